@@ -1,0 +1,455 @@
+//! # mstar-kkt — solving the KKT system (eq. 16) fast and safely
+//!
+//! [`KktSolver`] analyses a sparsity pattern once ([`KktSolver::new`]), then
+//! [`factor`](KktSolver::factor)s new values and
+//! [`solve`](KktSolver::solve_in_place)s right-hand sides as often as needed,
+//! reusing every buffer. Backends: faer's sparse LU (COLAMD ordering, supernodal
+//! or simplicial) and a dense LU with partial pivoting for tiny systems, chosen
+//! by [`Backend::Auto`].
+//!
+//! A singular or numerically singular matrix is an `Err` naming the unknown that
+//! has no pivot, never NaN or a panic; every solution is checked by its residual.
+//! This crate knows nothing of mechanics: the caller maps unknowns to names.
+//!
+//! ```
+//! use mstar_kkt::{Csc, KktOptions, KktSolver};
+//!
+//! // [[2, 1], [1, 0]] in compressed sparse column form.
+//! let a = Csc { n: 2, col_ptr: vec![0, 2, 3], row_idx: vec![0, 1, 0], values: vec![2.0, 1.0, 1.0] };
+//! let mut solver = KktSolver::new(&a, &KktOptions::default())?;
+//! solver.factor(&a.values)?;
+//! let mut x = [4.0, 1.0];
+//! solver.solve_in_place(&mut x)?;
+//! assert!((x[0] - 1.0).abs() < 1e-14 && (x[1] - 2.0).abs() < 1e-14);
+//! # Ok::<(), mstar_kkt::KktError>(())
+//! ```
+#![deny(missing_docs)]
+
+mod dense;
+mod sparse_lu;
+
+use dense::DenseLu;
+use sparse_lu::SparseLu;
+
+/// A square sparse matrix in compressed sparse column form with sorted row
+/// indices and no duplicates.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Csc {
+    /// Dimension.
+    pub n: usize,
+    /// Column pointers, length `n + 1`.
+    pub col_ptr: Vec<usize>,
+    /// Row indices, length `nnz`.
+    pub row_idx: Vec<usize>,
+    /// Values, length `nnz`.
+    pub values: Vec<f64>,
+}
+
+impl Csc {
+    /// Number of stored values.
+    #[must_use]
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// `y = A x`.
+    ///
+    /// # Panics
+    /// If `x` or `y` is not of length `n`.
+    pub fn mul(&self, x: &[f64], y: &mut [f64]) {
+        assert_eq!(x.len(), self.n);
+        assert_eq!(y.len(), self.n);
+        y.fill(0.0);
+        for (j, &xj) in x.iter().enumerate() {
+            for k in self.col_ptr[j]..self.col_ptr[j + 1] {
+                y[self.row_idx[k]] += self.values[k] * xj;
+            }
+        }
+    }
+
+    /// The dense row-major matrix (for tests, diagnostics and small systems).
+    #[must_use]
+    pub fn to_dense(&self) -> Vec<Vec<f64>> {
+        let mut a = vec![vec![0.0; self.n]; self.n];
+        for j in 0..self.n {
+            for k in self.col_ptr[j]..self.col_ptr[j + 1] {
+                a[self.row_idx[k]][j] += self.values[k];
+            }
+        }
+        a
+    }
+
+    /// Checks the structure: lengths, bounds, sorted unique row indices.
+    fn validate(&self) -> Result<(), KktError> {
+        let bad = |why: &str| Err(KktError::Structure(why.to_string()));
+        if self.col_ptr.len() != self.n + 1 || self.col_ptr[0] != 0 {
+            return bad("col_ptr must have n + 1 entries starting at 0");
+        }
+        if self.col_ptr.windows(2).any(|w| w[0] > w[1]) {
+            return bad("col_ptr must be non-decreasing");
+        }
+        if self.col_ptr[self.n] != self.row_idx.len() || self.values.len() != self.row_idx.len() {
+            return bad("row_idx and values must have col_ptr[n] entries");
+        }
+        for j in 0..self.n {
+            let col = &self.row_idx[self.col_ptr[j]..self.col_ptr[j + 1]];
+            if col.windows(2).any(|w| w[0] >= w[1]) || col.iter().any(|&i| i >= self.n) {
+                return bad("row indices must be sorted, unique and below n");
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Which factorization to use.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Backend {
+    /// Dense LU up to [`KktOptions::dense_threshold`] unknowns, sparse LU above
+    /// (default).
+    #[default]
+    Auto,
+    /// Dense LU with partial pivoting.
+    Dense,
+    /// faer's sparse LU with partial pivoting and a COLAMD column ordering.
+    SparseLu,
+}
+
+/// Options of a [`KktSolver`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KktOptions {
+    /// Factorization (default: [`Backend::Auto`]).
+    pub backend: Backend,
+    /// Largest dimension that [`Backend::Auto`] solves densely (default: 24).
+    pub dense_threshold: usize,
+    /// Largest accepted relative residual `‖A x − b‖∞ / (‖A‖∞ ‖x‖∞ + ‖b‖∞)` of a
+    /// solution; above it the matrix is reported as numerically singular
+    /// (default: 1e-8).
+    pub residual_tolerance: f64,
+}
+
+impl Default for KktOptions {
+    fn default() -> Self {
+        Self {
+            backend: Backend::Auto,
+            dense_threshold: 24,
+            residual_tolerance: 1e-8,
+        }
+    }
+}
+
+/// Errors of the KKT solver.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum KktError {
+    /// The matrix is (numerically) singular; `unknown` is the column that found
+    /// no pivot, when the factorization could tell.
+    #[error("the KKT matrix is singular{}", match .unknown { Some(k) => format!(" (no pivot for unknown {k})"), None => String::new() })]
+    Singular {
+        /// Index of the unknown without a pivot.
+        unknown: Option<usize>,
+    },
+    /// The matrix or the right-hand side contains NaN or infinity.
+    #[error("the KKT matrix or right-hand side contains NaN or infinity")]
+    NonFinite,
+    /// The solution's residual is too large: the matrix is numerically singular.
+    #[error(
+        "the KKT solution is inaccurate (relative residual {relative_residual:.2e}): the matrix is numerically singular"
+    )]
+    Inaccurate {
+        /// `‖A x − b‖∞ / (‖A‖∞ ‖x‖∞ + ‖b‖∞)`.
+        relative_residual: f64,
+    },
+    /// The sparsity structure is malformed.
+    #[error("malformed sparse structure: {0}")]
+    Structure(String),
+    /// `solve_in_place` was called before a successful `factor`.
+    #[error("solve called without a successful factorization")]
+    NotFactored,
+    /// Memory for the factorization could not be allocated.
+    #[error("out of memory for the factorization")]
+    OutOfMemory,
+    /// An error reported by faer.
+    #[error("sparse factorization failed: {0}")]
+    Backend(String),
+}
+
+enum Inner {
+    Dense(DenseLu),
+    SparseLu(Box<SparseLu>),
+}
+
+/// Factors and solves one sparse square system many times: symbolic analysis
+/// once, numeric factorization per call to [`factor`](Self::factor), no
+/// allocation after [`new`](Self::new).
+pub struct KktSolver {
+    a: Csc,
+    inner: Inner,
+    backend: Backend,
+    factored: bool,
+    tol: f64,
+    rhs: Vec<f64>,
+    ax: Vec<f64>,
+    a_norm: f64,
+}
+
+impl std::fmt::Debug for KktSolver {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("KktSolver")
+            .field("n", &self.a.n)
+            .field("nnz", &self.a.row_idx.len())
+            .field("backend", &self.backend)
+            .finish()
+    }
+}
+
+impl KktSolver {
+    /// Analyses the structure of `a` (its values are ignored).
+    ///
+    /// # Errors
+    /// [`KktError::Structure`] for a malformed structure, [`KktError::Backend`]
+    /// or [`KktError::OutOfMemory`] when the symbolic analysis fails.
+    pub fn new(a: &Csc, options: &KktOptions) -> Result<Self, KktError> {
+        a.validate()?;
+        let backend = match options.backend {
+            Backend::Auto if a.n <= options.dense_threshold => Backend::Dense,
+            Backend::Auto => Backend::SparseLu,
+            b => b,
+        };
+        let inner = match backend {
+            Backend::Dense => Inner::Dense(DenseLu::new(a.n, &a.col_ptr, &a.row_idx)),
+            _ => Inner::SparseLu(Box::new(SparseLu::new(a)?)),
+        };
+        Ok(Self {
+            a: Csc {
+                values: vec![0.0; a.row_idx.len()],
+                ..a.clone()
+            },
+            inner,
+            backend,
+            factored: false,
+            tol: options.residual_tolerance,
+            rhs: vec![0.0; a.n],
+            ax: vec![0.0; a.n],
+            a_norm: 0.0,
+        })
+    }
+
+    /// The backend in use ([`Backend::Auto`] resolved).
+    #[must_use]
+    pub fn backend(&self) -> Backend {
+        self.backend
+    }
+
+    /// Dimension of the system.
+    #[must_use]
+    pub fn dim(&self) -> usize {
+        self.a.n
+    }
+
+    /// Factors the matrix with these values (same structure as at construction).
+    ///
+    /// # Errors
+    /// [`KktError::NonFinite`] for NaN or infinite values, [`KktError::Singular`]
+    /// when a pivot is missing.
+    ///
+    /// # Panics
+    /// If `values` does not have one value per structural entry.
+    pub fn factor(&mut self, values: &[f64]) -> Result<(), KktError> {
+        assert_eq!(values.len(), self.a.values.len(), "one value per entry");
+        self.factored = false;
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err(KktError::NonFinite);
+        }
+        self.a.values.copy_from_slice(values);
+        // ‖A‖∞: largest absolute row sum.
+        self.ax.fill(0.0);
+        for j in 0..self.a.n {
+            for k in self.a.col_ptr[j]..self.a.col_ptr[j + 1] {
+                self.ax[self.a.row_idx[k]] += self.a.values[k].abs();
+            }
+        }
+        self.a_norm = self.ax.iter().fold(0.0, |m: f64, &x| m.max(x));
+        match &mut self.inner {
+            Inner::Dense(lu) => lu.factor(values)?,
+            Inner::SparseLu(lu) => lu.factor(&self.a)?,
+        }
+        self.factored = true;
+        Ok(())
+    }
+
+    /// Solves `A x = rhs` in place with the last factorization and checks the
+    /// solution's residual.
+    ///
+    /// # Errors
+    /// [`KktError::NotFactored`] without a successful factorization;
+    /// [`KktError::NonFinite`] or [`KktError::Inaccurate`] when the matrix is
+    /// numerically singular (the pivots gave NaN or a solution that does not
+    /// solve the system).
+    ///
+    /// # Panics
+    /// If `rhs.len()` differs from the dimension.
+    pub fn solve_in_place(&mut self, rhs: &mut [f64]) -> Result<(), KktError> {
+        assert_eq!(rhs.len(), self.a.n, "right-hand side of the wrong length");
+        if !self.factored {
+            return Err(KktError::NotFactored);
+        }
+        if rhs.iter().any(|v| !v.is_finite()) {
+            return Err(KktError::NonFinite);
+        }
+        self.rhs.copy_from_slice(rhs);
+        match &mut self.inner {
+            Inner::Dense(lu) => lu.solve_in_place(rhs),
+            Inner::SparseLu(lu) => lu.solve_in_place(rhs),
+        }
+        if rhs.iter().any(|v| !v.is_finite()) {
+            return Err(KktError::Singular { unknown: None });
+        }
+        self.a.mul(rhs, &mut self.ax);
+        let (mut res, mut bn, mut xn) = (0.0f64, 0.0f64, 0.0f64);
+        for i in 0..self.a.n {
+            res = res.max((self.ax[i] - self.rhs[i]).abs());
+            bn = bn.max(self.rhs[i].abs());
+            xn = xn.max(rhs[i].abs());
+        }
+        let denom = self.a_norm * xn + bn;
+        let relative_residual = if denom > 0.0 { res / denom } else { 0.0 };
+        if relative_residual > self.tol {
+            return Err(KktError::Inaccurate { relative_residual });
+        }
+        Ok(())
+    }
+}
+
+/// The 2-norm condition number `σ_max / σ_min` of a (small) sparse matrix,
+/// computed from the singular values of its dense form; `inf` when singular.
+/// For diagnostics and conditioning studies, not for large systems.
+#[must_use]
+pub fn condition_number(a: &Csc) -> f64 {
+    let mut d = nalgebra::DMatrix::<f64>::zeros(a.n, a.n);
+    for j in 0..a.n {
+        for k in a.col_ptr[j]..a.col_ptr[j + 1] {
+            d[(a.row_idx[k], j)] += a.values[k];
+        }
+    }
+    let s = d.singular_values();
+    let max = s.iter().fold(0.0f64, |m, &x| m.max(x));
+    let min = s.iter().fold(f64::INFINITY, |m, &x| m.min(x));
+    if min == 0.0 { f64::INFINITY } else { max / min }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A dense matrix (row-major) as [`Csc`].
+    fn csc(a: &[&[f64]]) -> Csc {
+        let n = a.len();
+        let mut m = Csc {
+            n,
+            col_ptr: vec![0],
+            ..Csc::default()
+        };
+        for j in 0..n {
+            for (i, row) in a.iter().enumerate() {
+                if row[j] != 0.0 || i == j {
+                    m.row_idx.push(i);
+                    m.values.push(row[j]);
+                }
+            }
+            m.col_ptr.push(m.row_idx.len());
+        }
+        m
+    }
+
+    fn kkt_example() -> Csc {
+        // [S Bᵀ; B 0] with S = diag(2, 3, 4), B = [1 1 0; 0 1 1].
+        csc(&[
+            &[2.0, 0.0, 0.0, 1.0, 0.0],
+            &[0.0, 3.0, 0.0, 1.0, 1.0],
+            &[0.0, 0.0, 4.0, 0.0, 1.0],
+            &[1.0, 1.0, 0.0, 0.0, 0.0],
+            &[0.0, 1.0, 1.0, 0.0, 0.0],
+        ])
+    }
+
+    fn solve_with(backend: Backend, a: &Csc, b: &[f64]) -> Result<Vec<f64>, KktError> {
+        let opts = KktOptions {
+            backend,
+            ..KktOptions::default()
+        };
+        let mut s = KktSolver::new(a, &opts)?;
+        s.factor(&a.values)?;
+        let mut x = b.to_vec();
+        s.solve_in_place(&mut x)?;
+        Ok(x)
+    }
+
+    #[test]
+    fn dense_and_sparse_solve_a_kkt_system() {
+        let a = kkt_example();
+        let x_true = [1.0, -2.0, 0.5, 3.0, -1.0];
+        let mut b = vec![0.0; 5];
+        a.mul(&x_true, &mut b);
+        for backend in [Backend::Dense, Backend::SparseLu] {
+            let x = solve_with(backend, &a, &b).expect("nonsingular");
+            for (xi, ti) in x.iter().zip(&x_true) {
+                assert!((xi - ti).abs() < 1e-13, "{backend:?}: {x:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn redundant_constraint_is_an_error_naming_its_multiplier() {
+        // Two identical constraint rows: the second multiplier is undetermined.
+        let a = csc(&[
+            &[2.0, 0.0, 1.0, 1.0],
+            &[0.0, 3.0, 1.0, 1.0],
+            &[1.0, 1.0, 0.0, 0.0],
+            &[1.0, 1.0, 0.0, 0.0],
+        ]);
+        let b = [1.0, 1.0, 1.0, 1.0];
+        assert_eq!(
+            solve_with(Backend::Dense, &a, &b),
+            Err(KktError::Singular { unknown: Some(3) })
+        );
+        let sparse = solve_with(Backend::SparseLu, &a, &b);
+        assert!(
+            matches!(
+                sparse,
+                Err(KktError::Singular { .. } | KktError::Inaccurate { .. })
+            ),
+            "{sparse:?}"
+        );
+    }
+
+    #[test]
+    fn nan_is_an_error() {
+        let mut a = kkt_example();
+        a.values[0] = f64::NAN;
+        let mut s = KktSolver::new(&a, &KktOptions::default()).expect("structure");
+        assert_eq!(s.factor(&a.values), Err(KktError::NonFinite));
+        let mut x = [0.0; 5];
+        assert_eq!(s.solve_in_place(&mut x), Err(KktError::NotFactored));
+    }
+
+    #[test]
+    fn malformed_structure_is_an_error() {
+        let a = Csc {
+            n: 2,
+            col_ptr: vec![0, 2, 3],
+            row_idx: vec![1, 0, 0],
+            values: vec![1.0; 3],
+        };
+        assert!(matches!(
+            KktSolver::new(&a, &KktOptions::default()),
+            Err(KktError::Structure(_))
+        ));
+    }
+
+    #[test]
+    fn condition_number_of_a_diagonal_matrix() {
+        let a = csc(&[&[4.0, 0.0], &[0.0, -0.5]]);
+        assert!((condition_number(&a) - 8.0).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,61 @@
+//! Sparse LU (faer): COLAMD ordering and symbolic analysis once, numeric
+//! refactorization into reused buffers.
+
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::LuError;
+use faer::sparse::linalg::lu::{LuRef, NumericLu, SymbolicLu, factorize_symbolic_lu};
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Conj, MatMut, Par};
+
+use crate::{Csc, KktError};
+
+pub(crate) struct SparseLu {
+    symbolic: SymbolicLu<usize>,
+    numeric: NumericLu<usize, f64>,
+    mem: MemBuffer,
+}
+
+impl SparseLu {
+    pub(crate) fn new(a: &Csc) -> Result<Self, KktError> {
+        let sym = SymbolicSparseColMatRef::new_checked(a.n, a.n, &a.col_ptr, None, &a.row_idx);
+        let symbolic = factorize_symbolic_lu(sym, Default::default())
+            .map_err(|e| KktError::Backend(format!("{e:?}")))?;
+        let req = StackReq::any_of(&[
+            symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+        ]);
+        let mem = MemBuffer::try_new(req).map_err(|_| KktError::OutOfMemory)?;
+        Ok(Self {
+            symbolic,
+            numeric: NumericLu::new(),
+            mem,
+        })
+    }
+
+    pub(crate) fn factor(&mut self, a: &Csc) -> Result<(), KktError> {
+        let sym = SymbolicSparseColMatRef::new_checked(a.n, a.n, &a.col_ptr, None, &a.row_idx);
+        let mat = SparseColMatRef::new(sym, &a.values);
+        let stack = MemStack::new(&mut self.mem);
+        match self.symbolic.factorize_numeric_lu(
+            &mut self.numeric,
+            mat,
+            Par::Seq,
+            stack,
+            Default::default(),
+        ) {
+            Ok(_) => Ok(()),
+            Err(LuError::SymbolicSingular { index }) => Err(KktError::Singular {
+                unknown: Some(index),
+            }),
+            Err(LuError::Generic(e)) => Err(KktError::Backend(format!("{e:?}"))),
+        }
+    }
+
+    pub(crate) fn solve_in_place(&mut self, rhs: &mut [f64]) {
+        let n = rhs.len();
+        let lu = LuRef::new_unchecked(&self.symbolic, &self.numeric);
+        let stack = MemStack::new(&mut self.mem);
+        let x = MatMut::from_column_major_slice_mut(rhs, n, 1);
+        lu.solve_in_place_with_conj(Conj::No, x, Par::Seq, stack);
+    }
+}

@@ -1,0 +1,74 @@
+//! Compressed-sparse-column structure built once from pattern entries, with a
+//! map from each entry to its slot in the value array.
+
+use mstar_kkt::Csc;
+
+/// Builds the structure of the union of `terms` (each a list of `(row, col)`
+/// entries, duplicates allowed) and returns it with, for each term, the slot of
+/// each of its entries in the value array.
+pub(crate) fn from_terms(n: usize, terms: &[&[(usize, usize)]]) -> (Csc, Vec<Vec<usize>>) {
+    let mut all: Vec<(usize, usize)> = terms
+        .iter()
+        .flat_map(|t| t.iter().map(|&(i, j)| (j, i)))
+        .collect();
+    all.sort_unstable();
+    all.dedup();
+    let mut col_ptr = vec![0usize; n + 1];
+    for &(j, _) in &all {
+        col_ptr[j + 1] += 1;
+    }
+    for j in 0..n {
+        col_ptr[j + 1] += col_ptr[j];
+    }
+    let row_idx: Vec<usize> = all.iter().map(|&(_, i)| i).collect();
+    let slots = terms
+        .iter()
+        .map(|t| {
+            t.iter()
+                .map(|&(i, j)| {
+                    // The entry is in the union by construction.
+                    let col = &row_idx[col_ptr[j]..col_ptr[j + 1]];
+                    col_ptr[j] + col.partition_point(|&r| r < i)
+                })
+                .collect()
+        })
+        .collect();
+    let nnz = row_idx.len();
+    (
+        Csc {
+            n,
+            col_ptr,
+            row_idx,
+            values: vec![0.0; nnz],
+        },
+        slots,
+    )
+}
+
+/// Adds `coef * values[k]` into `out[slots[k]]` for every entry of a term.
+#[inline]
+pub(crate) fn scatter(out: &mut [f64], slots: &[usize], values: &[f64], coef: f64) {
+    for (&s, &v) in slots.iter().zip(values) {
+        out[s] += coef * v;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn union_of_terms_with_slots() {
+        let t1 = [(0, 0), (1, 0), (1, 1)];
+        let t2 = [(1, 0), (0, 1), (0, 0)];
+        let (mut a, slots) = from_terms(2, &[&t1, &t2]);
+        assert_eq!(a.col_ptr, vec![0, 2, 4]);
+        assert_eq!(a.row_idx, vec![0, 1, 0, 1]);
+        scatter(&mut a.values, &slots[0], &[1.0, 2.0, 3.0], 1.0);
+        scatter(&mut a.values, &slots[1], &[10.0, 20.0, 30.0], 2.0);
+        assert_eq!(a.to_dense(), vec![vec![61.0, 40.0], vec![22.0, 3.0]]);
+        let mut y = [0.0; 2];
+        a.mul(&[1.0, 1.0], &mut y);
+        assert_eq!(y, [101.0, 25.0]);
+    }
+}

@@ -1,0 +1,447 @@
+//! Residual, constraints and the KKT iteration matrix of a [`System`] on a
+//! pattern computed once (`algorithm.md` §2-4, the paper's eqs. 3-17).
+
+use mstar_model::{Pattern, System};
+
+use mstar_kkt::Csc;
+
+use crate::csc::{from_terms, scatter};
+
+/// Errors in a system's declared structure.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum LinearizeError {
+    /// A declared pattern has the wrong dimensions.
+    #[error("the {matrix} pattern is {got_rows}×{got_cols}, expected {want_rows}×{want_cols}")]
+    PatternShape {
+        /// Which matrix.
+        matrix: &'static str,
+        /// Declared rows.
+        got_rows: usize,
+        /// Declared columns.
+        got_cols: usize,
+        /// Expected rows.
+        want_rows: usize,
+        /// Expected columns.
+        want_cols: usize,
+    },
+    /// A declared pattern has an entry outside its bounds.
+    #[error("the {matrix} pattern has the entry ({row}, {col}) outside the matrix")]
+    PatternEntry {
+        /// Which matrix.
+        matrix: &'static str,
+        /// Row of the entry.
+        row: usize,
+        /// Column of the entry.
+        col: usize,
+    },
+}
+
+/// The coefficients that turn the linearized equations (8)-(9) into one KKT
+/// matrix (16):
+///
+/// ```text
+/// top-left = scale·(c_u K_T + c_v C_T + c_a M + c_bb BᵀB) + c_identity I
+/// [ top-left  Bᵀ ]
+/// [ B         0  ]
+/// ```
+///
+/// For the paper's Newmark scheme `c_u = 1`, `c_v = γ/(βh)`, `c_a = c_bb = 1/(βh²)`
+/// (so that `c_a M + c_bb BᵀB = M*/(βh²)`, eqs. 11 and 17) and `scale = 1`.
+/// `scale = 1/c_a` multiplies the equilibrium rows and divides the multipliers
+/// so that the matrix's conditioning does not grow as `h → 0` (Bottasso,
+/// Bauchau & Cardona 2007).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coefficients {
+    /// Factor of the tangent stiffness `K_T` (eq. 6).
+    pub c_u: f64,
+    /// Factor of the tangent damping `C_T` (eq. 7).
+    pub c_v: f64,
+    /// Factor of the mass matrix `M`.
+    pub c_a: f64,
+    /// Factor of `BᵀB`, the augmentation `M* = M + BᵀB` (eq. 11).
+    pub c_bb: f64,
+    /// Factor of the identity (used by the minimum-norm position projection).
+    pub c_identity: f64,
+    /// Row scaling of the equilibrium equations (and inverse scaling of `Δλ`).
+    pub scale: f64,
+}
+
+impl Coefficients {
+    /// Only the mass matrix: `[M Bᵀ; B 0]`, the acceleration-level KKT matrix.
+    #[must_use]
+    pub fn acceleration() -> Self {
+        Self {
+            c_u: 0.0,
+            c_v: 0.0,
+            c_a: 1.0,
+            c_bb: 0.0,
+            c_identity: 0.0,
+            scale: 1.0,
+        }
+    }
+
+    /// Only the identity: `[I Bᵀ; B 0]`, for minimum-norm projections.
+    #[must_use]
+    pub fn projection() -> Self {
+        Self {
+            c_u: 0.0,
+            c_v: 0.0,
+            c_a: 0.0,
+            c_bb: 0.0,
+            c_identity: 1.0,
+            scale: 1.0,
+        }
+    }
+}
+
+/// Residual, constraints, Jacobians and the KKT matrix of one [`System`], with
+/// every buffer allocated once in [`Linearization::new`].
+///
+/// Call [`eval_residual`](Self::eval_residual) at every Newton iteration,
+/// [`eval_jacobians`](Self::eval_jacobians) and [`assemble`](Self::assemble)
+/// only when the iteration matrix is to be refreshed.
+#[derive(Clone, Debug)]
+pub struct Linearization {
+    n: usize,
+    m: usize,
+    mass_pattern: Pattern,
+    b_pattern: Pattern,
+    /// Values of `M` on the system's mass pattern.
+    pub mass: Vec<f64>,
+    /// Values of `B` on the system's B pattern.
+    pub b: Vec<f64>,
+    /// Values of `Σ λᵢ ∂²Φᵢ/∂u²` on the system's Hessian pattern.
+    pub hessian: Vec<f64>,
+    /// Values of `∂g/∂u`.
+    pub g_u: Vec<f64>,
+    /// Values of `∂g/∂u̇`.
+    pub g_v: Vec<f64>,
+    /// Values of `∂(M ü)/∂u`.
+    pub mass_du: Vec<f64>,
+    /// Forces `g` (eq. 3).
+    pub g: Vec<f64>,
+    /// Constraint force `Bᵀλ` (eq. 1).
+    pub bt_lambda: Vec<f64>,
+    /// Inertia force `M ü`.
+    pub m_a: Vec<f64>,
+    /// Residual `r = g − Bᵀλ − M ü` (the paper's γ, eq. 3).
+    pub r: Vec<f64>,
+    /// Constraints `Φ` (eq. 4).
+    pub phi: Vec<f64>,
+    kkt: Csc,
+    slots: KktSlots,
+    bb_pairs: Vec<(usize, usize)>,
+    m_star: Csc,
+    m_star_mass: Vec<usize>,
+    m_star_bb: Vec<usize>,
+    bb_values: Vec<f64>,
+}
+
+#[derive(Clone, Debug)]
+struct KktSlots {
+    mass: Vec<usize>,
+    hessian: Vec<usize>,
+    g_u: Vec<usize>,
+    g_v: Vec<usize>,
+    mass_du: Vec<usize>,
+    bb: Vec<usize>,
+    identity: Vec<usize>,
+    b: Vec<usize>,
+    bt: Vec<usize>,
+}
+
+fn checked(
+    p: Pattern,
+    matrix: &'static str,
+    rows: usize,
+    cols: usize,
+) -> Result<Pattern, LinearizeError> {
+    if p.nrows != rows || p.ncols != cols {
+        return Err(LinearizeError::PatternShape {
+            matrix,
+            got_rows: p.nrows,
+            got_cols: p.ncols,
+            want_rows: rows,
+            want_cols: cols,
+        });
+    }
+    if let Some((row, col)) = p.out_of_bounds() {
+        return Err(LinearizeError::PatternEntry { matrix, row, col });
+    }
+    Ok(p)
+}
+
+impl Linearization {
+    /// Reads the system's patterns, checks them, and builds the KKT structure
+    /// `[S_T Bᵀ; B 0]` (eq. 16) once: the union of the patterns of `M`, `BᵀB`,
+    /// the constraint Hessian, `∂g/∂u`, `∂g/∂u̇`, `∂(Mü)/∂u`, the diagonal, `B`
+    /// and `Bᵀ`.
+    ///
+    /// # Errors
+    /// [`LinearizeError`] when a declared pattern has the wrong shape or an
+    /// entry out of bounds.
+    pub fn new<S: System + ?Sized>(sys: &S) -> Result<Self, LinearizeError> {
+        let n = sys.n_coords();
+        let m = sys.n_constraints();
+        let mass_pattern = checked(sys.mass_pattern(), "mass", n, n)?;
+        let b_pattern = checked(sys.b_pattern(), "B", m, n)?;
+        let hessian_pattern = checked(sys.hessian_pattern(), "constraint Hessian", n, n)?;
+        let g_u_pattern = checked(sys.forces_du_pattern(), "∂g/∂u", n, n)?;
+        let g_v_pattern = checked(sys.forces_dv_pattern(), "∂g/∂u̇", n, n)?;
+        let mass_du_pattern = checked(sys.mass_du_pattern(), "∂(Mü)/∂u", n, n)?;
+
+        // BᵀB: for every constraint row, all pairs of its entries.
+        let mut rows: Vec<Vec<usize>> = vec![Vec::new(); m];
+        for (k, &(i, _)) in b_pattern.entries.iter().enumerate() {
+            rows[i].push(k);
+        }
+        let mut bb_pairs = Vec::new();
+        for row in &rows {
+            for &p in row {
+                for &q in row {
+                    bb_pairs.push((p, q));
+                }
+            }
+        }
+        let bb_entries: Vec<(usize, usize)> = bb_pairs
+            .iter()
+            .map(|&(p, q)| (b_pattern.entries[p].1, b_pattern.entries[q].1))
+            .collect();
+        let identity: Vec<(usize, usize)> = (0..n + m).map(|i| (i, i)).collect();
+        let b_entries: Vec<(usize, usize)> =
+            b_pattern.entries.iter().map(|&(i, j)| (n + i, j)).collect();
+        let bt_entries: Vec<(usize, usize)> =
+            b_pattern.entries.iter().map(|&(i, j)| (j, n + i)).collect();
+        let (kkt, slots) = from_terms(
+            n + m,
+            &[
+                &mass_pattern.entries,
+                &hessian_pattern.entries,
+                &g_u_pattern.entries,
+                &g_v_pattern.entries,
+                &mass_du_pattern.entries,
+                &bb_entries,
+                &identity[..n],
+                &b_entries,
+                &bt_entries,
+                &identity[n..],
+            ],
+        );
+        let mut it = slots.into_iter();
+        let mut next = || it.next().unwrap_or_default();
+        let slots = KktSlots {
+            mass: next(),
+            hessian: next(),
+            g_u: next(),
+            g_v: next(),
+            mass_du: next(),
+            bb: next(),
+            identity: next(),
+            b: next(),
+            bt: next(),
+        };
+        let (m_star, ms) = from_terms(n, &[&mass_pattern.entries, &bb_entries]);
+        let mut ms = ms.into_iter();
+        let m_star_mass = ms.next().unwrap_or_default();
+        let m_star_bb = ms.next().unwrap_or_default();
+        Ok(Self {
+            n,
+            m,
+            mass: vec![0.0; mass_pattern.len()],
+            b: vec![0.0; b_pattern.len()],
+            hessian: vec![0.0; hessian_pattern.len()],
+            g_u: vec![0.0; g_u_pattern.len()],
+            g_v: vec![0.0; g_v_pattern.len()],
+            mass_du: vec![0.0; mass_du_pattern.len()],
+            g: vec![0.0; n],
+            bt_lambda: vec![0.0; n],
+            m_a: vec![0.0; n],
+            r: vec![0.0; n],
+            phi: vec![0.0; m],
+            bb_values: vec![0.0; bb_pairs.len()],
+            mass_pattern,
+            b_pattern,
+            kkt,
+            slots,
+            bb_pairs,
+            m_star,
+            m_star_mass,
+            m_star_bb,
+        })
+    }
+
+    /// Number of coordinates `n`.
+    #[must_use]
+    pub fn n_coords(&self) -> usize {
+        self.n
+    }
+
+    /// Number of constraints `m`.
+    #[must_use]
+    pub fn n_constraints(&self) -> usize {
+        self.m
+    }
+
+    /// The system's mass pattern (for energies and products with `M`).
+    #[must_use]
+    pub fn mass_pattern(&self) -> &Pattern {
+        &self.mass_pattern
+    }
+
+    /// The system's `B` pattern.
+    #[must_use]
+    pub fn b_pattern(&self) -> &Pattern {
+        &self.b_pattern
+    }
+
+    /// Evaluates `M`, `B`, `g`, `Φ` and the residual `r = g − Bᵀλ − M ü` (eq. 3)
+    /// at the given state.
+    #[allow(clippy::too_many_arguments)]
+    pub fn eval_residual<S: System + ?Sized>(
+        &mut self,
+        sys: &S,
+        t: f64,
+        u: &[f64],
+        v: &[f64],
+        a: &[f64],
+        lambda: &[f64],
+    ) {
+        sys.mass_into(t, u, &mut self.mass);
+        sys.b_into(t, u, &mut self.b);
+        sys.forces_into(t, u, v, &mut self.g);
+        sys.phi_into(t, u, &mut self.phi);
+        self.bt_lambda.fill(0.0);
+        self.b_pattern
+            .mul_transpose_add(&self.b, lambda, &mut self.bt_lambda);
+        self.m_a.fill(0.0);
+        self.mass_pattern.mul_add(&self.mass, a, &mut self.m_a);
+        for i in 0..self.n {
+            self.r[i] = self.g[i] - self.bt_lambda[i] - self.m_a[i];
+        }
+    }
+
+    /// Evaluates the parts of `K_T` and `C_T` (eqs. 6-7): the constraint Hessian
+    /// contracted with `λ`, `∂g/∂u`, `∂g/∂u̇` and `∂(M ü)/∂u`. `M` and `B` come
+    /// from the last [`eval_residual`](Self::eval_residual).
+    #[allow(clippy::too_many_arguments)]
+    pub fn eval_jacobians<S: System + ?Sized>(
+        &mut self,
+        sys: &S,
+        t: f64,
+        u: &[f64],
+        v: &[f64],
+        a: &[f64],
+        lambda: &[f64],
+    ) {
+        sys.hessian_into(t, u, lambda, &mut self.hessian);
+        sys.forces_du_into(t, u, v, &mut self.g_u);
+        sys.forces_dv_into(t, u, v, &mut self.g_v);
+        sys.mass_du_into(t, u, a, &mut self.mass_du);
+    }
+
+    fn eval_bb(&mut self) {
+        for (out, &(p, q)) in self.bb_values.iter_mut().zip(&self.bb_pairs) {
+            *out = self.b[p] * self.b[q];
+        }
+    }
+
+    /// Fills the values of the KKT matrix (16) with the given coefficients from
+    /// the last evaluations:
+    /// `S_T = c_u K_T + c_v C_T + c_a M + c_bb BᵀB` (eq. 17, `K_T = Σλᵢ∂²Φᵢ/∂u²
+    /// − ∂g/∂u + ∂(Mü)/∂u`, `C_T = −∂g/∂u̇`), scaled by `scale`, plus
+    /// `c_identity I`.
+    pub fn assemble(&mut self, c: &Coefficients) {
+        if c.c_bb != 0.0 {
+            self.eval_bb();
+        }
+        let s = c.scale;
+        let vals = &mut self.kkt.values;
+        vals.fill(0.0);
+        let sl = &self.slots;
+        scatter(vals, &sl.mass, &self.mass, s * c.c_a);
+        if c.c_u != 0.0 {
+            scatter(vals, &sl.hessian, &self.hessian, s * c.c_u);
+            scatter(vals, &sl.g_u, &self.g_u, -s * c.c_u);
+            scatter(vals, &sl.mass_du, &self.mass_du, s * c.c_u);
+        }
+        if c.c_v != 0.0 {
+            scatter(vals, &sl.g_v, &self.g_v, -s * c.c_v);
+        }
+        if c.c_bb != 0.0 {
+            scatter(vals, &sl.bb, &self.bb_values, s * c.c_bb);
+        }
+        if c.c_identity != 0.0 {
+            for &k in &sl.identity {
+                vals[k] += c.c_identity;
+            }
+        }
+        scatter(vals, &sl.b, &self.b, 1.0);
+        scatter(vals, &sl.bt, &self.b, 1.0);
+    }
+
+    /// The KKT matrix (16) as last [`assemble`](Self::assemble)d; unknowns are
+    /// ordered `[Δu (n); Δλ (m)]`. Its structure never changes.
+    #[must_use]
+    pub fn kkt(&self) -> &Csc {
+        &self.kkt
+    }
+
+    /// The right-hand side of (16), `[scale·r; −Φ]`.
+    ///
+    /// # Panics
+    /// If `rhs` is not of length `n + m`.
+    pub fn kkt_rhs(&self, scale: f64, rhs: &mut [f64]) {
+        assert_eq!(rhs.len(), self.n + self.m);
+        for (x, &r) in rhs[..self.n].iter_mut().zip(&self.r) {
+            *x = scale * r;
+        }
+        for (x, &p) in rhs[self.n..].iter_mut().zip(&self.phi) {
+            *x = -p;
+        }
+    }
+
+    /// Fills and returns the modified mass matrix `M* = M + BᵀB` (eq. 11) from
+    /// the last [`eval_residual`](Self::eval_residual).
+    pub fn m_star(&mut self) -> &Csc {
+        self.eval_bb();
+        let vals = &mut self.m_star.values;
+        vals.fill(0.0);
+        scatter(vals, &self.m_star_mass, &self.mass, 1.0);
+        scatter(vals, &self.m_star_bb, &self.bb_values, 1.0);
+        &self.m_star
+    }
+
+    /// `‖r‖∞`, the residual norm of the last evaluation.
+    #[must_use]
+    pub fn residual_norm(&self) -> f64 {
+        max_abs(&self.r)
+    }
+
+    /// `‖Φ‖∞`, the constraint norm of the last evaluation.
+    #[must_use]
+    pub fn constraint_norm(&self) -> f64 {
+        max_abs(&self.phi)
+    }
+
+    /// The size of the forces that balance in eq. (3):
+    /// `max(‖g‖∞, ‖Bᵀλ‖∞, ‖M ü‖∞)`. The residual is judged relative to it.
+    #[must_use]
+    pub fn force_scale(&self) -> f64 {
+        max_abs(&self.g)
+            .max(max_abs(&self.bt_lambda))
+            .max(max_abs(&self.m_a))
+    }
+}
+
+/// `‖x‖∞` (NaN if any entry is NaN).
+#[must_use]
+pub fn max_abs(x: &[f64]) -> f64 {
+    x.iter().fold(0.0f64, |acc, &v| {
+        if v.is_nan() || acc.is_nan() {
+            f64::NAN
+        } else {
+            acc.max(v.abs())
+        }
+    })
+}

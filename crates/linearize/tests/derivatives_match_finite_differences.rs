@@ -1,0 +1,153 @@
+//! The Newton iteration converges quadratically only if `B = ∂Φ/∂u`,
+//! `K_T = −∂r/∂u` (eq. 6, with the constraint Hessian `Σλᵢ∂²Φᵢ/∂u²`) and
+//! `C_T = −∂r/∂u̇` (eq. 7) are the true derivatives. Every analytic derivative
+//! of the pendulum chains is compared with central finite differences at random
+//! states, and the assembled KKT matrix with the dense formula of eqs. (16)-(17).
+
+use mstar_linearize::{Coefficients, Linearization, check_derivatives};
+use mstar_model::{Link, PendulumChain, System};
+use proptest::prelude::*;
+use proptest::test_runner::FileFailurePersistence;
+
+/// Central differences with step 1e-6 have truncation error ~1e-12·f‴ and
+/// round-off ~1e-16/1e-6 = 1e-10 relative; 1e-6 leaves a wide margin while a
+/// wrong sign or a missing term gives errors of order 1.
+const FD_TOL: f64 = 1e-6;
+
+fn chain(masses: &[f64], lengths: &[f64], g0: f64) -> PendulumChain {
+    let links = masses
+        .iter()
+        .zip(lengths)
+        .map(|(&m, &l)| Link { m, l })
+        .collect();
+    PendulumChain::new(links, g0)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("regressions"))),
+        ..ProptestConfig::default()
+    })]
+    #[test]
+    fn pendulum_chain_derivatives(
+        n in 1usize..5,
+        seed in prop::collection::vec(-3.0f64..3.0, 48),
+        masses in prop::collection::vec(0.1f64..5.0, 4),
+        lengths in prop::collection::vec(0.2f64..2.0, 4),
+    ) {
+        let sys = chain(&masses[..n], &lengths[..n], 9.81);
+        let (nc, m) = (sys.n_coords(), sys.n_constraints());
+        // An arbitrary (not necessarily consistent) state.
+        let u = &seed[..nc];
+        let v = &seed[nc..2 * nc];
+        let a = &seed[2 * nc..3 * nc];
+        let lambda = &seed[3 * nc..3 * nc + m];
+        let e = check_derivatives(&sys, 0.3, u, v, a, lambda);
+        prop_assert!(e.max() < FD_TOL, "{e:?}");
+    }
+}
+
+#[test]
+fn wrong_hessian_sign_is_caught() {
+    // The checker must be able to fail: flip the Hessian of a correct system.
+    struct Flipped(PendulumChain);
+    impl System for Flipped {
+        fn n_coords(&self) -> usize {
+            self.0.n_coords()
+        }
+        fn n_constraints(&self) -> usize {
+            self.0.n_constraints()
+        }
+        fn coord_name(&self, i: usize) -> String {
+            self.0.coord_name(i)
+        }
+        fn constraint_name(&self, i: usize) -> String {
+            self.0.constraint_name(i)
+        }
+        fn mass_pattern(&self) -> mstar_model::Pattern {
+            self.0.mass_pattern()
+        }
+        fn mass_into(&self, t: f64, u: &[f64], m: &mut [f64]) {
+            self.0.mass_into(t, u, m)
+        }
+        fn forces_into(&self, t: f64, u: &[f64], v: &[f64], g: &mut [f64]) {
+            self.0.forces_into(t, u, v, g)
+        }
+        fn phi_into(&self, t: f64, u: &[f64], phi: &mut [f64]) {
+            self.0.phi_into(t, u, phi)
+        }
+        fn b_pattern(&self) -> mstar_model::Pattern {
+            self.0.b_pattern()
+        }
+        fn b_into(&self, t: f64, u: &[f64], b: &mut [f64]) {
+            self.0.b_into(t, u, b)
+        }
+        fn hessian_pattern(&self) -> mstar_model::Pattern {
+            self.0.hessian_pattern()
+        }
+        fn hessian_into(&self, t: f64, u: &[f64], mu: &[f64], out: &mut [f64]) {
+            self.0.hessian_into(t, u, mu, out);
+            out.iter_mut().for_each(|x| *x = -*x);
+        }
+        fn accel_rhs_into(&self, t: f64, u: &[f64], v: &[f64], c: &mut [f64]) {
+            self.0.accel_rhs_into(t, u, v, c)
+        }
+    }
+    let sys = Flipped(PendulumChain::paper(1.0, 1.0, 10.0));
+    let e = check_derivatives(
+        &sys,
+        0.0,
+        &[0.7, -0.7, 0.8],
+        &[0.1; 3],
+        &[0.0; 3],
+        &[3.0, -4.0],
+    );
+    assert!(e.k_t > 0.1, "{e:?}");
+}
+
+#[test]
+fn kkt_matrix_is_eq_16_with_m_star() {
+    // The paper's pendulum at θ: S_T = K_T + γ/(βh) C_T + M*/(βh²) (17) with
+    // M* of eq. (19), K_T = diag(0, 0, l(λ₁ sin θ − λ₂ cos θ)), C_T = 0.
+    let (m, l, th) = (1.0, 1.0, 0.6f64);
+    let sys = PendulumChain::paper(m, l, 10.0);
+    let u = sys.position(&[th]);
+    let lambda = [2.0, -3.0];
+    let mut lin = Linearization::new(&sys).expect("valid");
+    lin.eval_residual(&sys, 0.0, &u, &[0.0; 3], &[0.0; 3], &lambda);
+    lin.eval_jacobians(&sys, 0.0, &u, &[0.0; 3], &[0.0; 3], &lambda);
+    let (beta, gamma, h) = (0.25, 0.5, 0.01);
+    let ca = 1.0 / (beta * h * h);
+    lin.assemble(&Coefficients {
+        c_u: 1.0,
+        c_v: gamma / (beta * h),
+        c_a: ca,
+        c_bb: ca,
+        c_identity: 0.0,
+        scale: 1.0,
+    });
+    let (c, s) = (th.cos(), th.sin());
+    let m_star = [
+        [m + 1.0, 0.0, -l * c],
+        [0.0, m + 1.0, -l * s],
+        [-l * c, -l * s, l * l],
+    ];
+    let b = [[1.0, 0.0, -l * c], [0.0, 1.0, -l * s]];
+    let k33 = l * (lambda[0] * s - lambda[1] * c);
+    let dense = lin.kkt().to_dense();
+    for i in 0..5 {
+        for j in 0..5 {
+            let expected = match (i < 3, j < 3) {
+                (true, true) => ca * m_star[i][j] + if i == 2 && j == 2 { k33 } else { 0.0 },
+                (true, false) => b[j - 3][i],
+                (false, true) => b[i - 3][j],
+                (false, false) => 0.0,
+            };
+            assert!(
+                (dense[i][j] - expected).abs() <= 1e-9 * expected.abs().max(1.0),
+                "({i},{j}): {} vs {expected}",
+                dense[i][j]
+            );
+        }
+    }
+}

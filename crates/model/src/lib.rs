@@ -1,0 +1,31 @@
+//! # mstar-model — what a constrained system is
+//!
+//! The [`System`] trait describes the index-3 DAE of `algorithm.md` §1 (the
+//! paper's eqs. 1-4),
+//! `M ü + Bᵀλ = g(u, u̇, t)`, `Φ(u, t) = 0`, with every matrix declared once as
+//! a sparse [`Pattern`] and written into caller-owned value buffers.
+//!
+//! [`PendulumChain`] is the paper's example (one link, `u = [x, y, θ]`, singular
+//! `M = diag(m, m, 0)`) and its multi-link generalization.
+//!
+//! ```
+//! use mstar_model::{PendulumChain, System};
+//!
+//! let pendulum = PendulumChain::paper(1.0, 1.0, 10.0);
+//! let u = pendulum.position(&[std::f64::consts::FRAC_PI_2]); // released horizontally
+//! let mut phi = vec![0.0; pendulum.n_constraints()];
+//! pendulum.phi_into(0.0, &u, &mut phi);
+//! assert!(phi.iter().all(|p| p.abs() < 1e-15));
+//! assert_eq!(pendulum.coord_name(2), "theta");
+//! ```
+#![deny(missing_docs)]
+
+mod pattern;
+mod pendulum;
+mod sample;
+mod system;
+
+pub use pattern::Pattern;
+pub use pendulum::{Link, PendulumChain};
+pub use sample::Sample;
+pub use system::{System, constraint_names, coord_names, kinetic_energy};

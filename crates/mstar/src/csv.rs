@@ -1,0 +1,136 @@
+//! CSV output with one column scheme for every model, written atomically.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::Path;
+
+use mstar_model::{Sample, System, coord_names};
+
+/// The CSV header: `t`, then `u:<name>`, `v:<name>`, `a:<name>` for each
+/// coordinate, `lambda:<i>` for each multiplier (0-based), then `energy`,
+/// `iterations`, `residual`, `constraint`.
+#[must_use]
+pub fn header<S: System + ?Sized>(sys: &S) -> Vec<String> {
+    let names = coord_names(sys);
+    let mut h = vec!["t".to_string()];
+    for prefix in ["u", "v", "a"] {
+        h.extend(names.iter().map(|n| format!("{prefix}:{n}")));
+    }
+    h.extend((0..sys.n_constraints()).map(|i| format!("lambda:{i}")));
+    h.extend(["energy", "iterations", "residual", "constraint"].map(String::from));
+    h
+}
+
+/// A number in shortest round-trip form: plain for `1e-4 ≤ |x| < 1e15` (and 0),
+/// exponent notation otherwise.
+fn number(out: &mut String, x: f64) {
+    let a = x.abs();
+    if x == 0.0 || (1e-4..1e15).contains(&a) || !x.is_finite() {
+        let _ = write!(out, "{x}");
+    } else {
+        let _ = write!(out, "{x:e}");
+    }
+}
+
+/// The samples as CSV text (header first), numbers in shortest round-trip form.
+#[must_use]
+pub fn to_csv<S: System + ?Sized>(sys: &S, samples: &[Sample]) -> String {
+    let mut out = header(sys).join(",");
+    out.push('\n');
+    for s in samples {
+        number(&mut out, s.t);
+        for &x in s.u.iter().chain(&s.v).chain(&s.a).chain(&s.lambda) {
+            out.push(',');
+            number(&mut out, x);
+        }
+        out.push(',');
+        number(&mut out, s.energy());
+        let _ = write!(out, ",{},", s.iterations);
+        number(&mut out, s.residual);
+        out.push(',');
+        number(&mut out, s.constraint);
+        out.push('\n');
+    }
+    out
+}
+
+/// Writes `contents` to `path` completely or not at all: to a temporary file in
+/// the same directory first, then renamed over `path`.
+///
+/// # Errors
+/// Any I/O error, with the path in the message; `path` is then untouched.
+pub fn write_atomically(path: &Path, contents: &[u8]) -> std::io::Result<()> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "output".into());
+    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(contents)?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(std::io::Error::new(
+            e.kind(),
+            format!("could not write {}: {e}", path.display()),
+        ));
+    }
+    Ok(())
+}
+
+/// Writes the samples as CSV to `path`, atomically (see [`write_atomically`]).
+///
+/// # Errors
+/// Any I/O error, with the path in the message.
+pub fn write_csv<S: System + ?Sized>(
+    path: &Path,
+    sys: &S,
+    samples: &[Sample],
+) -> std::io::Result<()> {
+    write_atomically(path, to_csv(sys, samples).as_bytes())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mstar_model::PendulumChain;
+
+    #[test]
+    fn header_follows_the_column_scheme() {
+        let sys = PendulumChain::paper(1.0, 1.0, 10.0);
+        assert_eq!(
+            header(&sys).join(","),
+            "t,u:x,u:y,u:theta,v:x,v:y,v:theta,a:x,a:y,a:theta,lambda:0,lambda:1,energy,iterations,residual,constraint"
+        );
+        let s = Sample {
+            t: 0.5,
+            u: vec![1.0, 2.0, 3.0],
+            v: vec![0.0; 3],
+            a: vec![0.0; 3],
+            lambda: vec![-10.0, 0.25],
+            kinetic: 1.0,
+            potential: 2.0,
+            iterations: 3,
+            residual: 1e-12,
+            constraint: 0.0,
+        };
+        let text = to_csv(&sys, &[s]);
+        let row = text.lines().nth(1).expect("one row");
+        assert_eq!(row, "0.5,1,2,3,0,0,0,0,0,0,-10,0.25,3,3,1e-12,0");
+    }
+
+    #[test]
+    fn failed_write_leaves_nothing() {
+        let dir = std::env::temp_dir().join(format!("mstar-csv-{}", std::process::id()));
+        let missing = dir.join("no-such-dir").join("out.csv");
+        assert!(write_atomically(&missing, b"x").is_err());
+        assert!(!missing.exists());
+    }
+}

@@ -1,0 +1,46 @@
+//! # mstar — time integration of constrained multibody systems
+//!
+//! The facade of the mstar workspace: it re-exports the stages of the algorithm
+//! (`algorithm.md`; the paper's eqs. 1-17) and holds the `mstar` command-line
+//! program.
+//!
+//! - [`model`]: the [`System`] trait and models ([`PendulumChain`]);
+//! - [`linearize`]: residual, `K_T`, `C_T` and the KKT matrix on a fixed pattern;
+//! - [`kkt`]: sparse (faer) and dense KKT solvers;
+//! - [`newmark`]: Newmark / HHT-α / generalized-α with Newton-Raphson
+//!   ([`Integrator`], [`Config`]);
+//! - [`rk4`]: independent minimal-coordinate references ([`ChainOracle`]);
+//! - [`csv`]: the output format; [`pendulum`]: the paper's presets;
+//!   [`analysis`]: errors, fitted orders, the period-2h amplitude.
+//!
+//! ```
+//! use mstar::pendulum::PendulumRun;
+//!
+//! let mut run = PendulumRun::standard();
+//! run.t_end = 0.5;
+//! let (samples, result) = run.run();
+//! let stats = result?;
+//! assert_eq!(stats.steps, 50);
+//! let reference = run.reference(&[samples[50].t]);
+//! let err = (samples[50].u[2] - reference[0].u[2]).abs();
+//! assert!(err < 1e-3, "{err}");
+//! # Ok::<(), mstar::IntegrationError>(())
+//! ```
+#![deny(missing_docs)]
+
+pub mod analysis;
+pub mod csv;
+pub mod pendulum;
+
+pub use mstar_kkt as kkt;
+pub use mstar_linearize as linearize;
+pub use mstar_model as model;
+pub use mstar_newmark as newmark;
+pub use mstar_rk4 as rk4;
+
+pub use mstar_model::{Link, Pattern, PendulumChain, Sample, System};
+pub use mstar_newmark::{
+    AlphaParams, Config, IntegrationError, Integrator, Newton, Observer, Predictor, RunStats,
+    Scheme, Start, Trajectory,
+};
+pub use mstar_rk4::{ChainOracle, pendulum_period};

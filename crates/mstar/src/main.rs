@@ -1,0 +1,448 @@
+//! The `mstar` command-line program.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand, ValueEnum};
+use mstar::pendulum::PendulumRun;
+use mstar::{Newton, Sample, Scheme, Start, csv};
+
+/// mstar: time integration of constrained multibody systems (index-3 DAEs
+/// M ü + Bᵀλ = g, Φ(u, t) = 0) with Newmark / HHT-α / generalized-α and
+/// Newton-Raphson on the KKT system.
+#[derive(Parser, Debug)]
+#[command(version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// The paper's pendulum in u = [x, y, θ] (singular M = diag(m, m, 0)).
+    ///
+    /// Without a preset: g = 9.81, θ₀ = π/2, h = 0.01, t_end = 10 s,
+    /// generalized-α (ρ∞ = 0.9), consistent start. `--preset paper`: g = 10,
+    /// λ₀ = (−10, 0), Newmark β = 1/4, γ = 1/2, the paper's M* start. Explicit
+    /// options override the preset.
+    Pendulum(PendulumArgs),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Preset {
+    /// The paper's setting (§3 of the paper).
+    Paper,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Integrator {
+    /// Newmark(β, γ); the paper's scheme with β = 1/4, γ = 1/2.
+    Newmark,
+    /// Hilber-Hughes-Taylor α (--alpha in [−1/3, 0]).
+    Hht,
+    /// Generalized-α (Chung & Hulbert) with spectral radius --rho.
+    GeneralizedAlpha,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Init {
+    /// M* ü₀ = g − Bᵀλ₀ with the given λ₀ (the paper's eq. 11).
+    Paper,
+    /// Consistent accelerations and multipliers from the acceleration-level KKT.
+    Consistent,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum NewtonArg {
+    /// Refactor at every iteration.
+    Full,
+    /// Reuse the factorization while the iteration contracts fast.
+    Modified,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum Reference {
+    /// Classic RK4 on θ̈ = −(g/l) sin θ, reconstructed in [x, y, θ].
+    Rk4,
+}
+
+#[derive(clap::Args, Debug)]
+struct PendulumArgs {
+    /// Start from a preset; explicit options override it.
+    #[arg(long, value_enum)]
+    preset: Option<Preset>,
+    /// Mass m, kg [default: 1].
+    #[arg(long)]
+    m: Option<f64>,
+    /// Rod length l, m [default: 1].
+    #[arg(long)]
+    l: Option<f64>,
+    /// Gravity g₀, m/s² [default: 9.81; paper: 10].
+    #[arg(long)]
+    g: Option<f64>,
+    /// Initial angle θ₀ from the downward vertical, rad [default: π/2].
+    #[arg(long, allow_hyphen_values = true)]
+    theta0: Option<f64>,
+    /// Initial angular velocity θ̇₀, rad/s [default: 0].
+    #[arg(long, allow_hyphen_values = true)]
+    omega0: Option<f64>,
+    /// Step size h, s [default: 0.01].
+    #[arg(long)]
+    h: Option<f64>,
+    /// Smallest step size for step control, s [default: h/1024; paper: h, i.e. off].
+    #[arg(long)]
+    h_min: Option<f64>,
+    /// End time, s [default: 10].
+    #[arg(long)]
+    t_end: Option<f64>,
+    /// Integrator [default: generalized-alpha; paper: newmark].
+    #[arg(long, value_enum)]
+    integrator: Option<Integrator>,
+    /// Newmark β [paper: 0.25]; implies --integrator newmark.
+    #[arg(long)]
+    beta: Option<f64>,
+    /// Newmark γ [paper: 0.5]; implies --integrator newmark.
+    #[arg(long)]
+    gamma: Option<f64>,
+    /// Generalized-α spectral radius ρ∞ in [0, 1] [default: 0.9].
+    #[arg(long)]
+    rho: Option<f64>,
+    /// HHT α in [−1/3, 0] [default: −0.1].
+    #[arg(long, allow_hyphen_values = true)]
+    alpha: Option<f64>,
+    /// Initial acceleration and multipliers [default: consistent; paper: paper].
+    #[arg(long, value_enum)]
+    init: Option<Init>,
+    /// Initial multipliers for --init paper, "L1,L2" [paper: -10,0]; implies --init paper.
+    #[arg(long, value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
+    lambda0: Option<Vec<f64>>,
+    /// Newton variant [default: modified; paper: full].
+    #[arg(long, value_enum)]
+    newton: Option<NewtonArg>,
+    /// Relative Newton tolerance on ‖r‖ and ‖Φ‖ [default: 1e-10].
+    #[arg(long)]
+    tol: Option<f64>,
+    /// Newton iterations per step attempt [default: 20].
+    #[arg(long)]
+    max_iter: Option<usize>,
+    /// Write a reference solution instead of integrating (same columns).
+    #[arg(long, value_enum)]
+    reference: Option<Reference>,
+    /// Write every step to this CSV file (complete or not at all).
+    #[arg(long)]
+    out: Option<PathBuf>,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Pendulum(args) => pendulum(&args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Builds the run from the preset and the explicit options.
+fn pendulum_run(args: &PendulumArgs) -> Result<PendulumRun> {
+    let mut run = match args.preset {
+        Some(Preset::Paper) => PendulumRun::paper(),
+        None => PendulumRun::standard(),
+    };
+    if let Some(m) = args.m {
+        run.m = m;
+    }
+    if let Some(l) = args.l {
+        run.l = l;
+    }
+    if let Some(g) = args.g {
+        run.g0 = g;
+    }
+    if let Some(th) = args.theta0 {
+        run.theta0 = th;
+    }
+    if let Some(w) = args.omega0 {
+        run.omega0 = w;
+    }
+    if let Some(t) = args.t_end {
+        run.t_end = t;
+    }
+    for (name, value) in [("m", run.m), ("l", run.l), ("t-end", run.t_end)] {
+        if !(value > 0.0 && value.is_finite()) {
+            bail!("--{name} must be positive (got {value})");
+        }
+    }
+    if !(run.g0.is_finite() && run.theta0.is_finite() && run.omega0.is_finite()) {
+        bail!("--g, --theta0 and --omega0 must be finite numbers");
+    }
+    let c = &mut run.config;
+    if let Some(h) = args.h {
+        c.h = h;
+        if args.preset == Some(Preset::Paper) {
+            c.h_min = Some(h);
+        }
+    }
+    if args.h_min.is_some() {
+        c.h_min = args.h_min;
+    }
+    if let Some(tol) = args.tol {
+        c.tol = tol;
+    }
+    if let Some(k) = args.max_iter {
+        c.max_iterations = k;
+    }
+    if let Some(n) = args.newton {
+        c.newton = match n {
+            NewtonArg::Full => Newton::Full,
+            NewtonArg::Modified => Newton::default(),
+        };
+    }
+    // Scheme: explicit --integrator, else implied by --beta/--gamma, --rho, --alpha.
+    let newmark_args = args.beta.is_some() || args.gamma.is_some();
+    let integrator = args.integrator.or(if newmark_args {
+        Some(Integrator::Newmark)
+    } else if args.rho.is_some() {
+        Some(Integrator::GeneralizedAlpha)
+    } else if args.alpha.is_some() {
+        Some(Integrator::Hht)
+    } else {
+        None
+    });
+    if let Some(integrator) = integrator {
+        let misplaced = |opt: &str, needs: &str| -> Result<()> {
+            bail!("{opt} applies to --integrator {needs}, not {integrator:?}")
+        };
+        if newmark_args && integrator != Integrator::Newmark {
+            misplaced("--beta/--gamma", "newmark")?;
+        }
+        if args.rho.is_some() && integrator != Integrator::GeneralizedAlpha {
+            misplaced("--rho", "generalized-alpha")?;
+        }
+        if args.alpha.is_some() && integrator != Integrator::Hht {
+            misplaced("--alpha", "hht")?;
+        }
+        let (beta0, gamma0) = match c.scheme {
+            Scheme::Newmark { beta, gamma } => (beta, gamma),
+            _ => (0.25, 0.5),
+        };
+        c.scheme = match integrator {
+            Integrator::Newmark => Scheme::Newmark {
+                beta: args.beta.unwrap_or(beta0),
+                gamma: args.gamma.unwrap_or(gamma0),
+            },
+            Integrator::Hht => Scheme::Hht {
+                alpha: args.alpha.unwrap_or(-0.1),
+            },
+            Integrator::GeneralizedAlpha => Scheme::GeneralizedAlpha {
+                rho_inf: args.rho.unwrap_or(0.9),
+            },
+        };
+    }
+    // Start: explicit --init, else implied by --lambda0.
+    let init = args.init.or(args.lambda0.as_ref().map(|_| Init::Paper));
+    match init {
+        Some(Init::Consistent) => {
+            if args.lambda0.is_some() {
+                bail!("--lambda0 applies to --init paper; a consistent start computes λ₀");
+            }
+            c.start = Start::Consistent;
+        }
+        Some(Init::Paper) => {
+            let lambda0 = match (&args.lambda0, &c.start) {
+                (Some(l), _) => l.clone(),
+                (None, Start::Paper { lambda0 }) => lambda0.clone(),
+                (None, Start::Consistent) => vec![-10.0, 0.0],
+            };
+            if lambda0.len() != 2 {
+                bail!("--lambda0 takes two values L1,L2 (got {})", lambda0.len());
+            }
+            c.start = Start::Paper { lambda0 };
+        }
+        None => {}
+    }
+    c.validate().context("invalid integrator options")?;
+    Ok(run)
+}
+
+fn describe(run: &PendulumRun) -> String {
+    let c = &run.config;
+    let scheme = match c.scheme {
+        Scheme::Newmark { beta, gamma } => format!("Newmark β = {beta}, γ = {gamma}"),
+        Scheme::Hht { alpha } => format!("HHT α = {alpha}"),
+        Scheme::GeneralizedAlpha { rho_inf } => format!("generalized-α ρ∞ = {rho_inf}"),
+    };
+    let start = match &c.start {
+        Start::Paper { lambda0 } => format!("paper start (M*, λ₀ = {lambda0:?})"),
+        Start::Consistent => "consistent start".into(),
+    };
+    let newton = match c.newton {
+        Newton::Full => "full Newton".to_string(),
+        Newton::Modified { max_rate } => format!("modified Newton (rate ≤ {max_rate})"),
+    };
+    format!(
+        "pendulum m = {} kg, l = {} m, g = {} m/s², θ₀ = {} rad, θ̇₀ = {} rad/s; {scheme}, {start}, {newton}, h = {} s, t_end = {} s",
+        run.m, run.l, run.g0, run.theta0, run.omega0, c.h, run.t_end
+    )
+}
+
+fn partial_path(out: &Path) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    out.with_file_name(format!("{stem}.partial.csv"))
+}
+
+fn pendulum(args: &PendulumArgs) -> Result<()> {
+    let run = pendulum_run(args)?;
+    let sys = run.system();
+    if args.reference == Some(Reference::Rk4) {
+        let samples = run.reference_on_grid();
+        println!("RK4 reference (minimal coordinate θ): {}", describe(&run));
+        println!("samples: {}", samples.len());
+        if let Some(last) = samples.last() {
+            println!("θ(t_end) = {:.9} rad at t = {}", last.u[2], last.t);
+        }
+        if let Some(out) = &args.out {
+            csv::write_csv(out, &sys, &samples)?;
+            println!("wrote {}", out.display());
+        }
+        return Ok(());
+    }
+    println!("{}", describe(&run));
+    let clock = Instant::now();
+    let (samples, result) = run.run();
+    let wall = clock.elapsed();
+    summary(&samples);
+    match result {
+        Ok(stats) => {
+            println!(
+                "steps: {} accepted, {} rejected; Newton iterations: {} total, {:.2} per step, {} max; factorizations: {}",
+                stats.steps,
+                stats.rejected,
+                stats.iterations,
+                stats.iterations as f64 / stats.steps.max(1) as f64,
+                stats.max_iterations,
+                stats.factorizations
+            );
+            println!(
+                "wall time: {:.3} s ({:.2} µs per step)",
+                wall.as_secs_f64(),
+                wall.as_secs_f64() * 1e6 / stats.steps.max(1) as f64
+            );
+            if let Some(out) = &args.out {
+                csv::write_csv(out, &sys, &samples)?;
+                println!("wrote {} ({} rows)", out.display(), samples.len());
+            }
+            Ok(())
+        }
+        Err(e) => {
+            if let Some(out) = &args.out {
+                let partial = partial_path(out);
+                csv::write_csv(&partial, &sys, &samples)?;
+                eprintln!(
+                    "note: {} was not written; the {} samples up to the failure are in {}",
+                    out.display(),
+                    samples.len(),
+                    partial.display()
+                );
+            }
+            Err(e.into())
+        }
+    }
+}
+
+fn summary(samples: &[Sample]) {
+    let (Some(first), Some(last)) = (samples.first(), samples.last()) else {
+        return;
+    };
+    let e0 = first.energy();
+    let drift = samples
+        .iter()
+        .map(|s| (s.energy() - e0).abs())
+        .fold(0.0, f64::max);
+    let phi = samples.iter().map(|s| s.constraint).fold(0.0, f64::max);
+    println!(
+        "t reached: {} s; θ = {:.9} rad, θ̇ = {:.9} rad/s, λ = [{:.6}, {:.6}]",
+        last.t, last.u[2], last.v[2], last.lambda[0], last.lambda[1]
+    );
+    println!("energy: E₀ = {e0:.6} J, max |E − E₀| = {drift:.3e} J; max ‖Φ‖∞ = {phi:.3e} m");
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[&str]) -> Result<PendulumRun> {
+        let cli = Cli::try_parse_from(std::iter::once("mstar").chain(args.iter().copied()))?;
+        let Command::Pendulum(a) = cli.command;
+        pendulum_run(&a)
+    }
+
+    #[test]
+    fn paper_preset_and_overrides() -> Result<()> {
+        let run = parse(&["pendulum", "--preset", "paper"])?;
+        assert_eq!(run, PendulumRun::paper());
+        let run = parse(&[
+            "pendulum",
+            "--preset",
+            "paper",
+            "--h",
+            "0.005",
+            "--lambda0",
+            "-5,1",
+        ])?;
+        assert_eq!(run.config.h, 0.005);
+        assert_eq!(run.config.h_min, Some(0.005));
+        assert_eq!(
+            run.config.start,
+            Start::Paper {
+                lambda0: vec![-5.0, 1.0]
+            }
+        );
+        let run = parse(&[
+            "pendulum",
+            "--preset",
+            "paper",
+            "--integrator",
+            "generalized-alpha",
+            "--init",
+            "consistent",
+        ])?;
+        assert_eq!(run.config.scheme, Scheme::GeneralizedAlpha { rho_inf: 0.9 });
+        assert_eq!(run.config.start, Start::Consistent);
+        Ok(())
+    }
+
+    #[test]
+    fn default_is_generalized_alpha_with_a_consistent_start() -> Result<()> {
+        let run = parse(&["pendulum"])?;
+        assert_eq!(run, PendulumRun::standard());
+        assert_eq!(run.g0, 9.81);
+        let run = parse(&["pendulum", "--beta", "0.3", "--gamma", "0.6"])?;
+        assert_eq!(
+            run.config.scheme,
+            Scheme::Newmark {
+                beta: 0.3,
+                gamma: 0.6
+            }
+        );
+        Ok(())
+    }
+
+    #[test]
+    fn contradictory_or_invalid_options_are_errors() {
+        assert!(parse(&["pendulum", "--integrator", "hht", "--rho", "0.5"]).is_err());
+        assert!(parse(&["pendulum", "--init", "consistent", "--lambda0", "1,2"]).is_err());
+        assert!(parse(&["pendulum", "--lambda0", "1,2,3"]).is_err());
+        assert!(parse(&["pendulum", "--rho", "2"]).is_err());
+        assert!(parse(&["pendulum", "--h", "-0.1"]).is_err());
+        assert!(parse(&["pendulum", "--t-end", "0"]).is_err());
+    }
+}

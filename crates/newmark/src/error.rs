@@ -1,0 +1,128 @@
+//! Errors of the integrators, each saying where and what to try.
+
+use mstar_kkt::KktError;
+use mstar_linearize::LinearizeError;
+
+/// Why an integration could not go on.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum IntegrationError {
+    /// An option is out of range.
+    #[error("invalid configuration: {0}")]
+    Config(String),
+    /// The system's declared structure is inconsistent.
+    #[error("invalid system structure: {0}")]
+    Structure(#[from] LinearizeError),
+    /// The state vectors have the wrong length.
+    #[error("{what} has {got} entries, the system has {want}")]
+    Dimension {
+        /// Which vector.
+        what: &'static str,
+        /// Given length.
+        got: usize,
+        /// Expected length.
+        want: usize,
+    },
+    /// The initial state violates a constraint and projection is disabled.
+    #[error(
+        "inconsistent initial state at t = {t}: {level} constraint '{constraint}' is violated by {value:.3e}; \
+         enable projection (the default) or give a state that satisfies Φ = 0 and B u̇ + Φ_t = 0"
+    )]
+    InconsistentInitialState {
+        /// Time.
+        t: f64,
+        /// `"position"` or `"velocity"`.
+        level: &'static str,
+        /// The most violated constraint.
+        constraint: String,
+        /// Its violation.
+        value: f64,
+    },
+    /// Projection of the initial positions onto `Φ = 0` did not converge.
+    #[error(
+        "could not project the initial state onto the constraints at t = {t}: ‖Φ‖∞ = {residual:.3e} after {iterations} \
+         Newton iterations (most violated: '{constraint}'); start closer to an assembled configuration"
+    )]
+    ProjectionFailed {
+        /// Time.
+        t: f64,
+        /// Iterations spent.
+        iterations: usize,
+        /// Final `‖Φ‖∞`.
+        residual: f64,
+        /// The most violated constraint.
+        constraint: String,
+    },
+    /// The KKT matrix could not be factored or solved.
+    #[error("{context} at t = {t} s (h = {h:e}): {source}{}", describe_unknown(.unknown))]
+    Kkt {
+        /// Which solve.
+        context: &'static str,
+        /// Time.
+        t: f64,
+        /// Step size.
+        h: f64,
+        /// The named unknown without a pivot, when known.
+        unknown: Option<String>,
+        /// The solver's error.
+        source: KktError,
+    },
+    /// The Newton iteration did not converge (and step control could not help).
+    #[error(
+        "Newton iteration did not converge at t = {t} s (h = {h:e}): after {iterations} iterations \
+         ‖r‖∞ = {residual:.3e} (tolerance {residual_tol:.3e}) and ‖Φ‖∞ = {constraint:.3e} (tolerance {constraint_tol:.3e}). \
+         Try a smaller h, generalized-α (--integrator generalized-alpha), a consistent start (--init consistent) or a looser tolerance"
+    )]
+    NewtonFailed {
+        /// Time of the failed step's end.
+        t: f64,
+        /// Step size.
+        h: f64,
+        /// Iterations spent.
+        iterations: usize,
+        /// Final `‖r‖∞`.
+        residual: f64,
+        /// Tolerance on `‖r‖∞`.
+        residual_tol: f64,
+        /// Final `‖Φ‖∞`.
+        constraint: f64,
+        /// Tolerance on `‖Φ‖∞`.
+        constraint_tol: f64,
+    },
+    /// Step control reached the smallest allowed step.
+    #[error(
+        "step size too small at t = {t} s: the step with h = {h:e} failed and h/2 would be below h_min = {h_min:e} \
+         (‖r‖∞ = {residual:.3e}, ‖Φ‖∞ = {constraint:.3e}); the model may be singular here, or lower h_min"
+    )]
+    StepSizeTooSmall {
+        /// Time at the start of the failed step.
+        t: f64,
+        /// The last step size tried.
+        h: f64,
+        /// The smallest allowed step size.
+        h_min: f64,
+        /// Final `‖r‖∞` of the last attempt.
+        residual: f64,
+        /// Final `‖Φ‖∞` of the last attempt.
+        constraint: f64,
+    },
+    /// NaN or infinity appeared in the state.
+    #[error(
+        "NaN or infinity in {what} at t = {t} s; the step size may be too large for the model's stiffness"
+    )]
+    NonFinite {
+        /// Time.
+        t: f64,
+        /// Where (e.g. "the forces g, coordinate 'theta'").
+        what: String,
+    },
+}
+
+fn describe_unknown(unknown: &Option<String>) -> String {
+    match unknown {
+        Some(u) => format!(
+            "; {u} is undetermined (a redundant or inconsistent constraint, or a coordinate that neither inertia, stiffness nor a constraint determines)"
+        ),
+        None => String::new(),
+    }
+}

@@ -1,0 +1,335 @@
+//! Integrator parameters and configuration.
+
+use mstar_kkt::KktOptions;
+
+use crate::IntegrationError;
+
+/// The time-integration scheme. All three are members of the generalized-α
+/// family in the form of Arnold & Brüls (2007):
+///
+/// ```text
+/// (1 − α_m) a_{n+1} + α_m a_n = (1 − α_f) ü_{n+1} + α_f ü_n
+/// u_{n+1} = u_n + h u̇_n + h² (½ − β) a_n + h² β a_{n+1}      (cf. eq. 13)
+/// u̇_{n+1} = u̇_n + h (1 − γ) a_n + h γ a_{n+1}                (cf. eq. 12)
+/// M ü_{n+1} + Bᵀ λ_{n+1} = g(u_{n+1}, u̇_{n+1}, t_{n+1}),  Φ(u_{n+1}, t_{n+1}) = 0
+/// ```
+///
+/// With `α_m = α_f = 0` the acceleration-like variable `a` equals `ü` and this is
+/// the paper's Newmark scheme (eqs. 12-13).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Scheme {
+    /// Newmark(β, γ), the paper's scheme with `β = 1/4, γ = 1/2` (trapezoidal
+    /// rule, non-dissipative; unstable in `λ` for index-3 systems).
+    Newmark {
+        /// β (the paper: 1/4).
+        beta: f64,
+        /// γ (the paper: 1/2).
+        gamma: f64,
+    },
+    /// Hilber-Hughes-Taylor α, `α ∈ [−1/3, 0]` in the original sign convention
+    /// (`α = 0` is the trapezoidal rule); `γ = ½ − α`, `β = (1 − α)²/4`.
+    Hht {
+        /// α ∈ [−1/3, 0].
+        alpha: f64,
+    },
+    /// Generalized-α of Chung & Hulbert (1993) with the spectral radius at
+    /// infinite frequency `ρ∞ ∈ [0, 1]` as the one knob (`ρ∞ = 1` is the
+    /// trapezoidal rule): `α_m = (2ρ∞ − 1)/(ρ∞ + 1)`, `α_f = ρ∞/(ρ∞ + 1)`,
+    /// `γ = ½ + α_f − α_m`, `β = ¼ (γ + ½)²`.
+    GeneralizedAlpha {
+        /// ρ∞ ∈ [0, 1] (default 0.9).
+        rho_inf: f64,
+    },
+}
+
+impl Default for Scheme {
+    /// Generalized-α with `ρ∞ = 0.9`.
+    fn default() -> Self {
+        Self::GeneralizedAlpha { rho_inf: 0.9 }
+    }
+}
+
+/// The four parameters of the generalized-α family (Arnold & Brüls form).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AlphaParams {
+    /// α_m.
+    pub alpha_m: f64,
+    /// α_f.
+    pub alpha_f: f64,
+    /// β.
+    pub beta: f64,
+    /// γ.
+    pub gamma: f64,
+}
+
+impl Scheme {
+    /// The scheme's parameters.
+    ///
+    /// # Errors
+    /// [`IntegrationError::Config`] for parameters outside their range.
+    pub fn params(&self) -> Result<AlphaParams, IntegrationError> {
+        let bad = |s: String| Err(IntegrationError::Config(s));
+        match *self {
+            Self::Newmark { beta, gamma } => {
+                if !(beta > 0.0 && beta.is_finite() && gamma > 0.0 && gamma.is_finite()) {
+                    return bad(format!(
+                        "Newmark needs β > 0 and γ > 0 (got β = {beta}, γ = {gamma}); the paper uses β = 0.25, γ = 0.5"
+                    ));
+                }
+                Ok(AlphaParams {
+                    alpha_m: 0.0,
+                    alpha_f: 0.0,
+                    beta,
+                    gamma,
+                })
+            }
+            Self::Hht { alpha } => {
+                if !(-1.0 / 3.0..=0.0).contains(&alpha) {
+                    return bad(format!(
+                        "HHT needs α in [−1/3, 0] (got {alpha}); α = 0 is the trapezoidal rule, α = −0.1 a common choice"
+                    ));
+                }
+                let alpha_f = -alpha;
+                let gamma = 0.5 + alpha_f;
+                Ok(AlphaParams {
+                    alpha_m: 0.0,
+                    alpha_f,
+                    beta: 0.25 * (gamma + 0.5) * (gamma + 0.5),
+                    gamma,
+                })
+            }
+            Self::GeneralizedAlpha { rho_inf } => {
+                if !(0.0..=1.0).contains(&rho_inf) {
+                    return bad(format!(
+                        "generalized-α needs ρ∞ in [0, 1] (got {rho_inf}); 1 is the trapezoidal rule, 0.9 the default"
+                    ));
+                }
+                let alpha_m = (2.0 * rho_inf - 1.0) / (rho_inf + 1.0);
+                let alpha_f = rho_inf / (rho_inf + 1.0);
+                let gamma = 0.5 + alpha_f - alpha_m;
+                Ok(AlphaParams {
+                    alpha_m,
+                    alpha_f,
+                    beta: 0.25 * (gamma + 0.5) * (gamma + 0.5),
+                    gamma,
+                })
+            }
+        }
+    }
+}
+
+/// How the step's Newton iteration starts (the predictor).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Predictor {
+    /// `ü_{n+1}⁰ = 0`, the paper's eq. (14a) (and Arnold & Brüls' Algorithm 1).
+    ZeroAcceleration,
+    /// `ü_{n+1}⁰ = ü_n`: usually one Newton iteration fewer (default).
+    #[default]
+    ConstantAcceleration,
+}
+
+/// How the initial acceleration and multipliers are obtained.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Start {
+    /// The paper's start: `M* ü₀ = g − Bᵀ λ₀` with `M* = M + BᵀB` (eq. 11) and
+    /// a given `λ₀` (in general not consistent with the constraints).
+    Paper {
+        /// The initial multipliers `λ₀`.
+        lambda0: Vec<f64>,
+    },
+    /// Consistent: solve `[M Bᵀ; B 0][ü₀; λ₀] = [g; c]` with the acceleration
+    /// right-hand side `c = −(B u̇)_u u̇ − 2 B_t u̇ − Φ_tt` (default).
+    #[default]
+    Consistent,
+}
+
+/// Newton-Raphson variant.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Newton {
+    /// Refactor the iteration matrix at every iteration.
+    Full,
+    /// Keep the factorization across iterations and steps while the observed
+    /// contraction rate `‖Δu_k‖/‖Δu_{k−1}‖` stays below `max_rate`; refactor when it
+    /// does not, when the step size changes, after a step that needed more than
+    /// 4 iterations, or after a failed attempt (default, `max_rate = 0.2`).
+    Modified {
+        /// Largest accepted contraction rate before a refactorization (in (0, 1)).
+        max_rate: f64,
+    },
+}
+
+impl Default for Newton {
+    fn default() -> Self {
+        Self::Modified { max_rate: 0.2 }
+    }
+}
+
+/// Configuration of an [`Integrator`](crate::Integrator). Each field states its
+/// default; [`Config::paper`] is the paper's setting.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Config {
+    /// Scheme (default: generalized-α, `ρ∞ = 0.9`).
+    pub scheme: Scheme,
+    /// Step size `h`, s (default: 0.01). Step control never exceeds it.
+    pub h: f64,
+    /// Smallest step size step control may use (default: `h / 1024`); `h_min = h`
+    /// disables step control.
+    pub h_min: Option<f64>,
+    /// Newton tolerance, relative (default: 1e-10): converged when
+    /// `‖r‖∞ ≤ tol · max(‖g‖∞, ‖Bᵀλ‖∞, ‖Mü‖∞)` and `‖Φ‖∞ ≤ tol · max(1, ‖u‖∞)`.
+    pub tol: f64,
+    /// Newton iterations per attempt before the step is rejected (default: 20).
+    pub max_iterations: usize,
+    /// Newton variant (default: modified, contraction rate 0.2).
+    pub newton: Newton,
+    /// Predictor (default: constant acceleration).
+    pub predictor: Predictor,
+    /// Initial acceleration and multipliers (default: consistent).
+    pub start: Start,
+    /// Start the acceleration-like variable at `a₀ = ü₀ + (α_m − α_f) h u⃛₀`
+    /// (Arnold & Brüls 2007), `u⃛₀` from central differences of consistent
+    /// accelerations, so that there is no `O(h)` transient in `ü` and `λ`
+    /// (default: true; only with [`Start::Consistent`]).
+    pub third_derivative_start: bool,
+    /// Project the initial state onto `Φ = 0` and `B u̇ + Φ_t = 0` (minimum-norm
+    /// corrections) when it violates them; when false such a state is an error
+    /// (default: true).
+    pub project: bool,
+    /// Remove from the multiplier update the shift that `M* = M + BᵀB` in `S_T`
+    /// introduces. With `S_T + c BᵀB` in (16) and `B Δu = −Φ`, the solve returns
+    /// the exact Newton `Δu` but `Δλ + c Φ`; subtracting `c Φ` makes the iteration
+    /// an exact Newton method again, which saves about one iteration per step.
+    /// The paper's scheme keeps the shift (default: true; [`Config::paper`]:
+    /// false).
+    pub exact_multiplier_update: bool,
+    /// Scale the KKT system (equilibrium rows × `1/c_a`, multipliers ÷ `1/c_a`)
+    /// so that its conditioning does not grow like `h⁻⁴` (default: true).
+    pub scaling: bool,
+    /// Linear solver options (default: dense below 24 unknowns, sparse LU above).
+    pub kkt: KktOptions,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Self {
+            scheme: Scheme::default(),
+            h: 0.01,
+            h_min: None,
+            tol: 1e-10,
+            max_iterations: 20,
+            newton: Newton::default(),
+            predictor: Predictor::default(),
+            start: Start::Consistent,
+            third_derivative_start: true,
+            project: true,
+            exact_multiplier_update: true,
+            scaling: true,
+            kkt: KktOptions::default(),
+        }
+    }
+}
+
+impl Config {
+    /// The paper's algorithm exactly (§2.2, Fig. 2): Newmark `β = 1/4, γ = 1/2`,
+    /// `ü⁰ = 0` predictor (14), full Newton on (16)-(17) with `M*`, the start
+    /// `M* ü₀ = g − Bᵀλ₀` (eq. 11) with the given `λ₀`, no step control, no
+    /// scaling.
+    #[must_use]
+    pub fn paper(h: f64, lambda0: Vec<f64>) -> Self {
+        Self {
+            scheme: Scheme::Newmark {
+                beta: 0.25,
+                gamma: 0.5,
+            },
+            h,
+            h_min: Some(h),
+            newton: Newton::Full,
+            predictor: Predictor::ZeroAcceleration,
+            start: Start::Paper { lambda0 },
+            third_derivative_start: false,
+            exact_multiplier_update: false,
+            scaling: false,
+            ..Self::default()
+        }
+    }
+
+    /// Checks ranges.
+    ///
+    /// # Errors
+    /// [`IntegrationError::Config`] naming the offending field.
+    pub fn validate(&self) -> Result<AlphaParams, IntegrationError> {
+        let bad = |s: String| Err(IntegrationError::Config(s));
+        if !(self.h > 0.0 && self.h.is_finite()) {
+            return bad(format!("the step size h must be positive (got {})", self.h));
+        }
+        if let Some(h_min) = self.h_min
+            && !(h_min > 0.0 && h_min <= self.h)
+        {
+            return bad(format!(
+                "h_min must be in (0, h] (got h_min = {h_min}, h = {})",
+                self.h
+            ));
+        }
+        if !(self.tol > 0.0 && self.tol < 1.0) {
+            return bad(format!(
+                "the Newton tolerance must be in (0, 1) (got {})",
+                self.tol
+            ));
+        }
+        if self.max_iterations == 0 {
+            return bad("max_iterations must be at least 1".into());
+        }
+        if let Newton::Modified { max_rate } = self.newton
+            && !(max_rate > 0.0 && max_rate < 1.0)
+        {
+            return bad(format!(
+                "the modified-Newton contraction rate must be in (0, 1) (got {max_rate})"
+            ));
+        }
+        self.scheme.params()
+    }
+
+    /// `h_min` with its default applied.
+    #[must_use]
+    pub fn h_min(&self) -> f64 {
+        self.h_min.unwrap_or(self.h / 1024.0)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rho_one_is_the_trapezoidal_rule() {
+        let p = Scheme::GeneralizedAlpha { rho_inf: 1.0 }
+            .params()
+            .expect("valid");
+        assert!((p.alpha_m - 0.5).abs() < 1e-15 && (p.alpha_f - 0.5).abs() < 1e-15);
+        assert!((p.beta - 0.25).abs() < 1e-15 && (p.gamma - 0.5).abs() < 1e-15);
+        let h = Scheme::Hht { alpha: 0.0 }.params().expect("valid");
+        assert_eq!(
+            (h.alpha_m, h.alpha_f, h.beta, h.gamma),
+            (0.0, 0.0, 0.25, 0.5)
+        );
+    }
+
+    #[test]
+    fn out_of_range_parameters_are_errors() {
+        assert!(Scheme::GeneralizedAlpha { rho_inf: 1.5 }.params().is_err());
+        assert!(Scheme::Hht { alpha: 0.1 }.params().is_err());
+        assert!(
+            Scheme::Newmark {
+                beta: 0.0,
+                gamma: 0.5
+            }
+            .params()
+            .is_err()
+        );
+        let c = Config {
+            h: -1.0,
+            ..Config::default()
+        };
+        assert!(c.validate().is_err());
+    }
+}

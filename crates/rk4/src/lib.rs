@@ -1,0 +1,270 @@
+//! # mstar-rk4 — independent reference solutions
+//!
+//! Classic fourth-order Runge-Kutta on the *minimal-coordinate* equations of
+//! motion, sharing no code with the DAE path of `mstar-newmark`: an oracle for
+//! every curve the integrators produce.
+//!
+//! [`ChainOracle`] integrates a [`PendulumChain`] in its absolute link angles
+//! `θ_k`. For one link (the paper's pendulum) its equation is exactly
+//! `θ̈ = −(g₀/l) sin θ`; from `θ, θ̇, θ̈` it reconstructs `x, y, ẋ, ẏ, ẍ, ÿ` and the
+//! multipliers (for one link the rod tension `T = m(g₀ cos θ + l θ̇²)` gives
+//! `λ₁ = T sin θ`, `λ₂ = −T cos θ`, `algorithm.md` §5), so every curve of the
+//! paper's Figs. 4-13 has a reference.
+//!
+//! ```
+//! use mstar_model::PendulumChain;
+//! use mstar_rk4::ChainOracle;
+//!
+//! let sys = PendulumChain::paper(1.0, 1.0, 10.0);
+//! let oracle = ChainOracle::new(&sys);
+//! let samples = oracle.solve(&[0.1], &[0.0], &[0.0, 0.5, 1.0]);
+//! // Tension at rest at θ = 0.1: T = m g₀ cos θ.
+//! let t0 = &samples[0];
+//! let tension = (t0.lambda[0].powi(2) + t0.lambda[1].powi(2)).sqrt();
+//! assert!((tension - 10.0 * 0.1f64.cos()).abs() < 1e-12);
+//! ```
+#![deny(missing_docs)]
+
+use mstar_model::{PendulumChain, Sample};
+use nalgebra::{DMatrix, DVector};
+
+/// RK4 in the absolute link angles of a [`PendulumChain`].
+///
+/// With `μ_jk = Σ_{i ≥ max(j,k)} m_i` the equations of motion are
+///
+/// ```text
+/// Σ_k μ_jk l_j l_k [cos(θ_j − θ_k) θ̈_k + sin(θ_j − θ_k) θ̇_k²] + (Σ_{i≥j} m_i) g₀ l_j sin θ_j = 0
+/// ```
+///
+/// (one link: `m l² θ̈ + m g₀ l sin θ = 0`).
+#[derive(Clone, Debug)]
+pub struct ChainOracle<'a> {
+    sys: &'a PendulumChain,
+    /// Largest RK4 step, s (default 1e-3: RK4's error is then ~1e-12 on the
+    /// paper's pendulum, far below any integrator error studied here).
+    pub max_step: f64,
+}
+
+impl<'a> ChainOracle<'a> {
+    /// An oracle for `sys` with the default `max_step`.
+    #[must_use]
+    pub fn new(sys: &'a PendulumChain) -> Self {
+        Self {
+            sys,
+            max_step: 1e-3,
+        }
+    }
+
+    /// Angular accelerations `θ̈` for angles `theta` and rates `omega`.
+    #[must_use]
+    pub fn angular_acceleration(&self, theta: &[f64], omega: &[f64]) -> Vec<f64> {
+        let links = &self.sys.links;
+        let n = links.len();
+        let g0 = self.sys.g0;
+        // Tail masses: tail[j] = Σ_{i ≥ j} m_i.
+        let mut tail = vec![0.0; n + 1];
+        for j in (0..n).rev() {
+            tail[j] = tail[j + 1] + links[j].m;
+        }
+        let mut mass = DMatrix::<f64>::zeros(n, n);
+        let mut rhs = DVector::<f64>::zeros(n);
+        for j in 0..n {
+            let lj = links[j].l;
+            rhs[j] = -tail[j] * g0 * lj * theta[j].sin();
+            for k in 0..n {
+                let mu = tail[j.max(k)] * lj * links[k].l;
+                let d = theta[j] - theta[k];
+                mass[(j, k)] = mu * d.cos();
+                rhs[j] -= mu * d.sin() * omega[k] * omega[k];
+            }
+        }
+        // The chain's mass matrix is symmetric positive definite.
+        match mass.cholesky() {
+            Some(c) => c.solve(&rhs).iter().copied().collect(),
+            None => vec![f64::NAN; n],
+        }
+    }
+
+    /// The full redundant-coordinate [`Sample`] at `t` for angles and rates:
+    /// positions, velocities, accelerations, multipliers and energies.
+    #[must_use]
+    pub fn sample(&self, t: f64, theta: &[f64], omega: &[f64]) -> Sample {
+        let links = &self.sys.links;
+        let n = links.len();
+        let g0 = self.sys.g0;
+        let alpha = self.angular_acceleration(theta, omega);
+        let mut s = Sample {
+            t,
+            u: Vec::with_capacity(3 * n),
+            v: Vec::with_capacity(3 * n),
+            a: Vec::with_capacity(3 * n),
+            lambda: vec![0.0; 2 * n],
+            ..Sample::default()
+        };
+        let (mut x, mut y, mut vx, mut vy, mut ax, mut ay) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        for k in 0..n {
+            let (l, th, w, al) = (links[k].l, theta[k], omega[k], alpha[k]);
+            let (sn, cs) = th.sin_cos();
+            x += l * sn;
+            y -= l * cs;
+            vx += l * cs * w;
+            vy += l * sn * w;
+            ax += l * (cs * al - sn * w * w);
+            ay += l * (sn * al + cs * w * w);
+            s.u.extend_from_slice(&[x, y, th]);
+            s.v.extend_from_slice(&[vx, vy, w]);
+            s.a.extend_from_slice(&[ax, ay, al]);
+            s.kinetic += 0.5 * links[k].m * (vx * vx + vy * vy);
+            s.potential += links[k].m * g0 * y;
+        }
+        // Multipliers from the tip inwards: m_i ẍ_i + λ_{2i} − λ_{2i+2} = 0,
+        // m_i ÿ_i + λ_{2i+1} − λ_{2i+3} = −m_i g₀.
+        let (mut lx, mut ly) = (0.0, 0.0);
+        for k in (0..n).rev() {
+            let m = links[k].m;
+            lx -= m * s.a[3 * k];
+            ly -= m * (s.a[3 * k + 1] + g0);
+            s.lambda[2 * k] = lx;
+            s.lambda[2 * k + 1] = ly;
+        }
+        s
+    }
+
+    /// Integrates from `(θ₀, θ̇₀)` at `t = 0` and returns the [`Sample`] at every
+    /// time in `times` (non-negative, non-decreasing), stepping with RK4 at most
+    /// [`max_step`](Self::max_step) between them.
+    ///
+    /// # Panics
+    /// If the slices' lengths differ from the number of links or `times` is
+    /// negative or decreasing.
+    #[must_use]
+    pub fn solve(&self, theta0: &[f64], omega0: &[f64], times: &[f64]) -> Vec<Sample> {
+        let n = self.sys.links.len();
+        assert_eq!(theta0.len(), n, "one angle per link");
+        assert_eq!(omega0.len(), n, "one rate per link");
+        let mut y: Vec<f64> = theta0.iter().chain(omega0).copied().collect();
+        let mut out = Vec::with_capacity(times.len());
+        let mut t = 0.0;
+        let f = |y: &[f64]| -> Vec<f64> {
+            let (th, w) = y.split_at(n);
+            let al = self.angular_acceleration(th, w);
+            w.iter().chain(&al).copied().collect()
+        };
+        for &target in times {
+            assert!(target >= t, "times must be non-negative and non-decreasing");
+            let span = target - t;
+            let steps = (span / self.max_step).ceil() as usize;
+            if steps > 0 {
+                let h = span / steps as f64;
+                for _ in 0..steps {
+                    let k1 = f(&y);
+                    let y2: Vec<f64> = y.iter().zip(&k1).map(|(a, k)| a + 0.5 * h * k).collect();
+                    let k2 = f(&y2);
+                    let y3: Vec<f64> = y.iter().zip(&k2).map(|(a, k)| a + 0.5 * h * k).collect();
+                    let k3 = f(&y3);
+                    let y4: Vec<f64> = y.iter().zip(&k3).map(|(a, k)| a + h * k).collect();
+                    let k4 = f(&y4);
+                    for i in 0..y.len() {
+                        y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+                    }
+                }
+            }
+            t = target;
+            let (th, w) = y.split_at(n);
+            out.push(self.sample(t, th, w));
+        }
+        out
+    }
+}
+
+/// The exact period of a pendulum of length `l` released at rest from `θ₀`:
+/// `T = 4 √(l/g₀) K(sin(θ₀/2))`, with the complete elliptic integral of the
+/// first kind from the arithmetic-geometric mean, `K(k) = π / (2 AGM(1, √(1−k²)))`.
+#[must_use]
+pub fn pendulum_period(l: f64, g0: f64, theta0: f64) -> f64 {
+    let k = (0.5 * theta0).sin();
+    let (mut a, mut b) = (1.0f64, (1.0 - k * k).sqrt());
+    for _ in 0..40 {
+        (a, b) = (0.5 * (a + b), (a * b).sqrt());
+    }
+    4.0 * (l / g0).sqrt() * std::f64::consts::PI / (2.0 * a)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mstar_model::{Link, System};
+
+    #[test]
+    fn pendulum_returns_after_the_exact_period() {
+        // A closed form independent of RK4: the elliptic-integral period.
+        let sys = PendulumChain::paper(1.0, 1.0, 10.0);
+        let theta0 = std::f64::consts::FRAC_PI_2;
+        let period = pendulum_period(1.0, 10.0, theta0);
+        let s = ChainOracle::new(&sys).solve(&[theta0], &[0.0], &[0.0, 0.5 * period, period]);
+        assert!(
+            (s[1].u[2] + theta0).abs() < 1e-9,
+            "half period: {}",
+            s[1].u[2]
+        );
+        assert!(
+            (s[2].u[2] - theta0).abs() < 1e-9,
+            "full period: {}",
+            s[2].u[2]
+        );
+        assert!(s[2].v[2].abs() < 1e-8);
+    }
+
+    #[test]
+    fn reconstruction_satisfies_the_dae() {
+        // M ü + Bᵀλ = g and B ü = c at a moving state of a 3-link chain.
+        let sys = PendulumChain::new(
+            vec![
+                Link { m: 1.0, l: 1.0 },
+                Link { m: 2.0, l: 0.5 },
+                Link { m: 0.5, l: 0.8 },
+            ],
+            9.81,
+        );
+        let s = ChainOracle::new(&sys).sample(0.0, &[0.3, -0.7, 1.2], &[0.5, -1.0, 2.0]);
+        let (n, m) = (sys.n_coords(), sys.n_constraints());
+        let (mp, bp) = (sys.mass_pattern(), sys.b_pattern());
+        let mut mass = vec![0.0; mp.len()];
+        let mut b = vec![0.0; bp.len()];
+        sys.mass_into(0.0, &s.u, &mut mass);
+        sys.b_into(0.0, &s.u, &mut b);
+        let mut lhs = vec![0.0; n];
+        mp.mul_add(&mass, &s.a, &mut lhs);
+        bp.mul_transpose_add(&b, &s.lambda, &mut lhs);
+        let mut g = vec![0.0; n];
+        sys.forces_into(0.0, &s.u, &s.v, &mut g);
+        for i in 0..n {
+            assert!(
+                (lhs[i] - g[i]).abs() < 1e-12,
+                "equation {i}: {} vs {}",
+                lhs[i],
+                g[i]
+            );
+        }
+        let mut ba = vec![0.0; m];
+        bp.mul_add(&b, &s.a, &mut ba);
+        let mut c = vec![0.0; m];
+        sys.accel_rhs_into(0.0, &s.u, &s.v, &mut c);
+        for i in 0..m {
+            assert!((ba[i] - c[i]).abs() < 1e-12);
+        }
+        let mut phi = vec![0.0; m];
+        sys.phi_into(0.0, &s.u, &mut phi);
+        assert!(phi.iter().all(|p| p.abs() < 1e-14));
+    }
+
+    #[test]
+    fn one_link_tension_matches_the_closed_form() {
+        let sys = PendulumChain::paper(2.0, 1.5, 9.81);
+        let s = ChainOracle::new(&sys).sample(0.0, &[0.4], &[1.3]);
+        let tension = 2.0 * (9.81 * 0.4f64.cos() + 1.5 * 1.3 * 1.3);
+        assert!((s.lambda[0] - tension * 0.4f64.sin()).abs() < 1e-12);
+        assert!((s.lambda[1] + tension * 0.4f64.cos()).abs() < 1e-12);
+        assert!((s.a[2] + 9.81 / 1.5 * 0.4f64.sin()).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,59 @@
+//! `cargo xtask <command>`: the project's studies and reports.
+//!
+//! Each command lives in its own file and writes its results under
+//! `target/studies/<study>/`, printing a summary table. The program first
+//! changes to the workspace root, so it behaves the same from any directory.
+//!
+//! - `cargo xtask paper`: the paper's pendulum example, Figs. 4-13, against
+//!   the RK4 oracle ([`paper`]).
+
+mod paper;
+mod plot;
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context as _, Result};
+use clap::{Parser, Subcommand};
+
+/// mstar studies: paper figures, convergence, stability, energy drift.
+#[derive(Debug, Parser)]
+#[command(name = "cargo xtask", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// The studies.
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Reproduce the paper's pendulum example (Figs. 4-13) against the RK4
+    /// oracle; writes CSVs and PNGs to target/studies/paper/ and copies the
+    /// PNGs to docs/figures/paper/.
+    Paper,
+}
+
+fn main() -> Result<()> {
+    let cli = Cli::parse();
+    let root = project_root();
+    std::env::set_current_dir(&root)
+        .with_context(|| format!("could not change to {}", root.display()))?;
+    match cli.command {
+        Command::Paper => paper::run(),
+    }
+}
+
+/// The workspace root (the parent of `xtask/`).
+fn project_root() -> PathBuf {
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+    manifest.parent().unwrap_or(manifest).to_path_buf()
+}
+
+/// `target/studies/<study>/`, created if missing (relative to the root).
+///
+/// # Errors
+/// If the directory cannot be created.
+fn study_dir(study: &str) -> Result<PathBuf> {
+    let dir = Path::new("target").join("studies").join(study);
+    std::fs::create_dir_all(&dir).with_context(|| format!("could not create {}", dir.display()))?;
+    Ok(dir)
+}
