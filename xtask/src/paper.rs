@@ -1,19 +1,24 @@
 //! `cargo xtask paper`: the paper's pendulum example (§3, Figs. 4-13) against
-//! the RK4 oracle, with the default integrator as a second column.
+//! the RK4 oracle.
 //!
-//! Runs [`PendulumRun::paper`] (trapezoidal Newmark, `M*` start, λ₀ = (−10, 0))
-//! and the same model with [`Config::default`] (generalized-α, consistent
-//! start); writes `target/studies/paper/{paper,rk4,generalized_alpha}.csv`, one
-//! PNG per paper figure (copied to `docs/figures/paper/`) and prints a summary.
-//! The paper preset is expected to stop early (Newton fails once the undamped
-//! period-2h mode in λ has grown large, `algorithm.md` §5); that is a result of
+//! Runs [`PendulumRun::paper`] (trapezoidal Newmark, `M*` start, λ₀ = (−10, 0)),
+//! the same model with [`Config::default`] (generalized-α, consistent start)
+//! and, to tell the scheme from the start, trapezoidal Newmark from a
+//! consistent start. Writes to `target/studies/paper/` the CSVs `paper.csv`,
+//! `rk4.csv` (the oracle at the paper run's times), `generalized_alpha.csv`,
+//! `newmark_consistent.csv` and `rk4_grid.csv` (the oracle from 0 to t_end),
+//! one PNG per paper figure (copied to `docs/figures/paper/`) and a multiplier
+//! error plot, and prints a summary table.
+//!
+//! The paper preset is expected to stop early (Newton fails once the period-2h
+//! oscillation in λ has grown large, `algorithm.md` §5); that is a result of
 //! the study, not a failure of it.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, Result};
 use mstar::pendulum::PendulumRun;
-use mstar::{Config, IntegrationError, RunStats, Sample};
+use mstar::{Config, IntegrationError, RunStats, Sample, Start};
 
 use crate::plot::{self, Legend, Panel, Scale, Series, Style};
 
@@ -37,6 +42,7 @@ struct Run {
 }
 
 impl Run {
+    /// Integrates `preset` and evaluates the oracle at the samples' times.
     fn new(name: &'static str, preset: &PendulumRun) -> Self {
         let (samples, result) = preset.run();
         let times: Vec<f64> = samples.iter().map(|s| s.t).collect();
@@ -66,6 +72,7 @@ impl Run {
             .max(self.max_err(0.0, hi, |s| s.lambda[1]))
     }
 
+    /// Time of the last accepted sample.
     fn t_reached(&self) -> f64 {
         self.samples.last().map_or(0.0, |s| s.t)
     }
@@ -94,8 +101,19 @@ pub fn run() -> Result<()> {
     };
     let sys = preset.system();
 
+    // Separates the scheme from the start: the paper's trapezoidal Newmark
+    // from consistent ü₀, λ₀.
+    let trapezoidal = PendulumRun {
+        config: Config {
+            start: Start::Consistent,
+            ..preset.config.clone()
+        },
+        ..PendulumRun::paper()
+    };
+
     let paper = Run::new("paper (Newmark, M* start)", &preset);
     let cured = Run::new("default (gen.-α ρ∞=0.9)", &default);
+    let consistent = Run::new("Newmark, consistent start", &trapezoidal);
     // The oracle on the full grid, so the reference curves run to t_end even
     // where the paper run stopped.
     let full = preset.reference_on_grid();
@@ -104,11 +122,13 @@ pub fn run() -> Result<()> {
         ("paper.csv", &paper.samples),
         ("rk4.csv", &paper.oracle),
         ("generalized_alpha.csv", &cured.samples),
+        ("newmark_consistent.csv", &consistent.samples),
+        ("rk4_grid.csv", &full),
     ] {
         mstar::csv::write_csv(&out.join(file), &sys, samples)?;
     }
 
-    let figures = figures(&paper, &cured, &full, preset.t_end);
+    let figures = figures(&paper, &cured, &[&consistent], &full, preset.t_end);
     let docs = PathBuf::from(DOCS_FIGURES);
     std::fs::create_dir_all(&docs)
         .with_context(|| format!("could not create {}", docs.display()))?;
@@ -118,10 +138,10 @@ pub fn run() -> Result<()> {
         copy(&path, &docs.join(file))?;
     }
 
-    print_summary(&[&paper, &cured]);
+    print_summary(&[&paper, &cured, &consistent]);
     println!();
     println!(
-        "wrote paper.csv, rk4.csv, generalized_alpha.csv and {} figures to {}",
+        "wrote paper.csv, rk4.csv (at the paper run's times), generalized_alpha.csv, newmark_consistent.csv,\nrk4_grid.csv (0 to t_end) and {} figures to {}",
         figures.len(),
         out.display()
     );
@@ -129,176 +149,236 @@ pub fn run() -> Result<()> {
     Ok(())
 }
 
+/// Copies a file, naming both paths on error.
 fn copy(from: &Path, to: &Path) -> Result<()> {
     std::fs::copy(from, to)
         .with_context(|| format!("could not copy {} to {}", from.display(), to.display()))?;
     Ok(())
 }
 
+/// The time axis label.
 const T: &str = "t (s)";
 
-/// Ours solid in `color`, the oracle dashed black on top.
-fn versus(
-    ours: &Run,
-    full: &[Sample],
-    what: &str,
-    color: plot::RGBColor,
-    f: impl Fn(&Sample) -> f64,
-) -> [Series; 2] {
-    [
-        Series::new(
-            format!("{what}, paper algorithm"),
-            ours.curve(&f),
-            Style::solid(color),
+/// A quantity of a sample.
+type Get = fn(&Sample) -> f64;
+
+/// A quantity of the integrator under study as a solid line.
+fn ours(run: &Run, what: &str, style: Style, f: impl Fn(&Sample) -> f64) -> Series {
+    Series::new(format!("{what}, paper algorithm"), run.curve(f), style)
+}
+
+/// The oracle's curves of several quantities as one dashed black series (one
+/// legend entry; the curves are separated by a break).
+fn oracle(full: &[Sample], what: &str, fs: &[Get]) -> Series {
+    let mut points = Vec::new();
+    for (k, f) in fs.iter().enumerate() {
+        if k > 0 {
+            points.push((f64::NAN, f64::NAN));
+        }
+        points.extend(curve(full, f));
+    }
+    Series::new(format!("{what}, RK4"), points, Style::dashed(plot::BLACK))
+}
+
+/// The mean of consecutive samples, at the midpoints: removes an oscillation
+/// of period 2h (the paper's "filtering", §3).
+fn mean2(points: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    points
+        .windows(2)
+        .map(|w| (0.5 * (w[0].0 + w[1].0), 0.5 * (w[0].1 + w[1].1)))
+        .collect()
+}
+
+/// The oracle's extent of the given quantities for `t ≤ t_max`, padded by a
+/// third of its span (room for the legend): the axis of a figure the paper run leaves.
+fn reference_range(full: &[Sample], t_max: f64, fs: &[Get]) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for f in fs {
+        for s in full.iter().filter(|s| s.t <= t_max) {
+            lo = lo.min(f(s));
+            hi = hi.max(f(s));
+        }
+    }
+    let pad = 0.35 * (hi - lo).max(1e-9);
+    (lo - pad, hi + pad)
+}
+
+/// A quantity that oscillates with period 2h and grows (ü, λ), in three
+/// panels: the first [`ZOOM`] seconds on the oracle's scale (the oscillation
+/// clipped, its two-sample mean and the oracle visible), the same window on
+/// the run's scale, and the whole run.
+fn oscillating(
+    title: &str,
+    y_label: &str,
+    t_end: f64,
+    stop: &str,
+    range: (f64, f64),
+    series: &[Series],
+) -> Vec<Panel> {
+    let with = |mut p: Panel| {
+        p.series = series.to_vec();
+        p.legend(Legend::UpperLeft)
+    };
+    vec![
+        with(
+            Panel::new(
+                format!("{title}, first {ZOOM} s, axis at the RK4 range"),
+                T,
+                y_label,
+            )
+            .x_range(0.0, ZOOM)
+            .y_range(range.0, range.1),
         ),
-        Series::new(
-            format!("{what}, RK4"),
-            curve(full, &f),
-            Style::dashed(plot::BLACK),
-        ),
+        with(Panel::new(format!("{title}, first {ZOOM} s"), T, y_label).x_range(0.0, ZOOM)),
+        with(Panel::new(format!("{title}, whole run{stop}"), T, y_label).x_range(0.0, t_end)),
     ]
 }
 
-/// A quantity that grows before the paper run stops: the first [`ZOOM`]
-/// seconds (where the oracle is visible), then the whole run on a scale that
-/// shows the growth.
-fn zoomed(title: &str, y_label: &str, t_end: f64, series: &[Series]) -> Vec<Panel> {
-    let mut first = Panel::new(format!("{title}: first {ZOOM} s"), T, y_label).x_range(0.0, ZOOM);
-    let mut whole = Panel::new(format!("{title}: whole run"), T, y_label)
-        .x_range(0.0, t_end)
-        .legend(Legend::UpperLeft);
-    first.series = series.to_vec();
-    whole.series = series.to_vec();
-    vec![first, whole]
-}
-
 /// The figures, paper numbering (Figs. 4-13), as `(file name, panels)`.
-fn figures(paper: &Run, cured: &Run, full: &[Sample], t_end: f64) -> Vec<(String, Vec<Panel>)> {
+fn figures(
+    paper: &Run,
+    cured: &Run,
+    others: &[&Run],
+    full: &[Sample],
+    t_end: f64,
+) -> Vec<(String, Vec<Panel>)> {
     let stop = match &paper.result {
         Ok(_) => String::new(),
-        Err(_) => format!(" (run stopped at t = {:.2} s)", paper.t_reached()),
+        Err(_) => format!(" (paper run stopped at t = {:.2} s)", paper.t_reached()),
     };
-    let panel =
-        |title: &str, y: &str| Panel::new(format!("{title}{stop}"), T, y).x_range(0.0, t_end);
+    // Figs. 4-7 are on the oracle's scale: once the paper run has diverged its
+    // curves leave the frame (they are clipped, not rescaled).
+    let clipped = |title: &str, y: &str, fs: &[Get]| {
+        let (lo, hi) = reference_range(full, t_end, fs);
+        Panel::new(format!("{title}, axis at the RK4 range"), T, y)
+            .x_range(0.0, t_end)
+            .y_range(lo, hi)
+    };
+    let solid = Style::solid(plot::BLUE);
+    let second = Style::solid(plot::ORANGE);
     let mut figs = Vec::new();
 
-    let mut theta = panel("Fig. 4a — angle θ", "θ (rad)");
-    theta
-        .series
-        .extend(versus(paper, full, "θ", plot::BLUE, |s| s.u[2]));
-    let mut omega = panel("Fig. 4b — angular velocity dθ/dt", "dθ/dt (rad/s)");
-    omega
-        .series
-        .extend(versus(paper, full, "dθ/dt", plot::BLUE, |s| s.v[2]));
+    let th: Get = |s| s.u[2];
+    let om: Get = |s| s.v[2];
+    let theta = clipped("Fig. 4a — angle θ", "θ (rad)", &[th])
+        .legend(Legend::LowerLeft)
+        .series_from(ours(paper, "θ", solid, th))
+        .series_from(oracle(full, "θ", &[th]));
+    let omega = clipped("Fig. 4b — angular velocity dθ/dt", "dθ/dt (rad/s)", &[om])
+        .legend(Legend::LowerRight)
+        .series_from(ours(paper, "dθ/dt", solid, om))
+        .series_from(oracle(full, "dθ/dt", &[om]));
     figs.push(("fig04_theta.png".to_string(), vec![theta, omega]));
 
-    let mut pos = panel("Fig. 5 — displacements x, y", "x, y (m)").legend(Legend::LowerRight);
-    pos.series
-        .extend(versus(paper, full, "x", plot::BLUE, |s| s.u[0]));
-    pos.series
-        .extend(versus(paper, full, "y", plot::ORANGE, |s| s.u[1]));
+    let (x, y): (Get, Get) = (|s| s.u[0], |s| s.u[1]);
+    let pos = clipped("Fig. 5 — displacements x, y", "x, y (m)", &[x, y])
+        .series_from(ours(paper, "x", solid, x))
+        .series_from(ours(paper, "y", second, y))
+        .series_from(oracle(full, "x and y", &[x, y]));
     figs.push(("fig05_position.png".to_string(), vec![pos]));
 
-    let mut vel =
-        panel("Fig. 6 — velocities dx/dt, dy/dt", "dx/dt, dy/dt (m/s)").legend(Legend::LowerRight);
-    vel.series
-        .extend(versus(paper, full, "dx/dt", plot::BLUE, |s| s.v[0]));
-    vel.series
-        .extend(versus(paper, full, "dy/dt", plot::ORANGE, |s| s.v[1]));
+    let (vx, vy): (Get, Get) = (|s| s.v[0], |s| s.v[1]);
+    let vel = clipped(
+        "Fig. 6 — velocities dx/dt, dy/dt",
+        "dx/dt, dy/dt (m/s)",
+        &[vx, vy],
+    )
+    .series_from(ours(paper, "dx/dt", solid, vx))
+    .series_from(ours(paper, "dy/dt", second, vy))
+    .series_from(oracle(full, "dx/dt and dy/dt", &[vx, vy]));
     figs.push(("fig06_velocity.png".to_string(), vec![vel]));
 
-    let e0 = paper.samples.first().map_or(0.0, Sample::energy);
-    let mut energy = panel("Fig. 7 — kinetic, potential and total energy", "energy (J)")
-        .legend(Legend::LowerRight);
-    energy.series.extend([
-        Series::new(
-            "kinetic K",
-            paper.curve(|s| s.kinetic),
-            Style::solid(plot::BLUE),
-        ),
-        Series::new(
-            "potential P",
-            paper.curve(|s| s.potential),
-            Style::solid(plot::ORANGE),
-        ),
-        Series::new(
-            "total E = K + P",
-            paper.curve(Sample::energy),
-            Style::solid(plot::RED),
-        ),
-        Series::new(
-            "K, RK4",
-            curve(full, |s| s.kinetic),
-            Style::dashed(plot::BLACK),
-        ),
-        Series::new(
-            "P, RK4",
-            curve(full, |s| s.potential),
-            Style::dashed(plot::GREY),
-        ),
-    ]);
-    let drift = panel("Fig. 7 (detail) — total energy error E − E₀", "E − E₀ (J)")
-        .legend(Legend::UpperLeft)
-        .series(
-            "paper algorithm",
-            paper.curve(|s| s.energy() - e0),
-            Style::solid(plot::RED).width(1),
-        );
-    figs.push(("fig07_energy.png".to_string(), vec![energy, drift]));
+    let (kin, pot): (Get, Get) = (|s| s.kinetic, |s| s.potential);
+    let energy = clipped(
+        "Fig. 7 — kinetic, potential, total energy",
+        "energy (J)",
+        &[kin, pot],
+    )
+    .legend(Legend::LowerRight)
+    .series("kinetic K, paper algorithm", paper.curve(kin), solid)
+    .series("potential P, paper algorithm", paper.curve(pot), second)
+    .series(
+        "total E = K + P, paper algorithm",
+        paper.curve(Sample::energy),
+        Style::solid(plot::RED),
+    )
+    .series_from(oracle(full, "K and P", &[kin, pot]));
+    let drift = |r: &Run| {
+        let e0 = r.samples.first().map_or(0.0, Sample::energy);
+        r.curve(|s| s.energy() - e0)
+    };
+    let detail = Panel::new(
+        format!("Fig. 7, detail — total energy error E − E₀, first {ZOOM} s"),
+        T,
+        "E − E₀ (J)",
+    )
+    .x_range(0.0, ZOOM)
+    .legend(Legend::UpperLeft)
+    .series(
+        "paper algorithm",
+        drift(paper),
+        Style::solid(plot::RED).width(1),
+    )
+    .series(cured.name, drift(cured), Style::solid(plot::GREEN));
+    figs.push(("fig07_energy.png".to_string(), vec![energy, detail]));
 
+    let tdd: Get = |s| s.a[2];
+    let (lo, hi) = reference_range(full, t_end, &[tdd]);
     let rk4_acc = Panel::new(
         "Fig. 8 — angular acceleration d²θ/dt², RK4",
         T,
         "d²θ/dt² (rad/s²)",
     )
     .x_range(0.0, t_end)
-    .series(
-        "d²θ/dt², RK4",
-        curve(full, |s| s.a[2]),
-        Style::solid(plot::BLACK),
-    );
+    .y_range(lo, hi)
+    .series("d²θ/dt², RK4", curve(full, tdd), Style::solid(plot::BLACK));
     figs.push(("fig08_theta_ddot_rk4.png".to_string(), vec![rk4_acc]));
 
-    let acc = |fig: &str, what: &str, unit: &str, k: usize| {
-        let title = format!("{fig} — {what}, paper algorithm{stop}");
-        zoomed(
-            &title,
-            &format!("{what} ({unit})"),
-            t_end,
-            &versus(paper, full, what, plot::BLUE, |s| s.a[k]),
-        )
-    };
-    figs.push((
-        "fig09_theta_ddot.png".to_string(),
-        acc("Fig. 9", "d²θ/dt²", "rad/s²", 2),
-    ));
-    figs.push((
-        "fig10_x_ddot.png".to_string(),
-        acc("Fig. 10", "d²x/dt²", "m/s²", 0),
-    ));
-    figs.push((
-        "fig11_y_ddot.png".to_string(),
-        acc("Fig. 11", "d²y/dt²", "m/s²", 1),
-    ));
-
-    for (fig, file, i) in [
-        ("Fig. 12", "fig12_lambda1.png", 0),
-        ("Fig. 13", "fig13_lambda2.png", 1),
-    ] {
-        let what = if i == 0 { "λ₁" } else { "λ₂" };
-        let mut series = versus(paper, full, what, plot::BLUE, |s| s.lambda[i]).to_vec();
-        series.insert(
-            1,
+    // Figs. 9-13: the raw curve thin, its two-sample mean, (for λ) the
+    // default integrator, and the oracle.
+    let (xdd, ydd): (Get, Get) = (|s| s.a[0], |s| s.a[1]);
+    let (l1, l2): (Get, Get) = (|s| s.lambda[0], |s| s.lambda[1]);
+    let accelerations: [(&str, &str, &str, &str, Get); 5] = [
+        ("fig09_theta_ddot.png", "Fig. 9", "d²θ/dt²", "rad/s²", tdd),
+        ("fig10_x_ddot.png", "Fig. 10", "d²x/dt²", "m/s²", xdd),
+        ("fig11_y_ddot.png", "Fig. 11", "d²y/dt²", "m/s²", ydd),
+        ("fig12_lambda1.png", "Fig. 12", "λ₁", "N", l1),
+        ("fig13_lambda2.png", "Fig. 13", "λ₂", "N", l2),
+    ];
+    for (file, fig, what, unit, f) in accelerations {
+        let raw = paper.curve(f);
+        let mut series = vec![
             Series::new(
-                format!("{what}, {}", cured.name),
-                cured.curve(|s| s.lambda[i]),
-                Style::solid(plot::GREEN),
+                format!("{what}, paper algorithm"),
+                raw.clone(),
+                Style::solid(plot::BLUE).width(1),
             ),
-        );
-        let title = format!("{fig} — multiplier {what}{stop}");
+            Series::new(
+                format!("{what}, paper algorithm, 2-sample mean"),
+                mean2(&raw),
+                second,
+            ),
+        ];
+        if what.starts_with('λ') {
+            series.push(Series::new(
+                format!("{what}, {}", cured.name),
+                cured.curve(f),
+                Style::solid(plot::GREEN),
+            ));
+        }
+        series.push(oracle(full, what, &[f]));
+        let range = reference_range(full, ZOOM, &[f]);
+        let title = format!("{fig} — {what}");
         figs.push((
             file.to_string(),
-            zoomed(&title, &format!("{what} (N)"), t_end, &series),
+            oscillating(
+                &title,
+                &format!("{what} ({unit})"),
+                t_end,
+                &stop,
+                range,
+                &series,
+            ),
         ));
     }
 
@@ -316,20 +396,29 @@ fn figures(paper: &Run, cured: &Run, full: &[Sample], t_end: f64) -> Vec<(String
             })
             .collect()
     };
-    let growth = Panel::new("Multiplier error max|λᵢ − λᵢ,RK4| (t > 0)", T, "error (N)")
-        .x_range(0.0, t_end)
-        .scale(Scale::LogY)
-        .legend(Legend::LowerRight)
-        .series(
-            paper.name,
-            lam_err(paper),
-            Style::solid(plot::BLUE).width(1),
+    let mut growth = Panel::new(
+        "Multiplier error max(|λ₁ − λ₁,RK4|, |λ₂ − λ₂,RK4|), t > 0",
+        T,
+        "error (N)",
+    )
+    .x_range(0.0, t_end)
+    .scale(Scale::LogY)
+    .legend(Legend::LowerRight);
+    for (run, color) in [(paper, plot::BLUE), (cured, plot::GREEN)]
+        .into_iter()
+        .chain(
+            others
+                .iter()
+                .copied()
+                .zip([plot::ORANGE, plot::RED, plot::GREY]),
         )
-        .series(
-            cured.name,
-            lam_err(cured),
-            Style::solid(plot::GREEN).width(1),
-        );
+    {
+        growth.series.push(Series::new(
+            run.name,
+            lam_err(run),
+            Style::solid(color).width(1),
+        ));
+    }
     figs.push(("lambda_error.png".to_string(), vec![growth]));
     figs
 }
@@ -343,6 +432,14 @@ fn iterations(samples: &[Sample]) -> (f64, usize) {
     (total as f64 / n as f64, max)
 }
 
+/// Display width of a table cell: characters without combining marks.
+fn width(s: &str) -> usize {
+    s.chars()
+        .filter(|c| !('\u{300}'..='\u{36f}').contains(c))
+        .count()
+}
+
+/// Prints the comparison table, one column per run, and why a run stopped.
 fn print_summary(runs: &[&Run]) {
     let mut rows: Vec<(String, Vec<String>)> = Vec::new();
     let mut row = |label: &str, f: &dyn Fn(&Run) -> String| {
@@ -377,6 +474,31 @@ fn print_summary(runs: &[&Run]) {
     row("max |λ − λ_RK4|, t > 0 (N)", &|r| e(r.lambda_err(all)));
     row("max |λ − λ_RK4|, 0 < t ≤ 2 s (N)", &|r| {
         e(r.lambda_err(ZOOM))
+    });
+    for hi in [1.0, ZOOM] {
+        row(
+            &format!("max |2-sample mean of λ − RK4 mean|, t ≤ {hi} s (N)"),
+            &|r| {
+                let m = |v: &[Sample], i: usize| mean2(&curve(v, |s| s.lambda[i]));
+                let mut err = 0.0_f64;
+                for i in 0..2 {
+                    // Skip the first mean: it contains the given λ₀.
+                    for (a, b) in m(&r.samples, i).iter().zip(&m(&r.oracle, i)).skip(1) {
+                        if a.0 <= hi {
+                            err = err.max((a.1 - b.1).abs());
+                        }
+                    }
+                }
+                e(err)
+            },
+        );
+    }
+    row("solution lost (|θ − θ_RK4| > 0.1 rad) at t (s)", &|r| {
+        r.samples
+            .iter()
+            .zip(&r.oracle)
+            .find(|(s, o)| (s.u[2] - o.u[2]).abs() > 0.1)
+            .map_or("never".to_string(), |(s, _)| format!("{:.2}", s.t))
     });
     row("energy drift max |E − E₀| (J)", &|r| {
         let e0 = r.samples.first().map_or(0.0, Sample::energy);
@@ -414,21 +536,17 @@ fn print_summary(runs: &[&Run]) {
         .to_string()
     });
 
-    let w0 = rows
-        .iter()
-        .map(|(l, _)| l.chars().count())
-        .max()
-        .unwrap_or(0);
+    let w0 = rows.iter().map(|(l, _)| width(l)).max().unwrap_or(0);
     let widths: Vec<usize> = (0..runs.len())
         .map(|j| {
             rows.iter()
-                .map(|(_, c)| c[j].chars().count())
-                .chain(std::iter::once(runs[j].name.chars().count()))
+                .map(|(_, c)| width(&c[j]))
+                .chain(std::iter::once(width(runs[j].name)))
                 .max()
                 .unwrap_or(0)
         })
         .collect();
-    let pad = |s: &str, w: usize| format!("{s}{}", " ".repeat(w.saturating_sub(s.chars().count())));
+    let pad = |s: &str, w: usize| format!("{s}{}", " ".repeat(w.saturating_sub(width(s))));
     let mut line = pad("", w0);
     for (r, w) in runs.iter().zip(&widths) {
         line.push_str(" | ");
@@ -437,7 +555,7 @@ fn print_summary(runs: &[&Run]) {
     println!("Pendulum, paper preset (m = 1, l = 1, g₀ = 10, h = 0.01, θ₀ = π/2), against RK4");
     println!();
     println!("{}", line.trim_end());
-    println!("{}", "-".repeat(line.chars().count()));
+    println!("{}", "-".repeat(width(&line)));
     for (label, cells) in &rows {
         let mut line = pad(label, w0);
         for (c, w) in cells.iter().zip(&widths) {

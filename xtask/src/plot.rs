@@ -185,6 +185,13 @@ impl Panel {
         self
     }
 
+    /// Adds a series built elsewhere.
+    #[must_use]
+    pub fn series_from(mut self, series: Series) -> Self {
+        self.series.push(series);
+        self
+    }
+
     /// Sets the axis scales.
     #[must_use]
     pub fn scale(mut self, scale: Scale) -> Self {
@@ -444,7 +451,9 @@ where
         .y_label_formatter(&|v| tick(*v))
         .label_style(("sans-serif", 14))
         .axis_desc_style(("sans-serif", 16))
-        .light_line_style(RGBColor(0, 0, 0).mix(0.05))
+        // No minor grid: plotters saves PNGs with fast compression, and the
+        // minor grid alone triples the file size.
+        .light_line_style(TRANSPARENT)
         .draw()?;
     for s in &panel.series {
         let shape = ShapeStyle::from(s.style.color).stroke_width(s.style.width);

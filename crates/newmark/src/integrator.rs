@@ -21,6 +21,9 @@ pub struct StartReport {
     /// The third time derivative estimate `u⃛₀` used for the Arnold-Brüls start
     /// (empty when not used).
     pub jerk: Vec<f64>,
+    /// The `O(h²)` starting velocity correction `δu̇` (normal to the constraints)
+    /// that puts the start on the discrete solution (empty when not used).
+    pub velocity_start_correction: Vec<f64>,
 }
 
 /// Why one attempt at a step failed (before step control decides).
@@ -432,30 +435,13 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
 
     /// One Newton attempt at the step `t → t + h`; returns the iterations.
     fn attempt(&mut self, h: f64) -> Result<usize, Failure> {
-        let AlphaParams {
-            alpha_m,
-            alpha_f,
-            beta,
-            gamma,
-        } = self.p;
+        let beta = self.p.beta;
         let t1 = self.step_end(h);
         self.predict(h);
         // Corrector factors (15): Δü = β' Δu, Δu̇ = γ' Δu.
-        let beta_p = (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h);
-        let gamma_p = gamma / (beta * h);
+        let coefficients = self.p.coefficients(h, self.config.scaling);
+        let (beta_p, gamma_p) = (coefficients.c_a, coefficients.c_v);
         let a_p = 1.0 / (beta * h * h);
-        let coefficients = Coefficients {
-            c_u: 1.0,
-            c_v: gamma_p,
-            c_a: beta_p,
-            c_bb: beta_p,
-            c_identity: 0.0,
-            scale: if self.config.scaling {
-                1.0 / beta_p
-            } else {
-                1.0
-            },
-        };
         let n = self.sys.n_coords();
         let max_rate = match self.config.newton {
             Newton::Modified { max_rate } => max_rate,
@@ -755,6 +741,36 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         Ok(())
     }
 
+    /// The velocity perturbation `δu̇` with `[M Bᵀ; B 0][δu̇; μ] = [0; −k B u⃛₀]`:
+    /// the given normal component, no tangential (inertia-weighted) part.
+    fn velocity_start_correction(
+        &mut self,
+        t: f64,
+        u: &[f64],
+        jerk: &[f64],
+        k: f64,
+    ) -> Result<Vec<f64>, IntegrationError> {
+        let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
+        let (zeros_n, zeros_m) = (vec![0.0; n], vec![0.0; m]);
+        let context = "computing the starting velocity correction";
+        self.lin.eval_residual(self.sys, t, u, &zeros_n, &zeros_n, &zeros_m);
+        self.lin.assemble(&Coefficients::acceleration());
+        self.solver
+            .factor(&self.lin.kkt().values)
+            .map_err(|e| self.kkt_error(context, t, 0.0, e))?;
+        self.rhs.fill(0.0);
+        self.lin
+            .b_pattern()
+            .mul_add(&self.lin.b, jerk, &mut self.rhs[n..]);
+        for x in &mut self.rhs[n..] {
+            *x *= -k;
+        }
+        self.solver
+            .solve_in_place(&mut self.rhs)
+            .map_err(|e| self.kkt_error(context, t, 0.0, e))?;
+        Ok(self.rhs[..n].to_vec())
+    }
+
     /// Initial `ü₀`, `λ₀` and the acceleration-like variable `a₀`.
     fn initial_acceleration(&mut self) -> Result<(), IntegrationError> {
         let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
@@ -785,7 +801,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                     alpha_m, alpha_f, ..
                 } = self.p;
                 self.state.a_alpha.copy_from_slice(&a);
-                if self.config.third_derivative_start && alpha_m != alpha_f {
+                if self.config.corrected_start {
                     // u⃛₀ by central differences of consistent accelerations at
                     // the Taylor states u₀ ± δu̇₀ + δ²/2 ü₀, u̇₀ ± δü₀: the O(δ²)
                     // velocity error is even in δ and cancels.
@@ -805,6 +821,18 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                     for i in 0..n {
                         self.state.a_alpha[i] = a[i] + (alpha_m - alpha_f) * d * jerk[i];
                     }
+                    // The discrete solution's velocity has a normal component
+                    // B u̇_n = −c h² B u⃛ (c = β + Δα/2 − 1/6 is the
+                    // position update's local error constant): without it the
+                    // first step absorbs the O(h³) normal position defect into
+                    // an O(h) jump of a, which rings as a period-2h transient.
+                    let AlphaParams { beta, .. } = self.p;
+                    let c = beta + 0.5 * (alpha_m - alpha_f) - 1.0 / 6.0;
+                    let dv = self.velocity_start_correction(t, &u, &jerk, c * d * d)?;
+                    for i in 0..n {
+                        self.state.v[i] += dv[i];
+                    }
+                    self.start.velocity_start_correction = dv;
                     self.start.jerk = jerk;
                 }
             }

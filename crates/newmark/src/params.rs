@@ -1,6 +1,7 @@
 //! Integrator parameters and configuration.
 
 use mstar_kkt::KktOptions;
+use mstar_linearize::Coefficients;
 
 use crate::IntegrationError;
 
@@ -60,6 +61,37 @@ pub struct AlphaParams {
     pub beta: f64,
     /// γ.
     pub gamma: f64,
+}
+
+impl AlphaParams {
+    /// `β' = (1 − α_m) / ((1 − α_f) β h²)`: the corrector's `Δü = β' Δu` (15a).
+    #[must_use]
+    pub fn beta_prime(&self, h: f64) -> f64 {
+        (1.0 - self.alpha_m) / ((1.0 - self.alpha_f) * self.beta * h * h)
+    }
+
+    /// `γ' = γ / (β h)`: the corrector's `Δu̇ = γ' Δu` (15b).
+    #[must_use]
+    pub fn gamma_prime(&self, h: f64) -> f64 {
+        self.gamma / (self.beta * h)
+    }
+
+    /// The KKT coefficients of one Newton iteration with step `h`:
+    /// `S_T = K_T + γ' C_T + β' M*` (eq. 17 with `M* = M + BᵀB`, eq. 11), and,
+    /// with `scaling`, the equilibrium rows multiplied (the multipliers divided)
+    /// by `1/β'` so that the matrix stays `O(1)` as `h → 0`.
+    #[must_use]
+    pub fn coefficients(&self, h: f64, scaling: bool) -> Coefficients {
+        let beta_p = self.beta_prime(h);
+        Coefficients {
+            c_u: 1.0,
+            c_v: self.gamma_prime(h),
+            c_a: beta_p,
+            c_bb: beta_p,
+            c_identity: 0.0,
+            scale: if scaling { 1.0 / beta_p } else { 1.0 },
+        }
+    }
 }
 
 impl Scheme {
@@ -186,11 +218,14 @@ pub struct Config {
     pub predictor: Predictor,
     /// Initial acceleration and multipliers (default: consistent).
     pub start: Start,
-    /// Start the acceleration-like variable at `a₀ = ü₀ + (α_m − α_f) h u⃛₀`
-    /// (Arnold & Brüls 2007), `u⃛₀` from central differences of consistent
-    /// accelerations, so that there is no `O(h)` transient in `ü` and `λ`
-    /// (default: true; only with [`Start::Consistent`]).
-    pub third_derivative_start: bool,
+    /// Start on the discrete solution, so that there is no `O(h)` period-2h
+    /// transient in `ü` and `λ` (default: true; only with [`Start::Consistent`]):
+    /// the acceleration-like variable starts at `a₀ = ü₀ + (α_m − α_f) h u⃛₀`
+    /// (Arnold & Brüls 2007) and the velocity gets the `O(h²)` normal component
+    /// `B δu̇₀ = −c h² B u⃛₀`, `c = β + (α_m − α_f)/2 − 1/6`, that the index-3
+    /// discrete solution carries (`docs/stability.md`). `u⃛₀` comes from central
+    /// differences of consistent accelerations at `t₀ ± h`.
+    pub corrected_start: bool,
     /// Project the initial state onto `Φ = 0` and `B u̇ + Φ_t = 0` (minimum-norm
     /// corrections) when it violates them; when false such a state is an error
     /// (default: true).
@@ -220,7 +255,7 @@ impl Default for Config {
             newton: Newton::default(),
             predictor: Predictor::default(),
             start: Start::Consistent,
-            third_derivative_start: true,
+            corrected_start: true,
             project: true,
             exact_multiplier_update: true,
             scaling: true,
@@ -246,7 +281,7 @@ impl Config {
             newton: Newton::Full,
             predictor: Predictor::ZeroAcceleration,
             start: Start::Paper { lambda0 },
-            third_derivative_start: false,
+            corrected_start: false,
             exact_multiplier_update: false,
             scaling: false,
             ..Self::default()

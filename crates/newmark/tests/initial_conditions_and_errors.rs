@@ -25,7 +25,13 @@ fn consistent_start_satisfies_the_dae_at_acceleration_level() {
     let theta = [0.3, -0.7, 1.2];
     let omega = [0.5, -1.0, 2.0];
     let (u, v) = (sys.position(&theta), sys.velocity(&theta, &omega));
-    let integ = Integrator::new(&sys, Config::default(), 0.0, &u, &v).expect("consistent start");
+    // Without the O(h²) start correction of u̇ (tested below), the state is
+    // exactly the given one.
+    let config = Config {
+        corrected_start: false,
+        ..Config::default()
+    };
+    let integ = Integrator::new(&sys, config, 0.0, &u, &v).expect("consistent start");
     let s = integ.sample();
     let (n, m) = (sys.n_coords(), sys.n_constraints());
     let (mp, bp) = (sys.mass_pattern(), sys.b_pattern());
@@ -98,9 +104,13 @@ fn rough_initial_state_is_projected_and_reported() {
     let mut phi = vec![0.0; sys.n_constraints()];
     sys.phi_into(0.0, &s.u, &mut phi);
     assert!(phi.iter().all(|p| p.abs() < 1e-12), "{phi:?}");
+    // The state also carries the O(h²) start correction of the velocity.
+    let start = &report.velocity_start_correction;
+    assert_eq!(start.len(), u.len());
     for i in 0..u.len() {
         assert!((s.u[i] - u[i] - report.position_correction[i]).abs() < 1e-15);
-        assert!((s.v[i] - v[i] - report.velocity_correction[i]).abs() < 1e-15);
+        assert!((s.v[i] - v[i] - report.velocity_correction[i] - start[i]).abs() < 1e-15);
+        assert!(start[i].abs() < 1e-2 * report.velocity_correction.iter().fold(0.0f64, |m, x| m.max(x.abs())));
     }
     // The velocity correction is the minimum-norm one: it lies in the range of Bᵀ,
     // so it is orthogonal to every admissible velocity, e.g. the chain's own.
