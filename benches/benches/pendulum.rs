@@ -38,7 +38,11 @@ fn phases(c: &mut Criterion) {
     });
     let mut solver = KktSolver::new(lin.kkt(), &KktOptions::default()).expect("pattern");
     group.bench_function("factor (dense)", |b| {
-        b.iter(|| solver.factor(black_box(&lin.kkt().values)).expect("regular"));
+        b.iter(|| {
+            solver
+                .factor(black_box(&lin.kkt().values))
+                .expect("regular")
+        });
     });
     let mut rhs = vec![0.0; 5];
     group.bench_function("solve (dense)", |b| {
@@ -52,12 +56,16 @@ fn phases(c: &mut Criterion) {
 
 fn steps(c: &mut Criterion) {
     let mut group = c.benchmark_group("pendulum/100 steps");
-    for (name, run) in [("paper", PendulumRun::paper()), ("default", PendulumRun::standard())] {
+    for (name, run) in [
+        ("paper", PendulumRun::paper()),
+        ("default", PendulumRun::standard()),
+    ] {
         let sys = run.system();
         let u0 = sys.position(&[run.theta0]);
         group.bench_function(name, |b| {
             b.iter(|| {
-                let mut integ = Integrator::new(&sys, run.config.clone(), 0.0, &u0, &[0.0; 3]).expect("start");
+                let mut integ =
+                    Integrator::new(&sys, run.config.clone(), 0.0, &u0, &[0.0; 3]).expect("start");
                 for _ in 0..100 {
                     integ.step(f64::INFINITY).expect("step");
                 }

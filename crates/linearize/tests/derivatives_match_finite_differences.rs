@@ -151,3 +151,131 @@ fn kkt_matrix_is_eq_16_with_m_star() {
         }
     }
 }
+
+/// A model with every planar element, at random parameters.
+fn every_element(p: &[f64]) -> mstar_model::planar::PlanarSystem {
+    use mstar_model::planar::{At, Coordinate, PlanarBuilder, TimeFunction};
+    let mut b = PlanarBuilder::new();
+    b.gravity(p[0], p[1]);
+    let r1 = b.rigid_body("r1", 1.0 + p[2].abs(), 0.1 + p[3].abs(), [p[4], p[5], p[6]]);
+    let r2 = b.rigid_body("r2", 2.0, 0.3, [p[7], p[8], p[9]]);
+    let r3 = b.rigid_body("r3", 0.5, 0.05, [p[10], p[11], p[12]]);
+    let pm = b.point_mass("pm", 0.7, [p[13], p[14]]);
+    b.revolute(
+        "hinge",
+        At::Ground([p[15], p[16]]),
+        At::Body(r1, [p[17], p[18]]),
+    );
+    b.revolute(
+        "pin",
+        At::Body(r1, [p[19], p[20]]),
+        At::Body(r2, [p[21], p[22]]),
+    );
+    b.distance(
+        "rod",
+        At::Body(r2, [p[23], p[24]]),
+        At::Body(pm, [0.0, 0.0]),
+        1.0 + p[25].abs(),
+    );
+    b.prismatic(
+        "slider",
+        At::Body(r2, [p[26], p[27]]),
+        [p[28], 1.0],
+        At::Body(r3, [p[29], p[30]]),
+    );
+    b.prismatic(
+        "rail",
+        At::Ground([p[31], 0.0]),
+        [1.0, p[32]],
+        At::Body(pm, [0.0, 0.0]),
+    );
+    b.weld(
+        "glue",
+        At::Body(r3, [p[33], p[34]]),
+        At::Body(r1, [p[35], p[36]]),
+    );
+    b.distance(
+        "tether",
+        At::Ground([0.0, 1.0]),
+        At::Body(r3, [p[37], p[38]]),
+        2.0,
+    );
+    let sine = TimeFunction::Sine {
+        offset: p[39],
+        amplitude: 0.5,
+        omega: 2.0,
+        phase: p[40],
+    };
+    b.driver("motor", r2, Coordinate::Theta, sine);
+    b.driver(
+        "lift",
+        pm,
+        Coordinate::Y,
+        TimeFunction::Linear {
+            value: 0.1,
+            rate: p[41],
+        },
+    );
+    b.force(
+        "push",
+        At::Body(r1, [p[42], p[43]]),
+        sine,
+        TimeFunction::Constant(p[44]),
+    );
+    b.torque("twist", r3, sine);
+    b.spring(
+        "spring",
+        At::Body(r1, [p[45], 0.2]),
+        At::Body(pm, [0.0, 0.0]),
+        50.0,
+        3.0,
+        0.5,
+    );
+    b.spring(
+        "anchor",
+        At::Ground([1.0, 1.0]),
+        At::Body(r2, [0.1, p[46]]),
+        20.0,
+        1.0,
+        0.0,
+    );
+    b.rotational_spring("torsion", Some(r1), r2, 10.0, 0.5);
+    b.rotational_spring("ground torsion", None, r3, 4.0, 0.2);
+    b.build().expect("valid model")
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("regressions"))),
+        ..ProptestConfig::default()
+    })]
+    #[test]
+    fn planar_element_derivatives(
+        params in prop::collection::vec(-1.0f64..1.0, 47),
+        state in prop::collection::vec(-2.0f64..2.0, 60),
+        t in 0.0f64..2.0,
+    ) {
+        let sys = every_element(&params);
+        let (n, m) = (sys.n_coords(), sys.n_constraints());
+        prop_assert_eq!((n, m), (11, 14));
+        let u = &state[..n];
+        let v = &state[n..2 * n];
+        let a = &state[2 * n..3 * n];
+        let lambda = &state[3 * n..3 * n + m];
+        let e = check_derivatives(&sys, t, u, v, a, lambda);
+        prop_assert!(e.max() < FD_TOL, "{e:?}");
+    }
+}
+
+#[test]
+fn chain_generators_start_assembled() {
+    use mstar_model::planar::{bar_chain, point_mass_chain};
+    for sys in [bar_chain(7), point_mass_chain(7)] {
+        let u = sys.initial_position();
+        let mut phi = vec![0.0; sys.n_constraints()];
+        sys.phi_into(0.0, &u, &mut phi);
+        assert!(phi.iter().all(|p| p.abs() < 1e-14), "{phi:?}");
+        assert_eq!(sys.coord_name(0), "link1.x");
+    }
+    assert_eq!(bar_chain(3).coord_name(8), "link3.theta");
+}

@@ -22,6 +22,7 @@
 
 mod pattern;
 mod pendulum;
+pub mod planar;
 mod sample;
 mod system;
 

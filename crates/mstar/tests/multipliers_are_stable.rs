@@ -43,7 +43,10 @@ fn start_errors(corrected_start: bool, hs: &[f64]) -> Vec<f64> {
 fn corrected_start_removes_the_first_order_transient() {
     let hs = [0.02, 0.01, 0.005, 0.0025];
     let corrected = fitted_order(&hs, &start_errors(true, &hs));
-    assert!((corrected - 2.0).abs() <= 0.1, "order {corrected:.3} with the corrected start");
+    assert!(
+        (corrected - 2.0).abs() <= 0.1,
+        "order {corrected:.3} with the corrected start"
+    );
     // Without it the period-2h transient is O(h): the test can tell the two apart.
     let plain = fitted_order(&hs, &start_errors(false, &hs));
     assert!(plain < 1.5, "order {plain:.3} without the corrected start");
@@ -66,7 +69,10 @@ fn generalized_alpha_keeps_lambda_second_order_accurate_over_100_s() {
             };
             let (s, r) = with_reference(&run);
             let err = max_lambda_error(&s, &r);
-            assert!(err <= bound, "ρ∞ = {rho_inf}, h = {h}: max |λ − λ_ref| = {err:.3} N > {bound} N");
+            assert!(
+                err <= bound,
+                "ρ∞ = {rho_inf}, h = {h}: max |λ − λ_ref| = {err:.3} N > {bound} N"
+            );
         }
     }
 }
@@ -83,7 +89,10 @@ fn paper_scheme_shows_the_growing_period_2h_oscillation() {
         nyquist_amplitude(&lambda1[k..k + 100])
     };
     let (early, late) = (window(0.0), window(4.0));
-    assert!(late > 10.0 * early, "period-2h amplitude of λ₁: {early:.3e} in [0, 1] s, {late:.3e} in [4, 5] s");
+    assert!(
+        late > 10.0 * early,
+        "period-2h amplitude of λ₁: {early:.3e} in [0, 1] s, {late:.3e} in [4, 5] s"
+    );
     let times: Vec<f64> = samples.iter().take(201).map(|s| s.t).collect();
     let reference = run.reference(&times);
     let err = max_lambda_error(&samples[..201], &reference);
@@ -95,7 +104,10 @@ fn paper_scheme_shows_the_growing_period_2h_oscillation() {
     assert!(result.is_ok());
     let lambda1: Vec<f64> = samples.iter().map(|s| s.lambda[0]).collect();
     let amplitude = nyquist_amplitude(&lambda1[400..500]);
-    assert!(amplitude < 1e-2 * late, "generalized-α period-2h amplitude {amplitude:.3e}");
+    assert!(
+        amplitude < 1e-2 * late,
+        "generalized-α period-2h amplitude {amplitude:.3e}"
+    );
 }
 
 /// Condition number of the pendulum's iteration matrix at a moving state.
@@ -116,8 +128,14 @@ fn condition(h: f64, scaling: bool) -> f64 {
 #[test]
 fn scaling_keeps_the_condition_number_bounded_as_h_shrinks() {
     let (coarse, fine) = (condition(1e-2, true), condition(1e-6, true));
-    assert!(fine <= 10.0 * coarse, "scaled: cond {coarse:.3e} at h = 1e-2, {fine:.3e} at h = 1e-6");
+    assert!(
+        fine <= 10.0 * coarse,
+        "scaled: cond {coarse:.3e} at h = 1e-2, {fine:.3e} at h = 1e-6"
+    );
     // Unscaled it grows like h⁻⁴ (here 16 orders of magnitude between the two).
     let (coarse, fine) = (condition(1e-2, false), condition(1e-6, false));
-    assert!(fine > 1e10 * coarse, "unscaled: cond {coarse:.3e} at h = 1e-2, {fine:.3e} at h = 1e-6");
+    assert!(
+        fine > 1e10 * coarse,
+        "unscaled: cond {coarse:.3e} at h = 1e-2, {fine:.3e} at h = 1e-6"
+    );
 }

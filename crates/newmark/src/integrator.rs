@@ -753,7 +753,8 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
         let (zeros_n, zeros_m) = (vec![0.0; n], vec![0.0; m]);
         let context = "computing the starting velocity correction";
-        self.lin.eval_residual(self.sys, t, u, &zeros_n, &zeros_n, &zeros_m);
+        self.lin
+            .eval_residual(self.sys, t, u, &zeros_n, &zeros_n, &zeros_m);
         self.lin.assemble(&Coefficients::acceleration());
         self.solver
             .factor(&self.lin.kkt().values)

@@ -110,7 +110,14 @@ fn rough_initial_state_is_projected_and_reported() {
     for i in 0..u.len() {
         assert!((s.u[i] - u[i] - report.position_correction[i]).abs() < 1e-15);
         assert!((s.v[i] - v[i] - report.velocity_correction[i] - start[i]).abs() < 1e-15);
-        assert!(start[i].abs() < 1e-2 * report.velocity_correction.iter().fold(0.0f64, |m, x| m.max(x.abs())));
+        assert!(
+            start[i].abs()
+                < 1e-2
+                    * report
+                        .velocity_correction
+                        .iter()
+                        .fold(0.0f64, |m, x| m.max(x.abs()))
+        );
     }
     // The velocity correction is the minimum-norm one: it lies in the range of Bᵀ,
     // so it is orthogonal to every admissible velocity, e.g. the chain's own.

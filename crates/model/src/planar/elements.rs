@@ -1,0 +1,461 @@
+//! Constraint and force elements of the planar builder, each with analytic
+//! first and second derivatives on local coordinate slots.
+
+use super::geometry::{Anchor, Kind, Pt, Slots};
+use super::time::TimeFunction;
+
+/// What a constraint element enforces.
+#[derive(Clone, Debug)]
+pub(crate) enum Joint {
+    /// `p_A − p_B = 0` (2 rows).
+    Revolute,
+    /// `½(|p_A − p_B|² − L²) = 0` (1 row).
+    Distance { length: f64 },
+    /// Revolute rows and `θ_B − θ_A − angle = 0` (3 rows).
+    Weld { angle: f64 },
+    /// `n_A · (p_B − p_A) = 0` with `n_A = A(θ_A) n'`, and, when `B` is a rigid
+    /// body, `θ_B − θ_A − angle = 0`.
+    Prismatic { normal: [f64; 2], angle: f64 },
+    /// `u[slot 0] − f(t) = 0` (1 row).
+    Driver { f: TimeFunction },
+}
+
+/// A constraint element: its equations, slots and local derivative patterns.
+#[derive(Clone, Debug)]
+pub(crate) struct Constraint {
+    pub name: String,
+    pub joint: Joint,
+    pub anchors: [Anchor; 2],
+    pub slots: Slots,
+    pub rows: usize,
+    /// First global constraint row.
+    pub row0: usize,
+    /// `(row, slot)` of each entry of `∂Φ/∂q`.
+    pub grad: Vec<(usize, usize)>,
+    /// `(row, slot a, slot b)` of each entry of `∂²Φ/∂q²` (both triangles).
+    pub hess: Vec<(usize, usize, usize)>,
+    /// Row names (suffixes).
+    pub row_names: Vec<&'static str>,
+}
+
+fn theta_slot(slots: &Slots, side: usize) -> Option<usize> {
+    (0..slots.len()).find(|&a| slots.side[a] == side && slots.kind[a] == Kind::Theta)
+}
+
+impl Constraint {
+    /// Builds the element and its local patterns.
+    pub(crate) fn new(name: String, joint: Joint, anchors: [Anchor; 2], row0: usize) -> Self {
+        let slots = if let Joint::Driver { .. } = joint {
+            // A driver acts on one coordinate, stored as anchor A = Point{x: coord}.
+            let Anchor::Point { x } = anchors[0] else {
+                unreachable!("drivers are built with a coordinate anchor")
+            };
+            Slots {
+                global: vec![x],
+                kind: vec![Kind::X],
+                side: vec![0],
+            }
+        } else {
+            Slots::of(&anchors)
+        };
+        let n = slots.len();
+        let mut grad = Vec::new();
+        let mut hess = Vec::new();
+        let revolute = |grad: &mut Vec<(usize, usize)>, hess: &mut Vec<(usize, usize, usize)>| {
+            for k in 0..2 {
+                for a in 0..n {
+                    let on = match slots.kind[a] {
+                        Kind::X => k == 0,
+                        Kind::Y => k == 1,
+                        Kind::Theta => true,
+                    };
+                    if on {
+                        grad.push((k, a));
+                    }
+                    if slots.kind[a] == Kind::Theta {
+                        hess.push((k, a, a));
+                    }
+                }
+            }
+        };
+        let (ta, tb) = (theta_slot(&slots, 0), theta_slot(&slots, 1));
+        let angle_row = |row: usize, grad: &mut Vec<(usize, usize)>| {
+            if let Some(a) = ta {
+                grad.push((row, a));
+            }
+            if let Some(b) = tb {
+                grad.push((row, b));
+            }
+        };
+        let (rows, row_names): (usize, Vec<&'static str>) = match &joint {
+            Joint::Revolute => {
+                revolute(&mut grad, &mut hess);
+                (2, vec![".x", ".y"])
+            }
+            Joint::Weld { .. } => {
+                revolute(&mut grad, &mut hess);
+                angle_row(2, &mut grad);
+                (3, vec![".x", ".y", ".theta"])
+            }
+            Joint::Distance { .. } => {
+                for a in 0..n {
+                    grad.push((0, a));
+                    for b in 0..n {
+                        let theta_diag = a == b && slots.kind[a] == Kind::Theta;
+                        if slots.couples(a, b) || theta_diag {
+                            hess.push((0, a, b));
+                        }
+                    }
+                }
+                (1, vec![""])
+            }
+            Joint::Prismatic { .. } => {
+                for a in 0..n {
+                    grad.push((0, a));
+                    for b in 0..n {
+                        let with_ta = Some(a) == ta || Some(b) == ta;
+                        let tb_diag = a == b && Some(a) == tb;
+                        if with_ta || tb_diag {
+                            hess.push((0, a, b));
+                        }
+                    }
+                }
+                if tb.is_some() {
+                    angle_row(1, &mut grad);
+                    (2, vec![".line", ".theta"])
+                } else {
+                    (1, vec![".line"])
+                }
+            }
+            Joint::Driver { .. } => {
+                grad.push((0, 0));
+                (1, vec![""])
+            }
+        };
+        Self {
+            name,
+            joint,
+            anchors,
+            slots,
+            rows,
+            row0,
+            grad,
+            hess,
+            row_names,
+        }
+    }
+
+    fn points(&self, u: &[f64]) -> [Pt; 2] {
+        [self.anchors[0].point(u), self.anchors[1].point(u)]
+    }
+
+    fn angle(&self, u: &[f64], angle: f64) -> f64 {
+        let th = |side: usize| match self.anchors[side] {
+            Anchor::Rigid { x, .. } => u[x + 2],
+            _ => 0.0,
+        };
+        th(1) - th(0) - angle
+    }
+
+    /// The unit normal `n_A`, `∂n/∂θ_A`, and whether it turns with `A`.
+    fn normal(&self, u: &[f64], n0: [f64; 2]) -> ([f64; 2], [f64; 2]) {
+        match self.anchors[0] {
+            Anchor::Rigid { x, .. } => {
+                let (s, c) = u[x + 2].sin_cos();
+                let n = [c * n0[0] - s * n0[1], s * n0[0] + c * n0[1]];
+                (n, [-n[1], n[0]])
+            }
+            _ => (n0, [0.0, 0.0]),
+        }
+    }
+
+    /// Constraint values `Φ` (rows of this element).
+    pub(crate) fn phi(&self, t: f64, u: &[f64], out: &mut [f64]) {
+        match &self.joint {
+            Joint::Driver { f } => out[0] = u[self.slots.global[0]] - f.eval(t).0,
+            _ => {
+                let pts = self.points(u);
+                let d = [pts[0].p[0] - pts[1].p[0], pts[0].p[1] - pts[1].p[1]];
+                match &self.joint {
+                    Joint::Revolute => out[..2].copy_from_slice(&d),
+                    Joint::Weld { angle } => {
+                        out[..2].copy_from_slice(&d);
+                        out[2] = self.angle(u, *angle);
+                    }
+                    Joint::Distance { length } => {
+                        out[0] = 0.5 * (d[0] * d[0] + d[1] * d[1] - length * length);
+                    }
+                    Joint::Prismatic { normal, angle } => {
+                        let (n, _) = self.normal(u, *normal);
+                        out[0] = -(n[0] * d[0] + n[1] * d[1]);
+                        if self.rows == 2 {
+                            out[1] = self.angle(u, *angle);
+                        }
+                    }
+                    Joint::Driver { .. } => {}
+                }
+            }
+        }
+    }
+
+    /// `∂Φ/∂t` and `∂²Φ/∂t²` (rows of this element).
+    pub(crate) fn phi_t(&self, t: f64, out_t: &mut [f64], out_tt: &mut [f64]) {
+        out_t.fill(0.0);
+        out_tt.fill(0.0);
+        if let Joint::Driver { f } = &self.joint {
+            let (_, f1, f2) = f.eval(t);
+            out_t[0] = -f1;
+            out_tt[0] = -f2;
+        }
+    }
+
+    /// Values of `∂Φ/∂q` in the order of [`Constraint::grad`].
+    pub(crate) fn grad_values(&self, u: &[f64], out: &mut [f64]) {
+        if let Joint::Driver { .. } = self.joint {
+            out[0] = 1.0;
+            return;
+        }
+        let pts = self.points(u);
+        let s = &self.slots;
+        let d = [pts[0].p[0] - pts[1].p[0], pts[0].p[1] - pts[1].p[1]];
+        let angle_sign = |a: usize| if s.side[a] == 0 { -1.0 } else { 1.0 };
+        for (v, &(row, a)) in out.iter_mut().zip(&self.grad) {
+            *v = match (&self.joint, row) {
+                (Joint::Revolute | Joint::Weld { .. }, 0 | 1) => s.d_grad(a, row, &pts),
+                (Joint::Weld { .. }, _) | (Joint::Prismatic { .. }, 1) => angle_sign(a),
+                (Joint::Distance { .. }, _) => {
+                    d[0] * s.d_grad(a, 0, &pts) + d[1] * s.d_grad(a, 1, &pts)
+                }
+                (Joint::Prismatic { normal, .. }, _) => {
+                    let (n, dn) = self.normal(u, *normal);
+                    let mut g = n[0] * s.d_grad(a, 0, &pts) + n[1] * s.d_grad(a, 1, &pts);
+                    if s.kind[a] == Kind::Theta && s.side[a] == 0 {
+                        g += dn[0] * d[0] + dn[1] * d[1];
+                    }
+                    -g
+                }
+                (Joint::Revolute, _) | (Joint::Driver { .. }, _) => 0.0,
+            };
+        }
+    }
+
+    /// Values of `∂²Φ_row/∂q_a∂q_b` in the order of [`Constraint::hess`].
+    pub(crate) fn hess_values(&self, u: &[f64], out: &mut [f64]) {
+        if self.hess.is_empty() {
+            return;
+        }
+        let pts = self.points(u);
+        let s = &self.slots;
+        let d = [pts[0].p[0] - pts[1].p[0], pts[0].p[1] - pts[1].p[1]];
+        for (v, &(row, a, b)) in out.iter_mut().zip(&self.hess) {
+            *v = match &self.joint {
+                Joint::Revolute | Joint::Weld { .. } => s.d_hess(a, b, row, &pts),
+                Joint::Distance { .. } => (0..2)
+                    .map(|k| {
+                        s.d_grad(a, k, &pts) * s.d_grad(b, k, &pts) + d[k] * s.d_hess(a, b, k, &pts)
+                    })
+                    .sum(),
+                Joint::Prismatic { normal, .. } => {
+                    let (n, dn) = self.normal(u, *normal);
+                    let ta =
+                        |x: usize| s.kind[x] == Kind::Theta && s.side[x] == 0 && dn != [0.0, 0.0];
+                    let mut h: f64 = (0..2).map(|k| n[k] * s.d_hess(a, b, k, &pts)).sum();
+                    if ta(a) {
+                        h += (0..2).map(|k| dn[k] * s.d_grad(b, k, &pts)).sum::<f64>();
+                    }
+                    if ta(b) {
+                        h += (0..2).map(|k| dn[k] * s.d_grad(a, k, &pts)).sum::<f64>();
+                    }
+                    if ta(a) && a == b {
+                        // ∂²n/∂θ² = −n
+                        h -= n[0] * d[0] + n[1] * d[1];
+                    }
+                    -h
+                }
+                Joint::Driver { .. } => 0.0,
+            };
+        }
+    }
+}
+
+/// What a force element applies.
+#[derive(Clone, Debug)]
+pub(crate) enum Load {
+    /// A force `(f_x(t), f_y(t))` (global directions) at anchor A.
+    PointForce { fx: TimeFunction, fy: TimeFunction },
+    /// A torque `τ(t)` on the rigid body of anchor A.
+    Torque { tau: TimeFunction },
+    /// A linear spring-damper between A and B: tension `k(ℓ − ℓ₀) + c ℓ̇`.
+    Spring { k: f64, c: f64, rest: f64 },
+    /// A rotational spring-damper: torque `−k(θ_B − θ_A − θ₀) − c(θ̇_B − θ̇_A)` on B
+    /// and its opposite on A.
+    RotationalSpring { k: f64, c: f64, angle: f64 },
+}
+
+/// A force element with its local Jacobian patterns (dense over its slots,
+/// restricted where structurally zero).
+#[derive(Clone, Debug)]
+pub(crate) struct Force {
+    pub load: Load,
+    pub anchors: [Anchor; 2],
+    pub slots: Slots,
+    /// `(a, b)` entries of `∂g/∂q`.
+    pub g_u: Vec<(usize, usize)>,
+    /// `(a, b)` entries of `∂g/∂q̇`.
+    pub g_v: Vec<(usize, usize)>,
+}
+
+impl Force {
+    pub(crate) fn new(load: Load, anchors: [Anchor; 2]) -> Self {
+        let slots = Slots::of(&anchors);
+        let n = slots.len();
+        let thetas: Vec<usize> = (0..n).filter(|&a| slots.kind[a] == Kind::Theta).collect();
+        let all: Vec<(usize, usize)> = (0..n).flat_map(|a| (0..n).map(move |b| (a, b))).collect();
+        let theta_pairs: Vec<(usize, usize)> = thetas
+            .iter()
+            .flat_map(|&a| thetas.iter().map(move |&b| (a, b)))
+            .collect();
+        let (g_u, g_v) = match load {
+            Load::PointForce { .. } => (thetas.iter().map(|&a| (a, a)).collect(), Vec::new()),
+            Load::Torque { .. } => (Vec::new(), Vec::new()),
+            Load::Spring { .. } => (all.clone(), all),
+            Load::RotationalSpring { .. } => (theta_pairs.clone(), theta_pairs),
+        };
+        Self {
+            load,
+            anchors,
+            slots,
+            g_u,
+            g_v,
+        }
+    }
+
+    /// Spring geometry: `ℓ`, `∂ℓ/∂q` and `∂²ℓ/∂q²` (dense, `n × n`) on the slots.
+    fn spring_geometry(&self, u: &[f64]) -> (f64, Vec<f64>, Vec<f64>) {
+        let s = &self.slots;
+        let n = s.len();
+        let pts = [self.anchors[0].point(u), self.anchors[1].point(u)];
+        let d = [pts[0].p[0] - pts[1].p[0], pts[0].p[1] - pts[1].p[1]];
+        let l = (d[0] * d[0] + d[1] * d[1]).sqrt().max(f64::MIN_POSITIVE);
+        let e = [d[0] / l, d[1] / l];
+        let jd: Vec<[f64; 2]> = (0..n)
+            .map(|a| [s.d_grad(a, 0, &pts), s.d_grad(a, 1, &pts)])
+            .collect();
+        let dl: Vec<f64> = jd.iter().map(|j| e[0] * j[0] + e[1] * j[1]).collect();
+        let mut hl = vec![0.0; n * n];
+        for a in 0..n {
+            for b in 0..n {
+                let dot = jd[a][0] * jd[b][0] + jd[a][1] * jd[b][1];
+                let curv: f64 = (0..2).map(|k| e[k] * s.d_hess(a, b, k, &pts)).sum();
+                hl[a * n + b] = (dot - dl[a] * dl[b]) / l + curv;
+            }
+        }
+        (l, dl, hl)
+    }
+
+    fn theta(&self, side: usize, w: &[f64]) -> f64 {
+        match self.anchors[side] {
+            Anchor::Rigid { x, .. } => w[x + 2],
+            _ => 0.0,
+        }
+    }
+
+    /// Adds the generalized forces to `g`.
+    pub(crate) fn add_forces(&self, t: f64, u: &[f64], v: &[f64], g: &mut [f64]) {
+        let s = &self.slots;
+        match &self.load {
+            Load::PointForce { fx, fy } => {
+                let f = [fx.eval(t).0, fy.eval(t).0];
+                let p = self.anchors[0].point(u);
+                for a in 0..s.len() {
+                    g[s.global[a]] += match s.kind[a] {
+                        Kind::X => f[0],
+                        Kind::Y => f[1],
+                        Kind::Theta => p.dp[0] * f[0] + p.dp[1] * f[1],
+                    };
+                }
+            }
+            Load::Torque { tau } => {
+                if let Anchor::Rigid { x, .. } = self.anchors[0] {
+                    g[x + 2] += tau.eval(t).0;
+                }
+            }
+            Load::Spring { k, c, rest } => {
+                let (l, dl, _) = self.spring_geometry(u);
+                let ldot: f64 = (0..s.len()).map(|a| dl[a] * v[s.global[a]]).sum();
+                let tension = k * (l - rest) + c * ldot;
+                for a in 0..s.len() {
+                    g[s.global[a]] -= tension * dl[a];
+                }
+            }
+            Load::RotationalSpring { k, c, angle } => {
+                let rel = self.theta(1, u) - self.theta(0, u) - angle;
+                let rel_dot = self.theta(1, v) - self.theta(0, v);
+                let tau = -k * rel - c * rel_dot;
+                for a in (0..s.len()).filter(|&a| s.kind[a] == Kind::Theta) {
+                    g[s.global[a]] += if s.side[a] == 1 { tau } else { -tau };
+                }
+            }
+        }
+    }
+
+    /// Values of `∂g/∂q` (`wrt_v = false`) or `∂g/∂q̇` (`true`) in pattern order.
+    pub(crate) fn jacobian(&self, t: f64, u: &[f64], v: &[f64], wrt_v: bool, out: &mut [f64]) {
+        let s = &self.slots;
+        let n = s.len();
+        let sign = |a: usize| if s.side[a] == 1 { 1.0 } else { -1.0 };
+        match &self.load {
+            Load::PointForce { fx, fy } => {
+                let f = [fx.eval(t).0, fy.eval(t).0];
+                let p = self.anchors[0].point(u);
+                for o in out.iter_mut() {
+                    *o = p.ddp[0] * f[0] + p.ddp[1] * f[1];
+                }
+            }
+            Load::Torque { .. } => {}
+            Load::Spring { k, c, rest } => {
+                let (l, dl, hl) = self.spring_geometry(u);
+                let pattern = if wrt_v { &self.g_v } else { &self.g_u };
+                if wrt_v {
+                    for (o, &(a, b)) in out.iter_mut().zip(pattern) {
+                        *o = -c * dl[a] * dl[b];
+                    }
+                } else {
+                    let vl: Vec<f64> = (0..n).map(|a| v[s.global[a]]).collect();
+                    let ldot: f64 = (0..n).map(|a| dl[a] * vl[a]).sum();
+                    let tension = k * (l - rest) + c * ldot;
+                    // ∂ℓ̇/∂q_b = Σ_a ∂²ℓ/∂q_a∂q_b q̇_a
+                    let dldot: Vec<f64> = (0..n)
+                        .map(|b| (0..n).map(|a| hl[a * n + b] * vl[a]).sum())
+                        .collect();
+                    for (o, &(a, b)) in out.iter_mut().zip(pattern) {
+                        *o = -(k * dl[b] + c * dldot[b]) * dl[a] - tension * hl[a * n + b];
+                    }
+                }
+            }
+            Load::RotationalSpring { k, c, .. } => {
+                let coef = if wrt_v { *c } else { *k };
+                let pattern = if wrt_v { &self.g_v } else { &self.g_u };
+                for (o, &(a, b)) in out.iter_mut().zip(pattern) {
+                    *o = -coef * sign(a) * sign(b);
+                }
+            }
+        }
+    }
+
+    /// Potential energy of conservative loads (springs); time-dependent loads
+    /// have none.
+    pub(crate) fn potential(&self, u: &[f64]) -> f64 {
+        match &self.load {
+            Load::Spring { k, rest, .. } => {
+                let (l, _, _) = self.spring_geometry(u);
+                0.5 * k * (l - rest) * (l - rest)
+            }
+            Load::RotationalSpring { k, angle, .. } => {
+                let rel = self.theta(1, u) - self.theta(0, u) - angle;
+                0.5 * k * rel * rel
+            }
+            Load::PointForce { .. } | Load::Torque { .. } => 0.0,
+        }
+    }
+}

@@ -1,0 +1,670 @@
+//! Planar multibody systems: rigid bodies in `(x, y, θ)`, point masses in
+//! `(x, y)`, joints, drivers and forces, assembled into a [`System`].
+//!
+//! Coordinates of a body named `b` are `b.x`, `b.y` (centre of mass) and
+//! `b.theta` (angle of the body's x axis from the global x axis, counter-
+//! clockwise). Local points are given in the body frame relative to the centre
+//! of mass. Every element has analytic first and second derivatives, checked
+//! against finite differences in the tests.
+
+mod chains;
+mod elements;
+mod geometry;
+mod time;
+
+pub use chains::{bar_chain, point_mass_chain};
+pub use time::TimeFunction;
+
+use elements::{Constraint, Force, Joint, Load};
+use geometry::{Anchor, Slots};
+
+use crate::{Pattern, System};
+
+/// Handle of a body in a [`PlanarBuilder`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct BodyId(usize);
+
+/// Where an element attaches: a fixed ground point or a point of a body
+/// (local coordinates, relative to the centre of mass).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum At {
+    /// A fixed point `[x, y]` of the ground.
+    Ground([f64; 2]),
+    /// The point at local offset `[sx, sy]` of a body (`[0, 0]` for a point mass).
+    Body(BodyId, [f64; 2]),
+}
+
+/// Which coordinate of a body a driver prescribes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Coordinate {
+    /// The centre of mass `x`.
+    X,
+    /// The centre of mass `y`.
+    Y,
+    /// The angle `θ` (rigid bodies only).
+    Theta,
+}
+
+/// Errors in a planar model.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum ModelError {
+    /// Two bodies or two elements share a name.
+    #[error("the name '{0}' is used twice")]
+    DuplicateName(String),
+    /// A parameter is out of range.
+    #[error("{element}: {what}")]
+    Invalid {
+        /// The element's name.
+        element: String,
+        /// What is wrong.
+        what: String,
+    },
+}
+
+#[derive(Clone, Debug)]
+struct Body {
+    name: String,
+    mass: f64,
+    /// `None` for a point mass.
+    inertia: Option<f64>,
+    /// Index of the body's `x` coordinate.
+    x: usize,
+    pose: [f64; 3],
+    velocity: [f64; 3],
+}
+
+/// Builds a [`PlanarSystem`] element by element.
+///
+/// ```
+/// use mstar_model::planar::{At, PlanarBuilder};
+///
+/// // A slender bar hinged to the ground at one end.
+/// let mut b = PlanarBuilder::new();
+/// let bar = b.rigid_body("bar", 1.0, 1.0 / 12.0, [0.5, 0.0, 0.0]);
+/// b.revolute("hinge", At::Ground([0.0, 0.0]), At::Body(bar, [-0.5, 0.0]));
+/// let sys = b.build()?;
+/// # use mstar_model::System;
+/// assert_eq!(sys.n_coords(), 3);
+/// assert_eq!(sys.n_constraints(), 2);
+/// # Ok::<(), mstar_model::planar::ModelError>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct PlanarBuilder {
+    gravity: [f64; 2],
+    bodies: Vec<Body>,
+    joints: Vec<(String, Joint, [At; 2])>,
+    drivers: Vec<(String, BodyId, Coordinate, TimeFunction)>,
+    forces: Vec<(String, Load, [At; 2])>,
+    n: usize,
+}
+
+impl Default for PlanarBuilder {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl PlanarBuilder {
+    /// An empty model with gravity `(0, −9.81)` m/s².
+    #[must_use]
+    pub fn new() -> Self {
+        Self {
+            gravity: [0.0, -9.81],
+            bodies: Vec::new(),
+            joints: Vec::new(),
+            drivers: Vec::new(),
+            forces: Vec::new(),
+            n: 0,
+        }
+    }
+
+    /// Sets the gravitational acceleration (default `(0, −9.81)` m/s²).
+    pub fn gravity(&mut self, gx: f64, gy: f64) -> &mut Self {
+        self.gravity = [gx, gy];
+        self
+    }
+
+    /// Adds a rigid body of mass `m` and inertia `j` about its centre of mass at
+    /// the initial pose `[x, y, θ]` (at rest; see [`PlanarBuilder::velocity`]).
+    pub fn rigid_body(&mut self, name: &str, m: f64, j: f64, pose: [f64; 3]) -> BodyId {
+        self.add_body(name, m, Some(j), pose)
+    }
+
+    /// Adds a point mass at `[x, y]` (at rest).
+    pub fn point_mass(&mut self, name: &str, m: f64, position: [f64; 2]) -> BodyId {
+        self.add_body(name, m, None, [position[0], position[1], 0.0])
+    }
+
+    fn add_body(&mut self, name: &str, mass: f64, inertia: Option<f64>, pose: [f64; 3]) -> BodyId {
+        let x = self.n;
+        self.n += if inertia.is_some() { 3 } else { 2 };
+        self.bodies.push(Body {
+            name: name.to_string(),
+            mass,
+            inertia,
+            x,
+            pose,
+            velocity: [0.0; 3],
+        });
+        BodyId(self.bodies.len() - 1)
+    }
+
+    /// Sets a body's initial velocity `[ẋ, ẏ, θ̇]` (θ̇ ignored for point masses).
+    pub fn velocity(&mut self, body: BodyId, velocity: [f64; 3]) -> &mut Self {
+        if let Some(b) = self.bodies.get_mut(body.0) {
+            b.velocity = velocity;
+        }
+        self
+    }
+
+    /// A revolute joint: the two points coincide (2 equations).
+    pub fn revolute(&mut self, name: &str, a: At, b: At) -> &mut Self {
+        self.joints.push((name.into(), Joint::Revolute, [a, b]));
+        self
+    }
+
+    /// A distance joint (massless rod): the two points stay `length` apart.
+    pub fn distance(&mut self, name: &str, a: At, b: At, length: f64) -> &mut Self {
+        self.joints
+            .push((name.into(), Joint::Distance { length }, [a, b]));
+        self
+    }
+
+    /// A weld: the points coincide and `θ_b − θ_a` stays at its initial value.
+    pub fn weld(&mut self, name: &str, a: At, b: At) -> &mut Self {
+        let angle = self.angle(b) - self.angle(a);
+        self.joints
+            .push((name.into(), Joint::Weld { angle }, [a, b]));
+        self
+    }
+
+    /// A prismatic joint: point `b` slides along the line through point `a` with
+    /// direction `axis` (in `a`'s body frame, or global for the ground); a rigid
+    /// body `b` keeps its initial angle relative to `a`.
+    pub fn prismatic(&mut self, name: &str, a: At, axis: [f64; 2], b: At) -> &mut Self {
+        let len = (axis[0] * axis[0] + axis[1] * axis[1]).sqrt();
+        let normal = if len > 0.0 {
+            [-axis[1] / len, axis[0] / len]
+        } else {
+            [f64::NAN, f64::NAN]
+        };
+        let angle = self.angle(b) - self.angle(a);
+        self.joints
+            .push((name.into(), Joint::Prismatic { normal, angle }, [a, b]));
+        self
+    }
+
+    /// A driver: `coordinate(body) = f(t)`.
+    pub fn driver(
+        &mut self,
+        name: &str,
+        body: BodyId,
+        coordinate: Coordinate,
+        f: TimeFunction,
+    ) -> &mut Self {
+        self.drivers.push((name.into(), body, coordinate, f));
+        self
+    }
+
+    /// A force `(f_x(t), f_y(t))` in global directions at a point.
+    pub fn force(&mut self, name: &str, at: At, fx: TimeFunction, fy: TimeFunction) -> &mut Self {
+        self.forces.push((
+            name.into(),
+            Load::PointForce { fx, fy },
+            [at, At::Ground([0.0; 2])],
+        ));
+        self
+    }
+
+    /// A torque `τ(t)` on a rigid body.
+    pub fn torque(&mut self, name: &str, body: BodyId, tau: TimeFunction) -> &mut Self {
+        self.forces.push((
+            name.into(),
+            Load::Torque { tau },
+            [At::Body(body, [0.0; 2]), At::Ground([0.0; 2])],
+        ));
+        self
+    }
+
+    /// A linear spring-damper between two points: tension `k(ℓ − ℓ₀) + c ℓ̇`.
+    pub fn spring(&mut self, name: &str, a: At, b: At, k: f64, c: f64, rest: f64) -> &mut Self {
+        self.forces
+            .push((name.into(), Load::Spring { k, c, rest }, [a, b]));
+        self
+    }
+
+    /// A rotational spring-damper between body `a` (or the ground) and body `b`:
+    /// torque `−k(θ_b − θ_a − θ₀) − c(θ̇_b − θ̇_a)` on `b`, `θ₀` the initial
+    /// relative angle.
+    pub fn rotational_spring(
+        &mut self,
+        name: &str,
+        a: Option<BodyId>,
+        b: BodyId,
+        k: f64,
+        c: f64,
+    ) -> &mut Self {
+        let at_a = a.map_or(At::Ground([0.0; 2]), |id| At::Body(id, [0.0; 2]));
+        let at_b = At::Body(b, [0.0; 2]);
+        let angle = self.angle(at_b) - self.angle(at_a);
+        self.forces.push((
+            name.into(),
+            Load::RotationalSpring { k, c, angle },
+            [at_a, at_b],
+        ));
+        self
+    }
+
+    fn angle(&self, at: At) -> f64 {
+        match at {
+            At::Body(id, _) => self
+                .bodies
+                .get(id.0)
+                .filter(|b| b.inertia.is_some())
+                .map_or(0.0, |b| b.pose[2]),
+            At::Ground(_) => 0.0,
+        }
+    }
+
+    fn anchor(&self, element: &str, at: At) -> Result<Anchor, ModelError> {
+        let invalid = |what: String| ModelError::Invalid {
+            element: element.to_string(),
+            what,
+        };
+        match at {
+            At::Ground(p) => Ok(Anchor::Ground(p)),
+            At::Body(id, s) => {
+                let b = self
+                    .bodies
+                    .get(id.0)
+                    .ok_or_else(|| invalid(format!("unknown body #{}", id.0)))?;
+                if !s.iter().all(|x| x.is_finite()) {
+                    return Err(invalid(format!(
+                        "non-finite attachment point on '{}'",
+                        b.name
+                    )));
+                }
+                match b.inertia {
+                    Some(_) => Ok(Anchor::Rigid { x: b.x, s }),
+                    None if s == [0.0, 0.0] => Ok(Anchor::Point { x: b.x }),
+                    None => Err(invalid(format!(
+                        "'{}' is a point mass: attach at [0, 0], not {s:?}",
+                        b.name
+                    ))),
+                }
+            }
+        }
+    }
+
+    /// Checks the model and assembles the [`PlanarSystem`].
+    ///
+    /// # Errors
+    /// [`ModelError`] for duplicate names, non-positive masses or inertias,
+    /// non-finite values, a zero prismatic axis, a non-positive rod length, a
+    /// driver of `θ` on a point mass, or an element attached to the ground twice.
+    pub fn build(&self) -> Result<PlanarSystem, ModelError> {
+        let mut names = std::collections::HashSet::new();
+        let all_names = self
+            .bodies
+            .iter()
+            .map(|b| &b.name)
+            .chain(self.joints.iter().map(|j| &j.0))
+            .chain(self.drivers.iter().map(|d| &d.0))
+            .chain(self.forces.iter().map(|f| &f.0));
+        for name in all_names {
+            if !names.insert(name.clone()) {
+                return Err(ModelError::DuplicateName(name.clone()));
+            }
+        }
+        for b in &self.bodies {
+            let invalid = |what: &str| ModelError::Invalid {
+                element: b.name.clone(),
+                what: what.to_string(),
+            };
+            if !(b.mass > 0.0 && b.mass.is_finite()) {
+                return Err(invalid("the mass must be positive"));
+            }
+            if let Some(j) = b.inertia
+                && !(j > 0.0 && j.is_finite())
+            {
+                return Err(invalid("the inertia must be positive"));
+            }
+            if !b.pose.iter().chain(&b.velocity).all(|x| x.is_finite()) {
+                return Err(invalid("the initial pose and velocity must be finite"));
+            }
+        }
+        let mut constraints = Vec::new();
+        let mut row = 0;
+        for (name, joint, [a, b]) in &self.joints {
+            let invalid = |what: &str| ModelError::Invalid {
+                element: name.clone(),
+                what: what.to_string(),
+            };
+            let anchors = [self.anchor(name, *a)?, self.anchor(name, *b)?];
+            if matches!(anchors, [Anchor::Ground(_), Anchor::Ground(_)]) {
+                return Err(invalid("both ends are on the ground"));
+            }
+            match joint {
+                Joint::Distance { length } if !(*length > 0.0 && length.is_finite()) => {
+                    return Err(invalid("the rod length must be positive"));
+                }
+                Joint::Prismatic { normal, .. } if !normal.iter().all(|x| x.is_finite()) => {
+                    return Err(invalid("the prismatic axis must be a non-zero vector"));
+                }
+                Joint::Prismatic { .. } if matches!(anchors[1], Anchor::Ground(_)) => {
+                    return Err(invalid("the sliding side (b) must be a body"));
+                }
+                _ => {}
+            }
+            let c = Constraint::new(name.clone(), joint.clone(), anchors, row);
+            row += c.rows;
+            constraints.push(c);
+        }
+        for (name, body, coordinate, f) in &self.drivers {
+            let invalid = |what: &str| ModelError::Invalid {
+                element: name.clone(),
+                what: what.to_string(),
+            };
+            let b = self
+                .bodies
+                .get(body.0)
+                .ok_or_else(|| invalid("unknown body"))?;
+            if !f.is_finite() {
+                return Err(invalid("the driver function must be finite"));
+            }
+            let x = match (coordinate, b.inertia) {
+                (Coordinate::X, _) => b.x,
+                (Coordinate::Y, _) => b.x + 1,
+                (Coordinate::Theta, Some(_)) => b.x + 2,
+                (Coordinate::Theta, None) => {
+                    return Err(invalid("a point mass has no angle to drive"));
+                }
+            };
+            let c = Constraint::new(
+                name.clone(),
+                Joint::Driver { f: *f },
+                [Anchor::Point { x }, Anchor::Ground([0.0; 2])],
+                row,
+            );
+            row += c.rows;
+            constraints.push(c);
+        }
+        let mut forces = Vec::new();
+        for (name, load, [a, b]) in &self.forces {
+            let anchors = [self.anchor(name, *a)?, self.anchor(name, *b)?];
+            let finite = match load {
+                Load::PointForce { fx, fy } => fx.is_finite() && fy.is_finite(),
+                Load::Torque { tau } => tau.is_finite(),
+                Load::Spring { k, c, rest } => {
+                    k.is_finite() && c.is_finite() && rest.is_finite() && *rest >= 0.0
+                }
+                Load::RotationalSpring { k, c, .. } => k.is_finite() && c.is_finite(),
+            };
+            if !finite {
+                return Err(ModelError::Invalid {
+                    element: name.clone(),
+                    what: "parameters must be finite (and a rest length non-negative)".into(),
+                });
+            }
+            forces.push(Force::new(load.clone(), anchors));
+        }
+        Ok(PlanarSystem::assemble(self, constraints, forces, row))
+    }
+}
+
+/// A planar multibody system assembled by [`PlanarBuilder`].
+#[derive(Clone, Debug)]
+pub struct PlanarSystem {
+    gravity: [f64; 2],
+    bodies: Vec<Body>,
+    constraints: Vec<Constraint>,
+    forces: Vec<Force>,
+    n: usize,
+    m: usize,
+    coord_names: Vec<String>,
+    constraint_names: Vec<String>,
+    mass_pattern: Pattern,
+    b_pattern: Pattern,
+    hessian_pattern: Pattern,
+    g_u_pattern: Pattern,
+    g_v_pattern: Pattern,
+    /// Offsets of each constraint's entries in the B and Hessian value buffers.
+    b_offsets: Vec<usize>,
+    h_offsets: Vec<usize>,
+    g_u_offsets: Vec<usize>,
+    g_v_offsets: Vec<usize>,
+}
+
+fn global_pairs<'a>(
+    slots: &'a Slots,
+    local: &'a [(usize, usize)],
+) -> impl Iterator<Item = (usize, usize)> + 'a {
+    local
+        .iter()
+        .map(|&(a, b)| (slots.global[a], slots.global[b]))
+}
+
+impl PlanarSystem {
+    fn assemble(
+        builder: &PlanarBuilder,
+        constraints: Vec<Constraint>,
+        forces: Vec<Force>,
+        m: usize,
+    ) -> Self {
+        let n = builder.n;
+        let mut coord_names = Vec::with_capacity(n);
+        let mut mass_entries = Vec::with_capacity(n);
+        for b in &builder.bodies {
+            let count = if b.inertia.is_some() { 3 } else { 2 };
+            for (k, c) in ["x", "y", "theta"].iter().take(count).enumerate() {
+                coord_names.push(format!("{}.{c}", b.name));
+                mass_entries.push((b.x + k, b.x + k));
+            }
+        }
+        let mut constraint_names = Vec::with_capacity(m);
+        let (mut b_entries, mut h_entries) = (Vec::new(), Vec::new());
+        let (mut b_offsets, mut h_offsets) = (Vec::new(), Vec::new());
+        for c in &constraints {
+            constraint_names.extend(c.row_names.iter().map(|s| format!("{}{s}", c.name)));
+            b_offsets.push(b_entries.len());
+            h_offsets.push(h_entries.len());
+            b_entries.extend(c.grad.iter().map(|&(r, a)| (c.row0 + r, c.slots.global[a])));
+            h_entries.extend(
+                c.hess
+                    .iter()
+                    .map(|&(_, a, b)| (c.slots.global[a], c.slots.global[b])),
+            );
+        }
+        let (mut gu, mut gv, mut gu_off, mut gv_off) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for f in &forces {
+            gu_off.push(gu.len());
+            gv_off.push(gv.len());
+            gu.extend(global_pairs(&f.slots, &f.g_u));
+            gv.extend(global_pairs(&f.slots, &f.g_v));
+        }
+        Self {
+            gravity: builder.gravity,
+            bodies: builder.bodies.clone(),
+            n,
+            m,
+            coord_names,
+            constraint_names,
+            mass_pattern: Pattern::from_entries(n, n, mass_entries),
+            b_pattern: Pattern::from_entries(m, n, b_entries),
+            hessian_pattern: Pattern::from_entries(n, n, h_entries),
+            g_u_pattern: Pattern::from_entries(n, n, gu),
+            g_v_pattern: Pattern::from_entries(n, n, gv),
+            b_offsets,
+            h_offsets,
+            g_u_offsets: gu_off,
+            g_v_offsets: gv_off,
+            constraints,
+            forces,
+        }
+    }
+
+    /// Initial coordinates `u₀` (the poses given to the builder).
+    #[must_use]
+    pub fn initial_position(&self) -> Vec<f64> {
+        self.initial(|b| b.pose)
+    }
+
+    /// Initial velocities `u̇₀` (given to the builder, zero by default).
+    #[must_use]
+    pub fn initial_velocity(&self) -> Vec<f64> {
+        self.initial(|b| b.velocity)
+    }
+
+    fn initial(&self, f: impl Fn(&Body) -> [f64; 3]) -> Vec<f64> {
+        let mut u = vec![0.0; self.n];
+        for b in &self.bodies {
+            let count = if b.inertia.is_some() { 3 } else { 2 };
+            u[b.x..b.x + count].copy_from_slice(&f(b)[..count]);
+        }
+        u
+    }
+
+    /// Number of bodies.
+    #[must_use]
+    pub fn n_bodies(&self) -> usize {
+        self.bodies.len()
+    }
+
+    /// Index of the `x` coordinate of the body called `name`.
+    #[must_use]
+    pub fn body_x(&self, name: &str) -> Option<usize> {
+        self.bodies.iter().find(|b| b.name == name).map(|b| b.x)
+    }
+}
+
+impl System for PlanarSystem {
+    fn n_coords(&self) -> usize {
+        self.n
+    }
+
+    fn n_constraints(&self) -> usize {
+        self.m
+    }
+
+    fn coord_name(&self, i: usize) -> String {
+        self.coord_names[i].clone()
+    }
+
+    fn constraint_name(&self, i: usize) -> String {
+        self.constraint_names[i].clone()
+    }
+
+    fn mass_pattern(&self) -> Pattern {
+        self.mass_pattern.clone()
+    }
+
+    fn mass_into(&self, _t: f64, _u: &[f64], mass: &mut [f64]) {
+        let mut k = 0;
+        for b in &self.bodies {
+            mass[k] = b.mass;
+            mass[k + 1] = b.mass;
+            k += 2;
+            if let Some(j) = b.inertia {
+                mass[k] = j;
+                k += 1;
+            }
+        }
+    }
+
+    fn forces_into(&self, t: f64, u: &[f64], v: &[f64], g: &mut [f64]) {
+        g.fill(0.0);
+        for b in &self.bodies {
+            g[b.x] = b.mass * self.gravity[0];
+            g[b.x + 1] = b.mass * self.gravity[1];
+        }
+        for f in &self.forces {
+            f.add_forces(t, u, v, g);
+        }
+    }
+
+    fn forces_du_pattern(&self) -> Pattern {
+        self.g_u_pattern.clone()
+    }
+
+    fn forces_du_into(&self, t: f64, u: &[f64], v: &[f64], g_u: &mut [f64]) {
+        for (f, &off) in self.forces.iter().zip(&self.g_u_offsets) {
+            f.jacobian(t, u, v, false, &mut g_u[off..off + f.g_u.len()]);
+        }
+    }
+
+    fn forces_dv_pattern(&self) -> Pattern {
+        self.g_v_pattern.clone()
+    }
+
+    fn forces_dv_into(&self, t: f64, u: &[f64], v: &[f64], g_v: &mut [f64]) {
+        for (f, &off) in self.forces.iter().zip(&self.g_v_offsets) {
+            f.jacobian(t, u, v, true, &mut g_v[off..off + f.g_v.len()]);
+        }
+    }
+
+    fn phi_into(&self, t: f64, u: &[f64], phi: &mut [f64]) {
+        for c in &self.constraints {
+            c.phi(t, u, &mut phi[c.row0..c.row0 + c.rows]);
+        }
+    }
+
+    fn b_pattern(&self) -> Pattern {
+        self.b_pattern.clone()
+    }
+
+    fn b_into(&self, _t: f64, u: &[f64], b: &mut [f64]) {
+        for (c, &off) in self.constraints.iter().zip(&self.b_offsets) {
+            c.grad_values(u, &mut b[off..off + c.grad.len()]);
+        }
+    }
+
+    fn phi_t_into(&self, t: f64, _u: &[f64], phi_t: &mut [f64]) {
+        let mut tt = [0.0; 3];
+        for c in &self.constraints {
+            c.phi_t(t, &mut phi_t[c.row0..c.row0 + c.rows], &mut tt[..c.rows]);
+        }
+    }
+
+    fn hessian_pattern(&self) -> Pattern {
+        self.hessian_pattern.clone()
+    }
+
+    fn hessian_into(&self, _t: f64, u: &[f64], mu: &[f64], out: &mut [f64]) {
+        for (c, &off) in self.constraints.iter().zip(&self.h_offsets) {
+            let vals = &mut out[off..off + c.hess.len()];
+            c.hess_values(u, vals);
+            for (v, &(r, _, _)) in vals.iter_mut().zip(&c.hess) {
+                *v *= mu[c.row0 + r];
+            }
+        }
+    }
+
+    fn accel_rhs_into(&self, t: f64, u: &[f64], v: &[f64], out: &mut [f64]) {
+        // c = −vᵀ (∂²Φ/∂q²) v − Φ_tt (no element has a B_t).
+        let mut hess = Vec::new();
+        let (mut t1, mut tt) = ([0.0; 3], [0.0; 3]);
+        for c in &self.constraints {
+            c.phi_t(t, &mut t1[..c.rows], &mut tt[..c.rows]);
+            let rows = &mut out[c.row0..c.row0 + c.rows];
+            for (o, &x) in rows.iter_mut().zip(&tt) {
+                *o = -x;
+            }
+            hess.resize(c.hess.len(), 0.0);
+            c.hess_values(u, &mut hess);
+            for (h, &(r, a, b)) in hess.iter().zip(&c.hess) {
+                rows[r] -= h * v[c.slots.global[a]] * v[c.slots.global[b]];
+            }
+        }
+    }
+
+    fn potential_energy(&self, _t: f64, u: &[f64]) -> f64 {
+        let gravity: f64 = self
+            .bodies
+            .iter()
+            .map(|b| -b.mass * (self.gravity[0] * u[b.x] + self.gravity[1] * u[b.x + 1]))
+            .sum();
+        gravity + self.forces.iter().map(|f| f.potential(u)).sum::<f64>()
+    }
+}
