@@ -32,34 +32,117 @@ fn number(out: &mut String, x: f64) {
     }
 }
 
+/// Appends one sample as a CSV row.
+fn row(out: &mut String, s: &Sample) {
+    {
+        number(out, s.t);
+        for &x in s.u.iter().chain(&s.v).chain(&s.a).chain(&s.lambda) {
+            out.push(',');
+            number(out, x);
+        }
+        out.push(',');
+        number(out, s.energy());
+        let _ = write!(out, ",{},", s.iterations);
+        number(out, s.residual);
+        out.push(',');
+        number(out, s.constraint);
+        out.push('\n');
+    }
+}
+
 /// The samples as CSV text (header first), numbers in shortest round-trip form.
 #[must_use]
 pub fn to_csv<S: System + ?Sized>(sys: &S, samples: &[Sample]) -> String {
     let mut out = header(sys).join(",");
     out.push('\n');
     for s in samples {
-        number(&mut out, s.t);
-        for &x in s.u.iter().chain(&s.v).chain(&s.a).chain(&s.lambda) {
-            out.push(',');
-            number(&mut out, x);
-        }
-        out.push(',');
-        number(&mut out, s.energy());
-        let _ = write!(out, ",{},", s.iterations);
-        number(&mut out, s.residual);
-        out.push(',');
-        number(&mut out, s.constraint);
-        out.push('\n');
+        row(&mut out, s);
     }
     out
 }
 
-/// Writes `contents` to `path` completely or not at all: to a temporary file in
-/// the same directory first, then renamed over `path`.
-///
-/// # Errors
-/// Any I/O error, with the path in the message; `path` is then untouched.
-pub fn write_atomically(path: &Path, contents: &[u8]) -> std::io::Result<()> {
+/// A CSV file written sample by sample (for runs too large to keep in memory),
+/// complete or not at all: rows go to a temporary file beside the target, which
+/// [`CsvStream::finish`] renames into place; dropped unfinished, the temporary
+/// file is removed.
+#[derive(Debug)]
+pub struct CsvStream {
+    path: std::path::PathBuf,
+    tmp: std::path::PathBuf,
+    file: Option<std::io::BufWriter<std::fs::File>>,
+    line: String,
+    error: Option<std::io::Error>,
+}
+
+impl CsvStream {
+    /// Creates the temporary file and writes the header.
+    ///
+    /// # Errors
+    /// Any I/O error, with the path in the message.
+    pub fn create<S: System + ?Sized>(path: &Path, sys: &S) -> std::io::Result<Self> {
+        let tmp = temporary_path(path);
+        let with_path = |e: std::io::Error| {
+            std::io::Error::new(e.kind(), format!("could not write {}: {e}", path.display()))
+        };
+        let mut file = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(with_path)?);
+        let mut line = header(sys).join(",");
+        line.push('\n');
+        file.write_all(line.as_bytes()).map_err(with_path)?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            tmp,
+            file: Some(file),
+            line,
+            error: None,
+        })
+    }
+
+    /// Appends a sample (the first I/O error is kept and reported by `finish`).
+    pub fn push(&mut self, s: &Sample) {
+        if self.error.is_some() {
+            return;
+        }
+        self.line.clear();
+        row(&mut self.line, s);
+        if let Some(f) = self.file.as_mut()
+            && let Err(e) = f.write_all(self.line.as_bytes())
+        {
+            self.error = Some(e);
+        }
+    }
+
+    /// Flushes and renames the file into place.
+    ///
+    /// # Errors
+    /// The first I/O error of the whole stream, with the path; the target is
+    /// then untouched.
+    pub fn finish(mut self) -> std::io::Result<()> {
+        let result = match (self.error.take(), self.file.take()) {
+            (Some(e), _) => Err(e),
+            (None, Some(mut f)) => f
+                .flush()
+                .and_then(|()| f.get_ref().sync_all())
+                .and_then(|()| std::fs::rename(&self.tmp, &self.path)),
+            (None, None) => Ok(()),
+        };
+        result.map_err(|e| {
+            std::io::Error::new(
+                e.kind(),
+                format!("could not write {}: {e}", self.path.display()),
+            )
+        })
+    }
+}
+
+impl Drop for CsvStream {
+    fn drop(&mut self) {
+        if self.file.take().is_some() || self.error.is_some() {
+            let _ = std::fs::remove_file(&self.tmp);
+        }
+    }
+}
+
+fn temporary_path(path: &Path) -> std::path::PathBuf {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => std::path::PathBuf::from("."),
@@ -68,7 +151,16 @@ pub fn write_atomically(path: &Path, contents: &[u8]) -> std::io::Result<()> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "output".into());
-    let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
+    dir.join(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// Writes `contents` to `path` completely or not at all: to a temporary file in
+/// the same directory first, then renamed over `path`.
+///
+/// # Errors
+/// Any I/O error, with the path in the message; `path` is then untouched.
+pub fn write_atomically(path: &Path, contents: &[u8]) -> std::io::Result<()> {
+    let tmp = temporary_path(path);
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
         f.write_all(contents)?;
@@ -124,6 +216,37 @@ mod tests {
         let text = to_csv(&sys, &[s]);
         let row = text.lines().nth(1).expect("one row");
         assert_eq!(row, "0.5,1,2,3,0,0,0,0,0,0,-10,0.25,3,3,1e-12,0");
+    }
+
+    #[test]
+    fn stream_is_complete_or_absent() {
+        let sys = PendulumChain::paper(1.0, 1.0, 10.0);
+        let dir = std::env::temp_dir().join(format!("mstar-stream-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("temp dir");
+        let path = dir.join("run.csv");
+        let sample = Sample {
+            u: vec![0.0; 3],
+            v: vec![0.0; 3],
+            a: vec![0.0; 3],
+            lambda: vec![0.0; 2],
+            ..Sample::default()
+        };
+        let mut unfinished = CsvStream::create(&path, &sys).expect("create");
+        unfinished.push(&sample);
+        drop(unfinished);
+        assert!(!path.exists());
+        assert_eq!(
+            std::fs::read_dir(&dir).expect("dir").count(),
+            0,
+            "temporary file left"
+        );
+        let mut stream = CsvStream::create(&path, &sys).expect("create");
+        stream.push(&sample);
+        stream.push(&sample);
+        stream.finish().expect("finish");
+        let text = std::fs::read_to_string(&path).expect("written");
+        assert_eq!(text, to_csv(&sys, &[sample.clone(), sample]));
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

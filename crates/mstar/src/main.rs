@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use mstar::pendulum::PendulumRun;
-use mstar::{Newton, Sample, Scheme, Start, csv};
+use mstar::{Config, Newton, Sample, Scheme, Start, System, csv};
 
 /// mstar: time integration of constrained multibody systems (index-3 DAEs
 /// M ü + Bᵀλ = g, Φ(u, t) = 0) with Newmark / HHT-α / generalized-α and
@@ -28,6 +28,37 @@ enum Command {
     /// λ₀ = (−10, 0), Newmark β = 1/4, γ = 1/2, the paper's M* start. Explicit
     /// options override the preset.
     Pendulum(PendulumArgs),
+    /// An N-link chain released horizontally from rest under gravity, with a
+    /// timing summary: slender bars (1 kg, 1 m) on revolute joints, or point
+    /// masses on rods. Defaults: h = 1e-3 s, t_end = 1 s, generalized-α
+    /// (ρ∞ = 0.9), consistent start.
+    Chain(ChainArgs),
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum ChainKind {
+    /// Uniform slender bars (1 kg, 1 m, J = m l²/12) on revolute joints.
+    Bars,
+    /// 1 kg point masses on massless 1 m rods.
+    Points,
+}
+
+#[derive(clap::Args, Debug)]
+struct ChainArgs {
+    /// Number of links N.
+    #[arg(long)]
+    links: usize,
+    /// What the links are.
+    #[arg(long, value_enum, default_value_t = ChainKind::Bars)]
+    kind: ChainKind,
+    /// End time, s.
+    #[arg(long, default_value_t = 1.0)]
+    t_end: f64,
+    #[command(flatten)]
+    integ: IntegratorArgs,
+    /// Write every step to this CSV file (streamed; complete or not at all).
+    #[arg(long)]
+    out: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -68,6 +99,41 @@ enum Reference {
     Rk4,
 }
 
+/// Integrator options shared by every model command.
+#[derive(clap::Args, Debug, Default)]
+struct IntegratorArgs {
+    /// Step size h, s [default: pendulum 0.01, chain 1e-3].
+    #[arg(long)]
+    h: Option<f64>,
+    /// Smallest step size for step control, s [default: h/1024; paper: h, i.e. off].
+    #[arg(long)]
+    h_min: Option<f64>,
+    /// Integrator [default: generalized-alpha; paper: newmark].
+    #[arg(long, value_enum)]
+    integrator: Option<Integrator>,
+    /// Newmark β [paper: 0.25]; implies --integrator newmark.
+    #[arg(long)]
+    beta: Option<f64>,
+    /// Newmark γ [paper: 0.5]; implies --integrator newmark.
+    #[arg(long)]
+    gamma: Option<f64>,
+    /// Generalized-α spectral radius ρ∞ in [0, 1] [default: 0.9].
+    #[arg(long)]
+    rho: Option<f64>,
+    /// HHT α in [−1/3, 0] [default: −0.1].
+    #[arg(long, allow_hyphen_values = true)]
+    alpha: Option<f64>,
+    /// Newton variant [default: modified; paper: full].
+    #[arg(long, value_enum)]
+    newton: Option<NewtonArg>,
+    /// Relative Newton tolerance on ‖r‖ and ‖Φ‖ [default: 1e-10].
+    #[arg(long)]
+    tol: Option<f64>,
+    /// Newton iterations per step attempt [default: 20].
+    #[arg(long)]
+    max_iter: Option<usize>,
+}
+
 #[derive(clap::Args, Debug)]
 struct PendulumArgs {
     /// Start from a preset; explicit options override it.
@@ -88,45 +154,17 @@ struct PendulumArgs {
     /// Initial angular velocity θ̇₀, rad/s [default: 0].
     #[arg(long, allow_hyphen_values = true)]
     omega0: Option<f64>,
-    /// Step size h, s [default: 0.01].
-    #[arg(long)]
-    h: Option<f64>,
-    /// Smallest step size for step control, s [default: h/1024; paper: h, i.e. off].
-    #[arg(long)]
-    h_min: Option<f64>,
     /// End time, s [default: 10].
     #[arg(long)]
     t_end: Option<f64>,
-    /// Integrator [default: generalized-alpha; paper: newmark].
-    #[arg(long, value_enum)]
-    integrator: Option<Integrator>,
-    /// Newmark β [paper: 0.25]; implies --integrator newmark.
-    #[arg(long)]
-    beta: Option<f64>,
-    /// Newmark γ [paper: 0.5]; implies --integrator newmark.
-    #[arg(long)]
-    gamma: Option<f64>,
-    /// Generalized-α spectral radius ρ∞ in [0, 1] [default: 0.9].
-    #[arg(long)]
-    rho: Option<f64>,
-    /// HHT α in [−1/3, 0] [default: −0.1].
-    #[arg(long, allow_hyphen_values = true)]
-    alpha: Option<f64>,
+    #[command(flatten)]
+    integ: IntegratorArgs,
     /// Initial acceleration and multipliers [default: consistent; paper: paper].
     #[arg(long, value_enum)]
     init: Option<Init>,
     /// Initial multipliers for --init paper, "L1,L2" [paper: -10,0]; implies --init paper.
     #[arg(long, value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
     lambda0: Option<Vec<f64>>,
-    /// Newton variant [default: modified; paper: full].
-    #[arg(long, value_enum)]
-    newton: Option<NewtonArg>,
-    /// Relative Newton tolerance on ‖r‖ and ‖Φ‖ [default: 1e-10].
-    #[arg(long)]
-    tol: Option<f64>,
-    /// Newton iterations per step attempt [default: 20].
-    #[arg(long)]
-    max_iter: Option<usize>,
     /// Write a reference solution instead of integrating (same columns).
     #[arg(long, value_enum)]
     reference: Option<Reference>,
@@ -139,6 +177,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Pendulum(args) => pendulum(&args),
+        Command::Chain(args) => chain(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -181,10 +220,44 @@ fn pendulum_run(args: &PendulumArgs) -> Result<PendulumRun> {
     if !(run.g0.is_finite() && run.theta0.is_finite() && run.omega0.is_finite()) {
         bail!("--g, --theta0 and --omega0 must be finite numbers");
     }
+    apply_integrator(
+        &args.integ,
+        &mut run.config,
+        args.preset == Some(Preset::Paper),
+    )?;
     let c = &mut run.config;
+    // Start: explicit --init, else implied by --lambda0.
+    let init = args.init.or(args.lambda0.as_ref().map(|_| Init::Paper));
+    match init {
+        Some(Init::Consistent) => {
+            if args.lambda0.is_some() {
+                bail!("--lambda0 applies to --init paper; a consistent start computes λ₀");
+            }
+            c.start = Start::Consistent;
+        }
+        Some(Init::Paper) => {
+            let lambda0 = match (&args.lambda0, &c.start) {
+                (Some(l), _) => l.clone(),
+                (None, Start::Paper { lambda0 }) => lambda0.clone(),
+                (None, Start::Consistent) => vec![-10.0, 0.0],
+            };
+            if lambda0.len() != 2 {
+                bail!("--lambda0 takes two values L1,L2 (got {})", lambda0.len());
+            }
+            c.start = Start::Paper { lambda0 };
+        }
+        None => {}
+    }
+    c.validate().context("invalid integrator options")?;
+    Ok(run)
+}
+
+/// Applies the integrator options to `c` (`paper_preset`: an explicit `--h`
+/// also fixes `h_min`, keeping step control off as in the paper).
+fn apply_integrator(args: &IntegratorArgs, c: &mut Config, paper_preset: bool) -> Result<()> {
     if let Some(h) = args.h {
         c.h = h;
-        if args.preset == Some(Preset::Paper) {
+        if paper_preset {
             c.h_min = Some(h);
         }
     }
@@ -244,30 +317,7 @@ fn pendulum_run(args: &PendulumArgs) -> Result<PendulumRun> {
             },
         };
     }
-    // Start: explicit --init, else implied by --lambda0.
-    let init = args.init.or(args.lambda0.as_ref().map(|_| Init::Paper));
-    match init {
-        Some(Init::Consistent) => {
-            if args.lambda0.is_some() {
-                bail!("--lambda0 applies to --init paper; a consistent start computes λ₀");
-            }
-            c.start = Start::Consistent;
-        }
-        Some(Init::Paper) => {
-            let lambda0 = match (&args.lambda0, &c.start) {
-                (Some(l), _) => l.clone(),
-                (None, Start::Paper { lambda0 }) => lambda0.clone(),
-                (None, Start::Consistent) => vec![-10.0, 0.0],
-            };
-            if lambda0.len() != 2 {
-                bail!("--lambda0 takes two values L1,L2 (got {})", lambda0.len());
-            }
-            c.start = Start::Paper { lambda0 };
-        }
-        None => {}
-    }
-    c.validate().context("invalid integrator options")?;
-    Ok(run)
+    Ok(())
 }
 
 fn describe(run: &PendulumRun) -> String {
@@ -358,6 +408,111 @@ fn pendulum(args: &PendulumArgs) -> Result<()> {
     }
 }
 
+/// The chain's configuration from the command line.
+fn chain_config(args: &ChainArgs) -> Result<Config> {
+    if args.links == 0 {
+        bail!("--links must be at least 1");
+    }
+    if !(args.t_end > 0.0 && args.t_end.is_finite()) {
+        bail!("--t-end must be positive (got {})", args.t_end);
+    }
+    let mut config = Config {
+        h: 1e-3,
+        ..Config::default()
+    };
+    apply_integrator(&args.integ, &mut config, false)?;
+    config.validate().context("invalid integrator options")?;
+    Ok(config)
+}
+
+fn chain(args: &ChainArgs) -> Result<()> {
+    let config = chain_config(args)?;
+    let n = args.links;
+    let clock = Instant::now();
+    let sys = match args.kind {
+        ChainKind::Bars => mstar::planar::bar_chain(n),
+        ChainKind::Points => mstar::planar::point_mass_chain(n),
+    };
+    println!(
+        "{n}-link chain of {} ({} coordinates, {} constraints); h = {} s, t_end = {} s",
+        match args.kind {
+            ChainKind::Bars => "bars on revolute joints",
+            ChainKind::Points => "point masses on rods",
+        },
+        sys.n_coords(),
+        sys.n_constraints(),
+        config.h,
+        args.t_end
+    );
+    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+    let mut integ = mstar::Integrator::new(&sys, config, 0.0, &u0, &v0)?;
+    let setup = clock.elapsed();
+    let mut stream = args
+        .out
+        .as_deref()
+        .map(|p| csv::CsvStream::create(p, &sys))
+        .transpose()?;
+    if let Some(s) = stream.as_mut() {
+        s.push(&integ.sample());
+    }
+    let clock = Instant::now();
+    let mut last_report = Instant::now();
+    while !integ.reached(args.t_end) {
+        integ.step(args.t_end)?;
+        if let Some(s) = stream.as_mut() {
+            s.push(&integ.sample());
+        }
+        if last_report.elapsed().as_secs_f64() > 2.0 {
+            last_report = Instant::now();
+            let st = integ.stats();
+            eprintln!(
+                "  t = {:.4} s of {} ({:.0} %), {} steps, {:.1} s elapsed",
+                integ.time(),
+                args.t_end,
+                100.0 * integ.time() / args.t_end,
+                st.steps,
+                clock.elapsed().as_secs_f64()
+            );
+        }
+    }
+    let wall = clock.elapsed().as_secs_f64();
+    let st = integ.stats();
+    let steps = st.steps.max(1) as f64;
+    println!(
+        "wall time: {wall:.3} s (+ {:.3} s setup); steps: {} accepted, {} rejected",
+        setup.as_secs_f64(),
+        st.steps,
+        st.rejected
+    );
+    println!(
+        "Newton iterations: {} ({:.2} per step, {} max); factorizations: {} ({:.3} per step)",
+        st.iterations,
+        st.iterations as f64 / steps,
+        st.max_iterations,
+        st.factorizations,
+        st.factorizations as f64 / steps
+    );
+    println!(
+        "time per step: {:.2} µs; per body per step: {:.3} µs",
+        wall * 1e6 / steps,
+        wall * 1e6 / steps / n as f64
+    );
+    let s = integ.sample();
+    let tip = sys.body_x(&format!("link{n}")).context("tip body")?;
+    println!(
+        "tip (link{n}) at t = {}: x = {:.9} m, y = {:.9} m; max ‖Φ‖∞ = {:.3e} m",
+        s.t,
+        s.u[tip],
+        s.u[tip + 1],
+        s.constraint
+    );
+    if let (Some(stream), Some(out)) = (stream, &args.out) {
+        stream.finish()?;
+        println!("wrote {}", out.display());
+    }
+    Ok(())
+}
+
 fn summary(samples: &[Sample]) {
     let (Some(first), Some(last)) = (samples.first(), samples.last()) else {
         return;
@@ -381,8 +536,33 @@ mod tests {
 
     fn parse(args: &[&str]) -> Result<PendulumRun> {
         let cli = Cli::try_parse_from(std::iter::once("mstar").chain(args.iter().copied()))?;
-        let Command::Pendulum(a) = cli.command;
-        pendulum_run(&a)
+        match cli.command {
+            Command::Pendulum(a) => pendulum_run(&a),
+            Command::Chain(_) => bail!("not a pendulum command"),
+        }
+    }
+
+    fn parse_chain(args: &[&str]) -> Result<Config> {
+        let cli = Cli::try_parse_from(std::iter::once("mstar").chain(args.iter().copied()))?;
+        match cli.command {
+            Command::Chain(a) => chain_config(&a),
+            Command::Pendulum(_) => bail!("not a chain command"),
+        }
+    }
+
+    #[test]
+    fn chain_defaults_and_options() -> Result<()> {
+        let c = parse_chain(&["chain", "--links", "10"])?;
+        assert_eq!(c.h, 1e-3);
+        assert_eq!(c.scheme, Scheme::GeneralizedAlpha { rho_inf: 0.9 });
+        let c = parse_chain(&[
+            "chain", "--links", "3", "--rho", "0.8", "--h", "0.002", "--newton", "full",
+        ])?;
+        assert_eq!((c.h, c.newton), (0.002, Newton::Full));
+        assert_eq!(c.scheme, Scheme::GeneralizedAlpha { rho_inf: 0.8 });
+        assert!(parse_chain(&["chain", "--links", "0"]).is_err());
+        assert!(parse_chain(&["chain", "--links", "5", "--t-end", "-1"]).is_err());
+        Ok(())
     }
 
     #[test]

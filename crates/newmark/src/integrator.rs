@@ -97,6 +97,10 @@ pub struct Integrator<'s, S: System + ?Sized> {
     t: f64,
     state: State,
     trial: State,
+    /// The state before the last accepted step and that step's size (for the
+    /// extrapolating predictor).
+    previous: State,
+    previous_h: Option<f64>,
     rhs: Vec<f64>,
     /// Current nominal step size (≤ config.h).
     h: f64,
@@ -177,6 +181,8 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             t: t0,
             state: State::zeros(n, m),
             trial: State::zeros(n, m),
+            previous: State::zeros(n, m),
+            previous_h: None,
             rhs: vec![0.0; n + m],
             h,
             factored_h: None,
@@ -273,7 +279,9 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         Ok(self.stats)
     }
 
-    fn reached(&self, t_end: f64) -> bool {
+    /// Whether the integration has reached `t_end` (within `1e-9 h`).
+    #[must_use]
+    pub fn reached(&self, t_end: f64) -> bool {
         t_end - self.t <= 1e-9 * self.config.h
     }
 
@@ -401,6 +409,10 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     }
 
     fn accept(&mut self, h: f64, iterations: usize) {
+        if self.config.predictor == Predictor::Extrapolated {
+            self.previous.copy_from(&self.state);
+            self.previous_h = Some(h);
+        }
         self.state.copy_from(&self.trial);
         if h == self.h_anchor {
             self.steps_at_h += 1;
@@ -542,10 +554,16 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             gamma,
         } = self.p;
         let (s, t) = (&self.state, &mut self.trial);
+        // Linear extrapolation needs the previous step (of any size).
+        let ratio = match (self.config.predictor, self.previous_h) {
+            (Predictor::Extrapolated, Some(h_prev)) => h / h_prev,
+            _ => 0.0,
+        };
         for i in 0..s.u.len() {
             let a1 = match self.config.predictor {
                 Predictor::ZeroAcceleration => 0.0,
                 Predictor::ConstantAcceleration => s.a[i],
+                Predictor::Extrapolated => s.a[i] + ratio * (s.a[i] - self.previous.a[i]),
             };
             let aa1 = (alpha_f * s.a[i] - alpha_m * s.a_alpha[i] + (1.0 - alpha_f) * a1)
                 / (1.0 - alpha_m);
@@ -554,7 +572,9 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             t.v[i] = s.v[i] + h * ((1.0 - gamma) * s.a_alpha[i] + gamma * aa1);
             t.u[i] = s.u[i] + h * s.v[i] + h * h * ((0.5 - beta) * s.a_alpha[i] + beta * aa1);
         }
-        t.lambda.copy_from_slice(&s.lambda);
+        for (i, l) in t.lambda.iter_mut().enumerate() {
+            *l = s.lambda[i] + ratio * (s.lambda[i] - self.previous.lambda[i]);
+        }
     }
 
     fn locate_non_finite(&self) -> String {

@@ -155,9 +155,12 @@ impl Scheme {
 pub enum Predictor {
     /// `ü_{n+1}⁰ = 0`, the paper's eq. (14a) (and Arnold & Brüls' Algorithm 1).
     ZeroAcceleration,
-    /// `ü_{n+1}⁰ = ü_n`: usually one Newton iteration fewer (default).
-    #[default]
+    /// `ü_{n+1}⁰ = ü_n`, `λ⁰ = λ_n`.
     ConstantAcceleration,
+    /// `ü_{n+1}⁰` and `λ⁰` extrapolated linearly from the last two steps
+    /// (default): the predictor's error drops from `O(h)` to `O(h²)`.
+    #[default]
+    Extrapolated,
 }
 
 /// How the initial acceleration and multipliers are obtained.

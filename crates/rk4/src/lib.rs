@@ -40,6 +40,7 @@ use nalgebra::{DMatrix, DVector};
 #[derive(Clone, Debug)]
 pub struct ChainOracle<'a> {
     sys: &'a PendulumChain,
+    chain: AngleChain,
     /// Largest RK4 step, s (default 1e-3: RK4's error is then ~1e-12 on the
     /// paper's pendulum, far below any integrator error studied here).
     pub max_step: f64,
@@ -49,8 +50,19 @@ impl<'a> ChainOracle<'a> {
     /// An oracle for `sys` with the default `max_step`.
     #[must_use]
     pub fn new(sys: &'a PendulumChain) -> Self {
+        let links = sys
+            .links
+            .iter()
+            .map(|l| AngleLink {
+                m: l.m,
+                j: 0.0,
+                l: l.l,
+                c: l.l,
+            })
+            .collect();
         Self {
             sys,
+            chain: AngleChain::new(links, sys.g0),
             max_step: 1e-3,
         }
     }
@@ -58,31 +70,12 @@ impl<'a> ChainOracle<'a> {
     /// Angular accelerations `θ̈` for angles `theta` and rates `omega`.
     #[must_use]
     pub fn angular_acceleration(&self, theta: &[f64], omega: &[f64]) -> Vec<f64> {
-        let links = &self.sys.links;
-        let n = links.len();
-        let g0 = self.sys.g0;
-        // Tail masses: tail[j] = Σ_{i ≥ j} m_i.
-        let mut tail = vec![0.0; n + 1];
-        for j in (0..n).rev() {
-            tail[j] = tail[j + 1] + links[j].m;
-        }
-        let mut mass = DMatrix::<f64>::zeros(n, n);
-        let mut rhs = DVector::<f64>::zeros(n);
-        for j in 0..n {
-            let lj = links[j].l;
-            rhs[j] = -tail[j] * g0 * lj * theta[j].sin();
-            for k in 0..n {
-                let mu = tail[j.max(k)] * lj * links[k].l;
-                let d = theta[j] - theta[k];
-                mass[(j, k)] = mu * d.cos();
-                rhs[j] -= mu * d.sin() * omega[k] * omega[k];
-            }
-        }
-        // The chain's mass matrix is symmetric positive definite.
-        match mass.cholesky() {
-            Some(c) => c.solve(&rhs).iter().copied().collect(),
-            None => vec![f64::NAN; n],
-        }
+        // θ is measured from the downward vertical: φ = θ − π/2 from +x.
+        let phi: Vec<f64> = theta
+            .iter()
+            .map(|t| t - std::f64::consts::FRAC_PI_2)
+            .collect();
+        self.chain.angular_acceleration(&phi, omega)
     }
 
     /// The full redundant-coordinate [`Sample`] at `t` for angles and rates:
@@ -142,38 +135,183 @@ impl<'a> ChainOracle<'a> {
         let n = self.sys.links.len();
         assert_eq!(theta0.len(), n, "one angle per link");
         assert_eq!(omega0.len(), n, "one rate per link");
-        let mut y: Vec<f64> = theta0.iter().chain(omega0).copied().collect();
-        let mut out = Vec::with_capacity(times.len());
-        let mut t = 0.0;
         let f = |y: &[f64]| -> Vec<f64> {
             let (th, w) = y.split_at(n);
             let al = self.angular_acceleration(th, w);
             w.iter().chain(&al).copied().collect()
         };
-        for &target in times {
-            assert!(target >= t, "times must be non-negative and non-decreasing");
-            let span = target - t;
-            let steps = (span / self.max_step).ceil() as usize;
-            if steps > 0 {
-                let h = span / steps as f64;
-                for _ in 0..steps {
-                    let k1 = f(&y);
-                    let y2: Vec<f64> = y.iter().zip(&k1).map(|(a, k)| a + 0.5 * h * k).collect();
-                    let k2 = f(&y2);
-                    let y3: Vec<f64> = y.iter().zip(&k2).map(|(a, k)| a + 0.5 * h * k).collect();
-                    let k3 = f(&y3);
-                    let y4: Vec<f64> = y.iter().zip(&k3).map(|(a, k)| a + h * k).collect();
-                    let k4 = f(&y4);
-                    for i in 0..y.len() {
-                        y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-                    }
+        let y0: Vec<f64> = theta0.iter().chain(omega0).copied().collect();
+        rk4_at(f, y0, times, self.max_step)
+            .into_iter()
+            .zip(times)
+            .map(|(y, &t)| self.sample(t, &y[..n], &y[n..]))
+            .collect()
+    }
+}
+
+/// Classic RK4 for `ẏ = f(y)` from `y(0) = y0`, returning `y` at each time of
+/// `times` (non-negative, non-decreasing), with steps of at most `max_step`.
+///
+/// # Panics
+/// If `times` is negative or decreasing.
+pub fn rk4_at(
+    f: impl Fn(&[f64]) -> Vec<f64>,
+    y0: Vec<f64>,
+    times: &[f64],
+    max_step: f64,
+) -> Vec<Vec<f64>> {
+    let mut y = y0;
+    let mut t = 0.0;
+    let mut out = Vec::with_capacity(times.len());
+    for &target in times {
+        assert!(target >= t, "times must be non-negative and non-decreasing");
+        let span = target - t;
+        let steps = (span / max_step).ceil() as usize;
+        if steps > 0 {
+            let h = span / steps as f64;
+            for _ in 0..steps {
+                let k1 = f(&y);
+                let y2: Vec<f64> = y.iter().zip(&k1).map(|(a, k)| a + 0.5 * h * k).collect();
+                let k2 = f(&y2);
+                let y3: Vec<f64> = y.iter().zip(&k2).map(|(a, k)| a + 0.5 * h * k).collect();
+                let k3 = f(&y3);
+                let y4: Vec<f64> = y.iter().zip(&k3).map(|(a, k)| a + h * k).collect();
+                let k4 = f(&y4);
+                for i in 0..y.len() {
+                    y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
                 }
             }
-            t = target;
-            let (th, w) = y.split_at(n);
-            out.push(self.sample(t, th, w));
         }
-        out
+        t = target;
+        out.push(y.clone());
+    }
+    out
+}
+
+/// One link of an [`AngleChain`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AngleLink {
+    /// Mass, kg.
+    pub m: f64,
+    /// Inertia about the centre of mass, kg m².
+    pub j: f64,
+    /// Distance from this link's joint to the next joint, m.
+    pub l: f64,
+    /// Distance from this link's joint to its centre of mass (along the link), m.
+    pub c: f64,
+}
+
+/// A planar serial chain hinged to the ground at the origin, in the absolute
+/// link angles `φ_k` (from `+x`, counter-clockwise) — the minimal coordinates.
+/// Centre of mass `k` is at `Σ_{i<k} l_i e(φ_i) + c_k e(φ_k)`, `e(φ) = (cos φ,
+/// sin φ)`, so with the lever arms `a_ki = l_i (i < k), c_k (i = k), 0 (i > k)`
+/// and `μ_ij = Σ_k m_k a_ki a_kj` the equations of motion are
+///
+/// ```text
+/// Σ_i (μ_ji cos(φ_j − φ_i) + J_j δ_ji) φ̈_i + Σ_i μ_ji sin(φ_j − φ_i) φ̇_i² = −g₀ Σ_k m_k a_kj cos φ_j
+/// ```
+///
+/// (gravity `−g₀ ŷ`). This covers point masses on rods (`J = 0`, `c = l`) and
+/// chains of bars (`c = l/2`, `J = m l²/12`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AngleChain {
+    links: Vec<AngleLink>,
+    g0: f64,
+    mu: Vec<f64>,
+    /// `Σ_k m_k a_kj`, the gravity lever of each angle.
+    weight: Vec<f64>,
+    /// Largest RK4 step, s (default 1e-4).
+    pub max_step: f64,
+}
+
+impl AngleChain {
+    /// A chain of the given links under gravity `g0` (along `−y`).
+    #[must_use]
+    pub fn new(links: Vec<AngleLink>, g0: f64) -> Self {
+        let n = links.len();
+        let arm = |k: usize, i: usize| match i.cmp(&k) {
+            std::cmp::Ordering::Less => links[i].l,
+            std::cmp::Ordering::Equal => links[k].c,
+            std::cmp::Ordering::Greater => 0.0,
+        };
+        let mut mu = vec![0.0; n * n];
+        let mut weight = vec![0.0; n];
+        for k in 0..n {
+            for i in 0..=k {
+                weight[i] += links[k].m * arm(k, i);
+                for j in 0..=k {
+                    mu[i * n + j] += links[k].m * arm(k, i) * arm(k, j);
+                }
+            }
+        }
+        Self {
+            links,
+            g0,
+            mu,
+            weight,
+            max_step: 1e-4,
+        }
+    }
+
+    /// `φ̈` for angles `phi` and rates `omega`.
+    #[must_use]
+    pub fn angular_acceleration(&self, phi: &[f64], omega: &[f64]) -> Vec<f64> {
+        let n = self.links.len();
+        let mut mass = DMatrix::<f64>::zeros(n, n);
+        let mut rhs = DVector::<f64>::zeros(n);
+        for j in 0..n {
+            rhs[j] = -self.g0 * self.weight[j] * phi[j].cos();
+            for i in 0..n {
+                let mu = self.mu[j * n + i];
+                let d = phi[j] - phi[i];
+                mass[(j, i)] = mu * d.cos();
+                rhs[j] -= mu * d.sin() * omega[i] * omega[i];
+            }
+            mass[(j, j)] += self.links[j].j;
+        }
+        // The chain's mass matrix is symmetric positive definite.
+        match mass.cholesky() {
+            Some(c) => c.solve(&rhs).iter().copied().collect(),
+            None => vec![f64::NAN; n],
+        }
+    }
+
+    /// Centres of mass `(x, y)` of every link for angles `phi`.
+    #[must_use]
+    pub fn centres(&self, phi: &[f64]) -> Vec<[f64; 2]> {
+        let mut joint = [0.0, 0.0];
+        self.links
+            .iter()
+            .zip(phi)
+            .map(|(link, &p)| {
+                let (s, c) = p.sin_cos();
+                let centre = [joint[0] + link.c * c, joint[1] + link.c * s];
+                joint = [joint[0] + link.l * c, joint[1] + link.l * s];
+                centre
+            })
+            .collect()
+    }
+
+    /// Integrates from `(φ₀, φ̇₀)` at `t = 0` and returns `(φ, φ̇)` at each time.
+    ///
+    /// # Panics
+    /// If the slices' lengths differ from the number of links or `times` is
+    /// negative or decreasing.
+    #[must_use]
+    pub fn solve(&self, phi0: &[f64], omega0: &[f64], times: &[f64]) -> Vec<(Vec<f64>, Vec<f64>)> {
+        let n = self.links.len();
+        assert_eq!(phi0.len(), n, "one angle per link");
+        assert_eq!(omega0.len(), n, "one rate per link");
+        let f = |y: &[f64]| -> Vec<f64> {
+            let (p, w) = y.split_at(n);
+            let al = self.angular_acceleration(p, w);
+            w.iter().chain(&al).copied().collect()
+        };
+        let y0: Vec<f64> = phi0.iter().chain(omega0).copied().collect();
+        rk4_at(f, y0, times, self.max_step)
+            .into_iter()
+            .map(|y| (y[..n].to_vec(), y[n..].to_vec()))
+            .collect()
     }
 }
 
