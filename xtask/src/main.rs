@@ -6,9 +6,17 @@
 //!
 //! - `cargo xtask paper`: the paper's pendulum example, Figs. 4-13, against
 //!   the RK4 oracle ([`paper`]).
+//! - `cargo xtask stability`: the period-2h mode over 100 s, the start
+//!   correction and the conditioning ([`stability`]).
+//! - `cargo xtask convergence`: fitted orders in u, u̇, ü, λ ([`convergence`]).
+//! - `cargo xtask energy`: energy error over 1000 s ([`energy`]).
 
+mod common;
+mod convergence;
+mod energy;
 mod paper;
 mod plot;
+mod stability;
 
 use std::path::{Path, PathBuf};
 
@@ -30,6 +38,16 @@ enum Command {
     /// oracle; writes CSVs and PNGs to target/studies/paper/ and copies the
     /// PNGs to docs/figures/paper/.
     Paper,
+    /// The period-2h mode of ü and λ over 100 s (pendulum, double pendulum),
+    /// the start correction and the KKT conditioning; writes to
+    /// target/studies/stability/ and docs/figures/stability/.
+    Stability,
+    /// Fitted convergence orders in u, u̇, ü and λ at t = 1 s against the
+    /// oracle; writes to target/studies/convergence/ and docs/figures/convergence/.
+    Convergence,
+    /// Energy error over 1000 s (RK4, trapezoidal, generalized-α); writes to
+    /// target/studies/energy/ and docs/figures/energy/.
+    Energy,
 }
 
 fn main() -> Result<()> {
@@ -39,6 +57,9 @@ fn main() -> Result<()> {
         .with_context(|| format!("could not change to {}", root.display()))?;
     match cli.command {
         Command::Paper => paper::run(),
+        Command::Stability => stability::run(),
+        Command::Convergence => convergence::run(),
+        Command::Energy => energy::run(),
     }
 }
 

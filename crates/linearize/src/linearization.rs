@@ -308,9 +308,8 @@ impl Linearization {
         lambda: &[f64],
     ) {
         sys.mass_into(t, u, &mut self.mass);
-        sys.b_into(t, u, &mut self.b);
+        sys.phi_b_into(t, u, &mut self.phi, &mut self.b);
         sys.forces_into(t, u, v, &mut self.g);
-        sys.phi_into(t, u, &mut self.phi);
         self.bt_lambda.fill(0.0);
         self.b_pattern
             .mul_transpose_add(&self.b, lambda, &mut self.bt_lambda);

@@ -75,6 +75,13 @@ pub trait System: Send + Sync {
     /// Values of `B(u, t)` on [`b_pattern`](System::b_pattern).
     fn b_into(&self, t: f64, u: &[f64], b: &mut [f64]);
 
+    /// `Φ` and `B` together (default: [`phi_into`](System::phi_into) then
+    /// [`b_into`](System::b_into)); override when they share work.
+    fn phi_b_into(&self, t: f64, u: &[f64], phi: &mut [f64], b: &mut [f64]) {
+        self.phi_into(t, u, phi);
+        self.b_into(t, u, b);
+    }
+
     /// `Φ_t = ∂Φ/∂t`, size `m` (default: zero, scleronomic constraints). The
     /// velocity constraint is `B u̇ + Φ_t = 0`.
     fn phi_t_into(&self, _t: f64, _u: &[f64], phi_t: &mut [f64]) {

@@ -473,7 +473,9 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             let residual_tol = self.config.tol * self.lin.force_scale();
             let constraint_tol = self.config.tol * max_abs(&s.u).max(1.0);
             self.stats.iterations += usize::from(k > 0);
-            if residual <= residual_tol && constraint <= constraint_tol {
+            // At least one correction: a predictor that happens to meet the
+            // tolerances (small h, near rest) still needs its λ and ü updated.
+            if k > 0 && residual <= residual_tol && constraint <= constraint_tol {
                 return Ok(k);
             }
             if k == self.config.max_iterations {

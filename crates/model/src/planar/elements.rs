@@ -171,10 +171,21 @@ impl Constraint {
 
     /// Constraint values `Φ` (rows of this element).
     pub(crate) fn phi(&self, t: f64, u: &[f64], out: &mut [f64]) {
+        self.phi_at(t, u, &self.points(u), out);
+    }
+
+    /// Constraint values `Φ` and `∂Φ/∂q` (in the order of [`Constraint::grad`])
+    /// with the attachment points computed once.
+    pub(crate) fn phi_grad(&self, t: f64, u: &[f64], phi: &mut [f64], grad: &mut [f64]) {
+        let pts = self.points(u);
+        self.phi_at(t, u, &pts, phi);
+        self.grad_at(u, &pts, grad);
+    }
+
+    fn phi_at(&self, t: f64, u: &[f64], pts: &[Pt; 2], out: &mut [f64]) {
         match &self.joint {
             Joint::Driver { f } => out[0] = u[self.slots.global[0]] - f.eval(t).0,
             _ => {
-                let pts = self.points(u);
                 let d = [pts[0].p[0] - pts[1].p[0], pts[0].p[1] - pts[1].p[1]];
                 match &self.joint {
                     Joint::Revolute => out[..2].copy_from_slice(&d),
@@ -211,11 +222,15 @@ impl Constraint {
 
     /// Values of `∂Φ/∂q` in the order of [`Constraint::grad`].
     pub(crate) fn grad_values(&self, u: &[f64], out: &mut [f64]) {
+        self.grad_at(u, &self.points(u), out);
+    }
+
+    fn grad_at(&self, u: &[f64], pts: &[Pt; 2], out: &mut [f64]) {
         if let Joint::Driver { .. } = self.joint {
             out[0] = 1.0;
             return;
         }
-        let pts = self.points(u);
+        let pts = *pts;
         let s = &self.slots;
         let d = [pts[0].p[0] - pts[1].p[0], pts[0].p[1] - pts[1].p[1]];
         let angle_sign = |a: usize| if s.side[a] == 0 { -1.0 } else { 1.0 };
