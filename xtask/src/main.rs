@@ -10,7 +10,9 @@
 //!   correction and the conditioning ([`stability`]).
 //! - `cargo xtask convergence`: fitted orders in u, u̇, ü, λ ([`convergence`]).
 //! - `cargo xtask energy`: energy error over 1000 s ([`energy`]).
+//! - `cargo xtask bench`: the chain benchmark as a table and a plot ([`bench`]).
 
+mod bench;
 mod common;
 mod convergence;
 mod energy;
@@ -48,6 +50,14 @@ enum Command {
     /// Energy error over 1000 s (RK4, trapezoidal, generalized-α); writes to
     /// target/studies/energy/ and docs/figures/energy/.
     Energy,
+    /// The chain benchmark (criterion, release build) for N = 10 … max-n:
+    /// µs per step and per body per step, Newton iterations and factorizations
+    /// per step, phase times, peak memory; writes to target/studies/bench/.
+    Bench {
+        /// Largest chain (10, 100, 1000, 10000 or 100000).
+        #[arg(long, default_value_t = 100_000)]
+        max_n: usize,
+    },
 }
 
 fn main() -> Result<()> {
@@ -60,6 +70,7 @@ fn main() -> Result<()> {
         Command::Stability => stability::run(),
         Command::Convergence => convergence::run(),
         Command::Energy => energy::run(),
+        Command::Bench { max_n } => bench::run(max_n),
     }
 }
 

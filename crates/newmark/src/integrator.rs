@@ -164,8 +164,13 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             });
         }
         let lin = Linearization::new(sys)?;
+        // The KKT matrix's leading n unknowns are the coordinates (for LDLᵀ).
+        let kkt_options = mstar_kkt::KktOptions {
+            n_primal: config.kkt.n_primal.or(Some(n)),
+            ..config.kkt
+        };
         let solver =
-            KktSolver::new(lin.kkt(), &config.kkt).map_err(|source| IntegrationError::Kkt {
+            KktSolver::new(lin.kkt(), &kkt_options).map_err(|source| IntegrationError::Kkt {
                 context: "analysing the KKT pattern",
                 t: t0,
                 h: config.h,
@@ -808,7 +813,11 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                 self.lin.eval_residual(self.sys, t, &u, &v, &a, &lambda0);
                 let m_star = self.lin.m_star().clone();
                 let context = "solving M* ü₀ = g − Bᵀλ₀ (eq. 11)";
-                let mut solver = KktSolver::new(&m_star, &self.config.kkt)
+                let options = mstar_kkt::KktOptions {
+                    n_primal: None,
+                    ..self.config.kkt
+                };
+                let mut solver = KktSolver::new(&m_star, &options)
                     .and_then(|mut s| s.factor(&m_star.values).map(|()| s))
                     .map_err(|e| self.kkt_error(context, t, 0.0, e))?;
                 a.copy_from_slice(&self.lin.r);

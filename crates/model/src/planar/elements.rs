@@ -146,6 +146,10 @@ impl Constraint {
     }
 
     fn points(&self, u: &[f64]) -> [Pt; 2] {
+        if let Joint::Driver { .. } = self.joint {
+            // A driver's anchor only names its coordinate.
+            return [Pt::default(); 2];
+        }
         [self.anchors[0].point(u), self.anchors[1].point(u)]
     }
 

@@ -622,7 +622,12 @@ impl System for PlanarSystem {
 
     fn phi_b_into(&self, t: f64, u: &[f64], phi: &mut [f64], b: &mut [f64]) {
         for (c, &off) in self.constraints.iter().zip(&self.b_offsets) {
-            c.phi_grad(t, u, &mut phi[c.row0..c.row0 + c.rows], &mut b[off..off + c.grad.len()]);
+            c.phi_grad(
+                t,
+                u,
+                &mut phi[c.row0..c.row0 + c.rows],
+                &mut b[off..off + c.grad.len()],
+            );
         }
     }
 

@@ -1,0 +1,139 @@
+//! Time per step of an N-link bar chain (the benchmark: bars of 1 kg,
+//! 1 m on revolute joints, released horizontally; h = 1e-3, generalized-α
+//! ρ∞ = 0.8, Newton tolerance 1e-8 relative, modified Newton), and the phases
+//! of one Newton iteration: residual evaluation, Jacobians + KKT assembly,
+//! numeric factorization, solve.
+//!
+//! Besides criterion's estimates it writes `target/studies/bench/counts.csv`
+//! (Newton iterations and factorizations per step, peak memory) for
+//! `cargo xtask bench`. Set `MSTAR_BENCH_MAX_N` to limit the largest chain
+//! (default 100000).
+
+use std::fmt::Write as _;
+use std::hint::black_box;
+use std::time::Duration;
+
+use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use mstar::kkt::KktSolver;
+use mstar::linearize::Linearization;
+use mstar::planar::{PlanarSystem, bar_chain};
+use mstar::{Config, Integrator, Scheme, System};
+
+fn config() -> Config {
+    Config {
+        h: 1e-3,
+        tol: 1e-8,
+        scheme: Scheme::GeneralizedAlpha { rho_inf: 0.8 },
+        ..Config::default()
+    }
+}
+
+fn sizes() -> Vec<usize> {
+    let max: usize = std::env::var("MSTAR_BENCH_MAX_N")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(100_000);
+    [10, 100, 1_000, 10_000, 100_000]
+        .into_iter()
+        .filter(|&n| n <= max)
+        .collect()
+}
+
+/// Peak resident memory of this process, in MiB (Linux), if known.
+fn peak_memory_mib() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib / 1024.0)
+}
+
+/// An integrator warmed up by `warm` steps (the chain starts at rest; the
+/// benchmark measures it moving).
+fn warmed(sys: &PlanarSystem, warm: usize) -> Integrator<'_, PlanarSystem> {
+    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+    let mut integ = Integrator::new(sys, config(), 0.0, &u0, &v0).expect("start");
+    for _ in 0..warm {
+        integ.step(f64::INFINITY).expect("step");
+    }
+    integ
+}
+
+fn steps(c: &mut Criterion) {
+    let mut counts = String::from("n,steps,iterations_per_step,factorizations_per_step,peak_mib\n");
+    let mut group = c.benchmark_group("chain/step");
+    for n in sizes() {
+        let sys = bar_chain(n);
+        group.sample_size(if n >= 10_000 { 10 } else { 30 });
+        group.measurement_time(Duration::from_secs(if n >= 10_000 { 20 } else { 5 }));
+        let mut integ = warmed(&sys, 20);
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter(|| integ.step(f64::INFINITY).expect("step"));
+        });
+        // Counts over 100 fresh steps after the same warm-up.
+        let mut integ = warmed(&sys, 20);
+        let before = integ.stats();
+        let k = 100;
+        for _ in 0..k {
+            integ.step(f64::INFINITY).expect("step");
+        }
+        let after = integ.stats();
+        let _ = writeln!(
+            counts,
+            "{n},{k},{},{},{}",
+            (after.iterations - before.iterations) as f64 / k as f64,
+            (after.factorizations - before.factorizations) as f64 / k as f64,
+            peak_memory_mib().map_or(String::new(), |m| format!("{m:.1}"))
+        );
+    }
+    group.finish();
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/studies/bench");
+    if std::fs::create_dir_all(&dir).is_ok() {
+        let _ = std::fs::write(dir.join("counts.csv"), counts);
+    }
+}
+
+fn phases(c: &mut Criterion) {
+    let mut group = c.benchmark_group("chain/phase");
+    for n in sizes() {
+        let sys = bar_chain(n);
+        group.sample_size(if n >= 10_000 { 10 } else { 30 });
+        let integ = warmed(&sys, 20);
+        let s = integ.sample();
+        let params = config().scheme.params().expect("valid");
+        let coefficients = params.coefficients(1e-3, true);
+        let mut lin = Linearization::new(&sys).expect("valid model");
+        lin.eval_residual(&sys, s.t, &s.u, &s.v, &s.a, &s.lambda);
+        group.bench_with_input(BenchmarkId::new("residual", n), &n, |b, _| {
+            b.iter(|| lin.eval_residual(&sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda));
+        });
+        group.bench_with_input(BenchmarkId::new("jacobians+assembly", n), &n, |b, _| {
+            b.iter(|| {
+                lin.eval_jacobians(&sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda);
+                lin.assemble(&coefficients);
+            });
+        });
+        let options = mstar::kkt::KktOptions {
+            n_primal: Some(sys.n_coords()),
+            ..mstar::kkt::KktOptions::default()
+        };
+        let mut solver = KktSolver::new(lin.kkt(), &options).expect("pattern");
+        group.bench_with_input(BenchmarkId::new("factor", n), &n, |b, _| {
+            b.iter(|| {
+                solver
+                    .factor(black_box(&lin.kkt().values))
+                    .expect("regular")
+            });
+        });
+        let mut rhs = vec![0.0; lin.kkt().n];
+        group.bench_with_input(BenchmarkId::new("solve", n), &n, |b, _| {
+            b.iter(|| {
+                lin.kkt_rhs(coefficients.scale, &mut rhs);
+                solver.solve_in_place(black_box(&mut rhs)).expect("regular");
+            });
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, steps, phases);
+criterion_main!(benches);

@@ -1,0 +1,130 @@
+//! `cargo xtask bench`: the chain benchmark (criterion, release build) as a
+//! table and a log-log plot.
+//!
+//! Runs `cargo bench -p mstar-benches --bench chain`, then reads criterion's
+//! median estimates (`target/criterion/chain_step/<N>/new/estimates.json`, and
+//! the per-phase ones) and the counts the benchmark writes
+//! (`target/studies/bench/counts.csv`).
+
+use std::path::Path;
+use std::process::Command;
+
+use anyhow::{Context as _, Result, bail};
+
+use crate::common::{Table, draw_figures};
+use crate::plot::{Legend, Panel, Scale, Style};
+use crate::study_dir;
+
+/// Median time in µs of one criterion benchmark, if it ran.
+fn median_us(id: &str) -> Option<f64> {
+    let path = Path::new("target/criterion")
+        .join(id)
+        .join("new/estimates.json");
+    let text = std::fs::read_to_string(path).ok()?;
+    let after = &text[text.find("\"median\"")?..];
+    let value = &after[after.find("\"point_estimate\":")? + "\"point_estimate\":".len()..];
+    let end = value.find([',', '}'])?;
+    value[..end].trim().parse::<f64>().ok().map(|ns| ns / 1e3)
+}
+
+/// The machine, for the record.
+fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    let cores = std::thread::available_parallelism().map_or(0, usize::from);
+    format!("{cpu}, {cores} cores")
+}
+
+/// Runs the benchmark up to `max_n` bodies and reports it.
+///
+/// # Errors
+/// If `cargo bench` fails or produces no estimates.
+pub fn run(max_n: usize) -> Result<()> {
+    let out = study_dir("bench")?;
+    println!(
+        "running the chain benchmark up to N = {max_n} (release build; the first build takes a few minutes)"
+    );
+    let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .args(["bench", "-p", "mstar-benches", "--bench", "chain"])
+        .env("MSTAR_BENCH_MAX_N", max_n.to_string())
+        .status()
+        .context("could not run cargo bench")?;
+    if !status.success() {
+        bail!("cargo bench failed ({status})");
+    }
+    let counts = std::fs::read_to_string(out.join("counts.csv"))
+        .context("the benchmark wrote no counts.csv")?;
+    let mut table = Table::new(
+        format!(
+            "chain of N bars, h = 1e-3, generalized-α ρ∞ = 0.8, tol 1e-8, modified Newton — {}",
+            machine()
+        ),
+        &[
+            "N",
+            "µs/step",
+            "µs/body/step",
+            "Newton it./step",
+            "factorizations/step",
+            "residual µs",
+            "Jacobians+assembly µs",
+            "factor µs",
+            "solve µs",
+            "peak MiB",
+        ],
+    );
+    let (mut per_step, mut per_body) = (Vec::new(), Vec::new());
+    for line in counts.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let Some(n) = f.first().and_then(|s| s.parse::<usize>().ok()) else {
+            continue;
+        };
+        let Some(step) = median_us(&format!("chain_step/{n}")) else {
+            continue;
+        };
+        let phase = |name: &str| {
+            median_us(&format!("chain_phase/{name}/{n}")).map_or("-".into(), |v| format!("{v:.1}"))
+        };
+        per_step.push((n as f64, step));
+        per_body.push((n as f64, step / n as f64));
+        table.row(vec![
+            n.to_string(),
+            format!("{step:.1}"),
+            format!("{:.3}", step / n as f64),
+            f.get(2).copied().unwrap_or("-").to_string(),
+            f.get(3).copied().unwrap_or("-").to_string(),
+            phase("residual"),
+            phase("jacobians+assembly"),
+            phase("factor"),
+            phase("solve"),
+            f.get(4).copied().unwrap_or("-").to_string(),
+        ]);
+    }
+    if per_step.is_empty() {
+        bail!("no criterion estimates found under target/criterion/chain_step/");
+    }
+    table.print();
+    table.write_csv(&out.join("bench.csv"))?;
+    let figure = vec![
+        Panel::new("time per step", "N (bodies)", "µs per step")
+            .scale(Scale::LogLog)
+            .series("mstar", per_step, Style::solid(crate::common::color(0)))
+            .legend(Legend::UpperLeft),
+        Panel::new(
+            "time per body per step",
+            "N (bodies)",
+            "µs per body per step",
+        )
+        .scale(Scale::LogLog)
+        .series("mstar", per_body, Style::solid(crate::common::color(1)))
+        .legend(Legend::UpperLeft),
+    ];
+    draw_figures("bench", &out, &[("chain.png".to_string(), figure)])?;
+    Ok(())
+}
