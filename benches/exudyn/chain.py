@@ -196,7 +196,7 @@ def solve_once(n, end_time, phases=False):
     if not solver.InitializeSolver(mbs, s):
         raise RuntimeError("InitializeSolver failed for N = %d" % n)
     if phases:
-        solver.timer.Reset()
+        solver.timer.Reset(True)  # zero all timers; True = keep them switched on
         solver.timer.useTimer = True
     t0 = time.perf_counter()
     ok = solver.SolveSteps(mbs, s)
@@ -291,17 +291,16 @@ def main():
               % (n, r['steps'], us_step, us_step / n, r['newton'] / r['steps'],
                  r['jacobians'] / r['steps'], r['rejected'], solver_name))
 
-
     if args.phases:
         print()
         print("Exudyn internal timers, us per step (one extra run per size, timers on):")
-        print("%8s %10s " % ("N", "wall") + " ".join("%14s" % p for p in PHASES))
+        print("%8s %10s " % ("N", "wall") + " ".join("%15s" % p for p in PHASES))
         for n, _ in rows:
             wait_for_quiet_machine()
             r = solve_once(n, end_time_for(n), phases=True)
             per = lambda sec: sec / r['steps'] * 1e6
             print("%8d %10.1f " % (n, per(r['wall']))
-                  + " ".join("%14.1f" % per(r['phases'][p]) for p in PHASES), flush=True)
+                  + " ".join("%15.1f" % per(r['phases'][p]) for p in PHASES), flush=True)
 
 
 if __name__ == '__main__':

@@ -186,7 +186,7 @@ pub enum Newton {
     /// Keep the factorization across iterations and steps while the observed
     /// contraction rate `‖Δu_k‖/‖Δu_{k−1}‖` stays below `max_rate`; refactor when it
     /// does not, when the step size changes, after a step that needed more than
-    /// 4 iterations, or after a failed attempt (default, `max_rate = 0.2`).
+    /// 4 iterations, or after a failed attempt (default, `max_rate = 0.5`).
     Modified {
         /// Largest accepted contraction rate before a refactorization (in (0, 1)).
         max_rate: f64,
@@ -195,7 +195,7 @@ pub enum Newton {
 
 impl Default for Newton {
     fn default() -> Self {
-        Self::Modified { max_rate: 0.2 }
+        Self::Modified { max_rate: 0.5 }
     }
 }
 
@@ -216,7 +216,7 @@ pub struct Config {
     pub tol: f64,
     /// Newton iterations per attempt before the step is rejected (default: 20).
     pub max_iterations: usize,
-    /// Newton variant (default: modified, contraction rate 0.2).
+    /// Newton variant (default: modified, contraction rate 0.5).
     pub newton: Newton,
     /// Predictor (default: extrapolated; the paper: zero acceleration).
     pub predictor: Predictor,
