@@ -528,6 +528,36 @@ fn summary(samples: &[Sample]) {
         last.t, last.u[2], last.v[2], last.lambda[0], last.lambda[1]
     );
     println!("energy: E₀ = {e0:.6} J, max |E − E₀| = {drift:.3e} J; max ‖Φ‖∞ = {phi:.3e} m");
+    // The trapezoidal rule's period-2h mode of λ grows silently: warn when the
+    // last second's amplitude is far above the first second's.
+    let per_second = samples
+        .iter()
+        .position(|s| s.t >= first.t + 1.0)
+        .unwrap_or(samples.len());
+    if samples.len() >= 2 * per_second && per_second >= 3 {
+        let amplitude = |part: &[Sample]| {
+            (0..first.lambda.len())
+                .map(|i| {
+                    let x: Vec<f64> = part.iter().map(|s| s.lambda[i]).collect();
+                    mstar::analysis::nyquist_amplitude(&x)
+                })
+                .fold(0.0, f64::max)
+        };
+        let (early, late) = (
+            amplitude(&samples[..per_second]),
+            amplitude(&samples[samples.len() - per_second..]),
+        );
+        let scale = samples
+            .iter()
+            .flat_map(|s| s.lambda.iter())
+            .fold(0.0f64, |m, x| m.max(x.abs()));
+        if late > 10.0 * early && late > 1e-3 * scale {
+            println!(
+                "warning: the period-2h oscillation of λ grew from {early:.3e} in the first second to {late:.3e} in the last: \
+                 the multipliers are not trustworthy (trapezoidal rule on an index-3 system); use generalized-α"
+            );
+        }
+    }
 }
 
 #[cfg(test)]

@@ -71,7 +71,8 @@ pub enum IntegrationError {
     #[error(
         "Newton iteration did not converge at t = {t} s (h = {h:e}): after {iterations} iterations \
          ‖r‖∞ = {residual:.3e} (tolerance {residual_tol:.3e}) and ‖Φ‖∞ = {constraint:.3e} (tolerance {constraint_tol:.3e}). \
-         Try a smaller h, generalized-α (--integrator generalized-alpha), a consistent start (--init consistent) or a looser tolerance"
+         With the trapezoidal rule (Newmark γ = 1/2) this is usually the growing period-2h oscillation of λ: use \
+         generalized-α (--integrator generalized-alpha, the default); otherwise try a smaller h or a looser tolerance"
     )]
     NewtonFailed {
         /// Time of the failed step's end.
