@@ -59,7 +59,8 @@ fn run(sys: &PlanarSystem, h: f64) -> Result<(f64, f64, f64), TestCaseError> {
     prop_assert!(integ.start_report().position_violation < 1e-12);
     prop_assert!(integ.start_report().velocity_violation < 1e-12);
     let mut phi = vec![0.0; sys.n_constraints()];
-    let (mut worst, mut e0, mut drift, mut scale, mut omega) = (0.0f64, None, 0.0f64, 0.0f64, 0.0f64);
+    let (mut worst, mut e0, mut drift, mut scale, mut omega) =
+        (0.0f64, None, 0.0f64, 0.0f64, 0.0f64);
     // Every third coordinate is a link angle.
     let angles: Vec<usize> = (2..sys.n_coords()).step_by(3).collect();
     integ
@@ -73,7 +74,12 @@ fn run(sys: &PlanarSystem, h: f64) -> Result<(f64, f64, f64), TestCaseError> {
             scale = scale.max(s.kinetic.abs()).max(s.potential.abs());
             omega = angles.iter().fold(omega, |m, &i| m.max(s.v[i].abs()));
         })
-        .map_err(|e| TestCaseError::fail(format!("{e} (h = {h}, fastest link rate so far {omega:.1} rad/s, n = {})", sys.n_bodies())))?;
+        .map_err(|e| {
+            TestCaseError::fail(format!(
+                "{e} (h = {h}, fastest link rate so far {omega:.1} rad/s, n = {})",
+                sys.n_bodies()
+            ))
+        })?;
     prop_assert!(worst <= 1.0, "‖Φ‖∞ reached {worst:.3} η");
     Ok((drift, scale.max(1.0), omega))
 }
