@@ -129,6 +129,8 @@ pub struct Linearization {
     pub r: Vec<f64>,
     /// Constraints `Φ` (eq. 4).
     pub phi: Vec<f64>,
+    /// `‖λ‖∞` of the last residual evaluation.
+    lambda_max: f64,
     kkt: Csc,
     slots: KktSlots,
     bb_pairs: Vec<(usize, usize)>,
@@ -259,6 +261,7 @@ impl Linearization {
             m_a: vec![0.0; n],
             r: vec![0.0; n],
             phi: vec![0.0; m],
+            lambda_max: 0.0,
             bb_values: vec![0.0; bb_pairs.len()],
             mass_pattern,
             b_pattern,
@@ -318,6 +321,7 @@ impl Linearization {
         for i in 0..self.n {
             self.r[i] = self.g[i] - self.bt_lambda[i] - self.m_a[i];
         }
+        self.lambda_max = max_abs(lambda);
     }
 
     /// Evaluates the parts of `K_T` and `C_T` (eqs. 6-7): the constraint Hessian
@@ -423,13 +427,17 @@ impl Linearization {
         max_abs(&self.phi)
     }
 
-    /// The size of the forces that balance in eq. (3):
-    /// `max(‖g‖∞, ‖Bᵀλ‖∞, ‖M ü‖∞)`. The residual is judged relative to it.
+    /// The size of the forces and multipliers that balance in eq. (3):
+    /// `max(‖g‖∞, ‖Bᵀλ‖∞, ‖M ü‖∞, ‖λ‖∞)`. The residual is judged relative to
+    /// it: in a long chain the joint forces `λ` are far larger than their
+    /// differences `Bᵀλ`, and the rotational equations cancel terms of size
+    /// `|λ|·l`, so round-off and a meaningful tolerance scale with `‖λ‖`.
     #[must_use]
     pub fn force_scale(&self) -> f64 {
         max_abs(&self.g)
             .max(max_abs(&self.bt_lambda))
             .max(max_abs(&self.m_a))
+            .max(self.lambda_max)
     }
 }
 

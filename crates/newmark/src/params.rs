@@ -211,7 +211,7 @@ pub struct Config {
     /// disables step control.
     pub h_min: Option<f64>,
     /// Newton tolerance, relative (default: 1e-10): converged when
-    /// `‖r‖∞ ≤ tol · max(‖g‖∞, ‖Bᵀλ‖∞, ‖Mü‖∞)` and `‖Φ‖∞ ≤ tol · max(1, ‖u‖∞)`
+    /// `‖r‖∞ ≤ tol · max(‖g‖∞, ‖Bᵀλ‖∞, ‖Mü‖∞, ‖λ‖∞)` and `‖Φ‖∞ ≤ tol · max(1, ‖u‖∞)`
     /// after at least one correction.
     pub tol: f64,
     /// Newton iterations per attempt before the step is rejected (default: 20).
