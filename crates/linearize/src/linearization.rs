@@ -129,8 +129,10 @@ pub struct Linearization {
     pub r: Vec<f64>,
     /// Constraints `Φ` (eq. 4).
     pub phi: Vec<f64>,
-    /// `‖λ‖∞` of the last residual evaluation.
-    lambda_max: f64,
+    /// `max(‖g‖∞, ‖Bᵀλ‖∞, ‖M ü‖∞, ‖λ‖∞)` of the last residual evaluation.
+    force_scale: f64,
+    /// `‖r‖∞` of the last residual evaluation (NaN if `r` has a NaN).
+    r_max: f64,
     kkt: Csc,
     slots: KktSlots,
     bb_pairs: Vec<(usize, usize)>,
@@ -261,7 +263,8 @@ impl Linearization {
             m_a: vec![0.0; n],
             r: vec![0.0; n],
             phi: vec![0.0; m],
-            lambda_max: 0.0,
+            force_scale: 0.0,
+            r_max: 0.0,
             bb_values: vec![0.0; bb_pairs.len()],
             mass_pattern,
             b_pattern,
@@ -318,10 +321,20 @@ impl Linearization {
             .mul_transpose_add(&self.b, lambda, &mut self.bt_lambda);
         self.m_a.fill(0.0);
         self.mass_pattern.mul_add(&self.mass, a, &mut self.m_a);
+        // r and, in the same pass, the force scale and ‖r‖∞.
+        let (mut scale, mut r_max) = (0.0f64, 0.0f64);
         for i in 0..self.n {
-            self.r[i] = self.g[i] - self.bt_lambda[i] - self.m_a[i];
+            let (g, bl, ma) = (self.g[i], self.bt_lambda[i], self.m_a[i]);
+            let r = g - bl - ma;
+            self.r[i] = r;
+            scale = scale.max(g.abs()).max(bl.abs()).max(ma.abs());
+            r_max = r_max.max(r.abs());
+            if r.is_nan() {
+                r_max = f64::NAN;
+            }
         }
-        self.lambda_max = max_abs(lambda);
+        self.force_scale = scale.max(max_abs(lambda));
+        self.r_max = r_max;
     }
 
     /// Evaluates the parts of `K_T` and `C_T` (eqs. 6-7): the constraint Hessian
@@ -418,7 +431,7 @@ impl Linearization {
     /// `‖r‖∞`, the residual norm of the last evaluation.
     #[must_use]
     pub fn residual_norm(&self) -> f64 {
-        max_abs(&self.r)
+        self.r_max
     }
 
     /// `‖Φ‖∞`, the constraint norm of the last evaluation.
@@ -434,10 +447,7 @@ impl Linearization {
     /// `|λ|·l`, so round-off and a meaningful tolerance scale with `‖λ‖`.
     #[must_use]
     pub fn force_scale(&self) -> f64 {
-        max_abs(&self.g)
-            .max(max_abs(&self.bt_lambda))
-            .max(max_abs(&self.m_a))
-            .max(self.lambda_max)
+        self.force_scale
     }
 }
 

@@ -180,8 +180,22 @@ impl Constraint {
 
     /// Constraint values `Φ` and `∂Φ/∂q` (in the order of [`Constraint::grad`])
     /// with the attachment points computed once.
-    pub(crate) fn phi_grad(&self, t: f64, u: &[f64], phi: &mut [f64], grad: &mut [f64]) {
-        let pts = self.points(u);
+    pub(crate) fn phi_grad(
+        &self,
+        t: f64,
+        u: &[f64],
+        trig: &[(f64, f64)],
+        phi: &mut [f64],
+        grad: &mut [f64],
+    ) {
+        let pts = if let Joint::Driver { .. } = self.joint {
+            [Pt::default(); 2]
+        } else {
+            [
+                self.anchors[0].point_cached(u, trig),
+                self.anchors[1].point_cached(u, trig),
+            ]
+        };
         self.phi_at(t, u, &pts, phi);
         self.grad_at(u, &pts, grad);
     }
@@ -236,6 +250,19 @@ impl Constraint {
         }
         let pts = *pts;
         let s = &self.slots;
+        if let Joint::Revolute = self.joint {
+            // The hot path of chains: ±1 on x (row 0) and y (row 1), ±∂p/∂θ on θ.
+            for (v, &(row, a)) in out.iter_mut().zip(&self.grad) {
+                let side = s.side[a];
+                let sign = if side == 0 { 1.0 } else { -1.0 };
+                *v = if s.kind[a] == Kind::Theta {
+                    sign * pts[side].dp[row]
+                } else {
+                    sign
+                };
+            }
+            return;
+        }
         let d = [pts[0].p[0] - pts[1].p[0], pts[0].p[1] - pts[1].p[1]];
         let angle_sign = |a: usize| if s.side[a] == 0 { -1.0 } else { 1.0 };
         for (v, &(row, a)) in out.iter_mut().zip(&self.grad) {

@@ -32,8 +32,20 @@ impl Anchor {
                 p: [u[x], u[x + 1]],
                 ..Pt::default()
             },
+            Self::Rigid { x, .. } => self.point_at(u, u[x + 2].sin_cos()),
+        }
+    }
+
+    /// [`Anchor::point`] with `(sin θ, cos θ)` of the body's angle given.
+    #[inline]
+    pub(crate) fn point_at(&self, u: &[f64], (sn, cs): (f64, f64)) -> Pt {
+        match *self {
+            Self::Ground(p) => Pt { p, ..Pt::default() },
+            Self::Point { x } => Pt {
+                p: [u[x], u[x + 1]],
+                ..Pt::default()
+            },
             Self::Rigid { x, s } => {
-                let (sn, cs) = u[x + 2].sin_cos();
                 let a = [cs * s[0] - sn * s[1], sn * s[0] + cs * s[1]];
                 Pt {
                     p: [u[x] + a[0], u[x + 1] + a[1]],
@@ -41,6 +53,16 @@ impl Anchor {
                     ddp: [-a[0], -a[1]],
                 }
             }
+        }
+    }
+
+    /// [`Anchor::point`] with `trig[i] = (sin u_i, cos u_i)` precomputed for
+    /// every angle coordinate `i`.
+    #[inline]
+    pub(crate) fn point_cached(&self, u: &[f64], trig: &[(f64, f64)]) -> Pt {
+        match *self {
+            Self::Rigid { x, .. } => self.point_at(u, trig[x + 2]),
+            _ => self.point_at(u, (0.0, 1.0)),
         }
     }
 

@@ -20,6 +20,11 @@ use geometry::{Anchor, Slots};
 
 use crate::{Pattern, System};
 
+thread_local! {
+    /// Scratch for `(sin θ, cos θ)` per coordinate during one evaluation.
+    static TRIG: std::cell::RefCell<Vec<(f64, f64)>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// Handle of a body in a [`PlanarBuilder`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct BodyId(usize);
@@ -621,14 +626,22 @@ impl System for PlanarSystem {
     }
 
     fn phi_b_into(&self, t: f64, u: &[f64], phi: &mut [f64], b: &mut [f64]) {
-        for (c, &off) in self.constraints.iter().zip(&self.b_offsets) {
-            c.phi_grad(
-                t,
-                u,
-                &mut phi[c.row0..c.row0 + c.rows],
-                &mut b[off..off + c.grad.len()],
-            );
-        }
+        // Each body's (sin θ, cos θ) once, not once per joint it takes part in.
+        TRIG.with_borrow_mut(|trig| {
+            trig.resize(self.n, (0.0, 1.0));
+            for body in self.bodies.iter().filter(|b| b.inertia.is_some()) {
+                trig[body.x + 2] = u[body.x + 2].sin_cos();
+            }
+            for (c, &off) in self.constraints.iter().zip(&self.b_offsets) {
+                c.phi_grad(
+                    t,
+                    u,
+                    trig,
+                    &mut phi[c.row0..c.row0 + c.rows],
+                    &mut b[off..off + c.grad.len()],
+                );
+            }
+        });
     }
 
     fn phi_t_into(&self, t: f64, _u: &[f64], phi_t: &mut [f64]) {
