@@ -89,6 +89,18 @@ impl PendulumRun {
         ChainOracle::new(&sys).solve(&[self.theta0], &[self.omega0], times)
     }
 
+    /// Integrates and pairs every sample with the RK4 reference at its time.
+    ///
+    /// # Errors
+    /// The integration's error, if it stopped before `t_end`.
+    pub fn run_with_reference(&self) -> Result<(Vec<Sample>, Vec<Sample>), IntegrationError> {
+        let (samples, result) = self.run();
+        result?;
+        let times: Vec<f64> = samples.iter().map(|s| s.t).collect();
+        let reference = self.reference(&times);
+        Ok((samples, reference))
+    }
+
     /// The RK4 reference on the uniform grid `0, h, 2h, …, t_end`.
     #[must_use]
     pub fn reference_on_grid(&self) -> Vec<Sample> {

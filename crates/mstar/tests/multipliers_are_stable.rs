@@ -13,13 +13,8 @@ use mstar::pendulum::PendulumRun;
 use mstar::{Config, Sample, Scheme};
 
 fn with_reference(run: &PendulumRun) -> (Vec<Sample>, Vec<Sample>) {
-    let (samples, result) = run.run();
-    if let Err(e) = result {
-        panic!("integration failed: {e}");
-    }
-    let times: Vec<f64> = samples.iter().map(|s| s.t).collect();
-    let reference = run.reference(&times);
-    (samples, reference)
+    run.run_with_reference()
+        .unwrap_or_else(|e| panic!("integration failed: {e}"))
 }
 
 /// Max λ error over the first 0.2 s from a moving start, for each h.
