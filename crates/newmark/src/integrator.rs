@@ -475,7 +475,16 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             if !residual.is_finite() || !constraint.is_finite() {
                 return Err(Failure::NonFinite(self.locate_non_finite()));
             }
-            let residual_tol = self.config.tol * self.lin.force_scale();
+            // Without the exact multiplier update (the paper's scheme) each
+            // correction shifts λ by c_bb·Φ, so round-off in Φ (ε‖u‖) comes back
+            // as a residual floor c_bb·ε·‖u‖·‖B‖ ~ 4ε‖u‖/h²: the tolerance cannot
+            // ask for less than that.
+            let floor = if self.config.exact_multiplier_update {
+                0.0
+            } else {
+                4.0 * coefficients.c_bb * f64::EPSILON * max_abs(&s.u).max(1.0) * max_abs(&self.lin.b)
+            };
+            let residual_tol = (self.config.tol * self.lin.force_scale()).max(floor);
             let constraint_tol = self.config.tol * max_abs(&s.u).max(1.0);
             self.stats.iterations += usize::from(k > 0);
             // At least one correction: a predictor that happens to meet the

@@ -212,7 +212,10 @@ pub struct Config {
     pub h_min: Option<f64>,
     /// Newton tolerance, relative (default: 1e-10): converged when
     /// `‖r‖∞ ≤ tol · max(‖g‖∞, ‖Bᵀλ‖∞, ‖Mü‖∞, ‖λ‖∞)` and `‖Φ‖∞ ≤ tol · max(1, ‖u‖∞)`
-    /// after at least one correction.
+    /// after at least one correction. Without
+    /// [`exact_multiplier_update`](Config::exact_multiplier_update) the residual
+    /// cannot go below the round-off floor `4 c_bb ε ‖u‖∞ ‖B‖∞` (`c_bb = β'`,
+    /// about `4ε‖u‖/h²`), which then replaces a smaller tolerance.
     pub tol: f64,
     /// Newton iterations per attempt before the step is rejected (default: 20).
     pub max_iterations: usize,
