@@ -482,7 +482,10 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             let floor = if self.config.exact_multiplier_update {
                 0.0
             } else {
-                4.0 * coefficients.c_bb * f64::EPSILON * max_abs(&s.u).max(1.0) * max_abs(&self.lin.b)
+                4.0 * coefficients.c_bb
+                    * f64::EPSILON
+                    * max_abs(&s.u).max(1.0)
+                    * max_abs(&self.lin.b)
             };
             let residual_tol = (self.config.tol * self.lin.force_scale()).max(floor);
             let constraint_tol = self.config.tol * max_abs(&s.u).max(1.0);
