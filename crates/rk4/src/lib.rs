@@ -132,19 +132,21 @@ impl<'a> ChainOracle<'a> {
     /// negative or decreasing.
     #[must_use]
     pub fn solve(&self, theta0: &[f64], omega0: &[f64], times: &[f64]) -> Vec<Sample> {
-        let n = self.sys.links.len();
-        assert_eq!(theta0.len(), n, "one angle per link");
-        assert_eq!(omega0.len(), n, "one rate per link");
-        let f = |y: &[f64]| -> Vec<f64> {
-            let (th, w) = y.split_at(n);
-            let al = self.angular_acceleration(th, w);
-            w.iter().chain(&al).copied().collect()
+        // θ from the downward vertical is φ + π/2 with φ from +x.
+        let half_pi = std::f64::consts::FRAC_PI_2;
+        let phi0: Vec<f64> = theta0.iter().map(|t| t - half_pi).collect();
+        let chain = AngleChain {
+            max_step: self.max_step,
+            ..self.chain.clone()
         };
-        let y0: Vec<f64> = theta0.iter().chain(omega0).copied().collect();
-        rk4_at(f, y0, times, self.max_step)
+        chain
+            .solve(&phi0, omega0, times)
             .into_iter()
             .zip(times)
-            .map(|(y, &t)| self.sample(t, &y[..n], &y[n..]))
+            .map(|((phi, omega), &t)| {
+                let theta: Vec<f64> = phi.iter().map(|p| p + half_pi).collect();
+                self.sample(t, &theta, &omega)
+            })
             .collect()
     }
 }
