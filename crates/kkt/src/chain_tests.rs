@@ -1,6 +1,6 @@
 //! The backends on KKT matrices of planar chains (see [`crate::testing`]).
 
-use crate::testing::{chain, relative_difference, relative_residual, vector};
+use crate::testing::{chain, chain_with, relative_difference, relative_residual, vector};
 use crate::{Backend, Csc, KktError, KktOptions, KktSolver};
 use proptest::prelude::*;
 
@@ -61,7 +61,11 @@ fn auto_picks_ldlt_when_the_primal_count_is_given() {
         ..KktOptions::default()
     };
     let pick = |o: KktOptions| KktSolver::new(&a, &o).expect("regular structure").backend();
+    // S + BᵀB couples every body: not block-diagonal.
     assert_eq!(pick(auto(Some(30))), Backend::SparseLdlt);
+    let plain = chain_with(10, 1, None, false);
+    let s = KktSolver::new(&plain, &auto(Some(30))).expect("regular structure");
+    assert_eq!(s.backend(), Backend::Schur);
     assert_eq!(pick(auto(None)), Backend::SparseLu);
     let small = chain(1, 1, None);
     let s = KktSolver::new(&small, &auto(Some(3))).expect("regular structure");
@@ -282,7 +286,12 @@ fn empty_system() {
         col_ptr: vec![0],
         ..Csc::default()
     };
-    for backend in [Backend::SparseLdlt, Backend::SparseLu, Backend::Dense] {
+    for backend in [
+        Backend::SparseLdlt,
+        Backend::SparseLu,
+        Backend::Dense,
+        Backend::Schur,
+    ] {
         let opts = KktOptions {
             backend,
             n_primal: Some(0),
@@ -292,6 +301,75 @@ fn empty_system() {
         s.factor(&[]).expect("nothing to factor");
         s.solve_in_place(&mut []).expect("nothing to solve");
     }
+}
+
+#[test]
+fn schur_matches_ldlt_and_lu_on_chains() {
+    for n_bodies in [1, 10, 1000] {
+        let a = chain_with(n_bodies, 7, None, false);
+        let mut b = vec![0.0; a.n];
+        a.mul(&vector(a.n, 3), &mut b);
+        let schur = solve(Backend::Schur, n_bodies, &a, &b).expect("Schur solves a regular chain");
+        let ldlt = solve(Backend::SparseLdlt, n_bodies, &a, &b).expect("LDLᵀ");
+        let lu = solve(Backend::SparseLu, n_bodies, &a, &b).expect("LU");
+        let r = relative_residual(&a, &schur, &b);
+        let (d_ldlt, d_lu) = (
+            relative_difference(&schur, &ldlt),
+            relative_difference(&schur, &lu),
+        );
+        eprintln!("N = {n_bodies}: Schur residual {r:.1e}; vs LDLᵀ {d_ldlt:.1e}, vs LU {d_lu:.1e}");
+        assert!(r <= 1e-12, "N = {n_bodies}: {r:e}");
+        assert!(d_ldlt <= 1e-10 && d_lu <= 1e-10, "N = {n_bodies}");
+    }
+}
+
+#[test]
+fn schur_names_a_redundant_constraint_or_a_singular_block() {
+    for (n_bodies, r) in [(1, 0), (10, 7), (1000, 1999)] {
+        for consistent in [true, false] {
+            let a = chain_with(n_bodies, 11, Some((r, 1.0 / 3.0)), false);
+            let mut b = vector(a.n, 5);
+            if consistent {
+                a.mul(&vector(a.n, 5), &mut b);
+            }
+            let result = solve(Backend::Schur, n_bodies, &a, &b);
+            let pair = [3 * n_bodies + r, a.n - 1];
+            assert!(
+                matches!(result, Err(KktError::Singular { unknown: Some(k) }) if pair.contains(&k)),
+                "N = {n_bodies}, row {r}: {result:?}"
+            );
+        }
+    }
+    // A body without mass: its block of S is zero.
+    let mut a = chain_with(10, 3, None, false);
+    let body = 4;
+    for j in 3 * body..3 * body + 3 {
+        for k in a.col_ptr[j]..a.col_ptr[j + 1] {
+            if a.row_idx[k] == j {
+                a.values[k] = 0.0;
+            }
+        }
+    }
+    let result = solve(Backend::Schur, 10, &a, &vector(a.n, 1));
+    assert!(
+        matches!(result, Err(KktError::Singular { unknown: Some(k) }) if (12..15).contains(&k)),
+        "{result:?}"
+    );
+}
+
+#[test]
+fn schur_needs_a_block_diagonal_primal_block() {
+    let a = chain(10, 1, None);
+    let result = KktSolver::new(&a, &options(Backend::Schur, 10));
+    assert!(matches!(result, Err(KktError::Structure(_))), "{result:?}");
+    let missing = KktOptions {
+        backend: Backend::Schur,
+        ..KktOptions::default()
+    };
+    assert!(matches!(
+        KktSolver::new(&chain_with(10, 1, None, false), &missing),
+        Err(KktError::Structure(_))
+    ));
 }
 
 proptest! {
@@ -304,5 +382,15 @@ proptest! {
         let dense = solve(Backend::Dense, n_bodies, &a, &b).expect("regular chain");
         prop_assert!(relative_difference(&ldlt, &dense) <= 1e-10);
         prop_assert!(relative_residual(&a, &ldlt, &b) <= 1e-12);
+    }
+
+    #[test]
+    fn schur_matches_dense_lu_on_random_chains(n_bodies in 1usize..12, seed in any::<u64>(), rhs_seed in any::<u64>()) {
+        let a = chain_with(n_bodies, seed, None, false);
+        let b = vector(a.n, rhs_seed);
+        let schur = solve(Backend::Schur, n_bodies, &a, &b).expect("regular chain");
+        let dense = solve(Backend::Dense, n_bodies, &a, &b).expect("regular chain");
+        prop_assert!(relative_difference(&schur, &dense) <= 1e-10);
+        prop_assert!(relative_residual(&a, &schur, &b) <= 1e-12);
     }
 }

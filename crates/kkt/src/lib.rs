@@ -21,9 +21,18 @@
 //!   pivots at the rounding level (redundant constraints) are rejected. When
 //!   `S` is indefinite the factorization may still succeed; the checks of the
 //!   solution below decide.
+//! - [`Backend::Schur`]: the Schur complement on the primal block `S`, for
+//!   KKT matrices whose `S` is block-diagonal with blocks of at most
+//!   [`MAX_SCHUR_BLOCK`] unknowns (bodies that interact only through
+//!   constraints, assembled without the `BᵀB` term): every block of `S` is
+//!   inverted densely and `C = B S⁻¹ Bᵀ` (pattern of `B Bᵀ`, block-tridiagonal
+//!   for a chain) is factored by sparse LDLᵀ after AMD. On chains it factors
+//!   about 10× and solves about 2× faster than LDLᵀ of the whole KKT matrix
+//!   (`cargo xtask bench`).
 //! - [`Backend::Auto`] (default): dense up to [`KktOptions::dense_threshold`]
-//!   unknowns; above it, LDLᵀ when [`KktOptions::n_primal`] is given, sparse LU
-//!   otherwise.
+//!   unknowns; above it, when [`KktOptions::n_primal`] is given, Schur if `S`'s
+//!   pattern is block-diagonal with small blocks, else LDLᵀ; sparse LU without
+//!   `n_primal`.
 //!
 //! A singular or numerically singular matrix is an `Err` naming the unknown that
 //! has no pivot, never NaN or a panic; every solution is checked by its residual
@@ -48,12 +57,15 @@
 #[cfg(test)]
 mod chain_tests;
 mod dense;
+mod schur;
 mod sparse_ldlt;
 mod sparse_lu;
 #[cfg(test)]
 mod testing;
 
 use dense::DenseLu;
+pub use schur::MAX_BLOCK as MAX_SCHUR_BLOCK;
+use schur::Schur;
 use sparse_ldlt::SparseLdlt;
 use sparse_lu::SparseLu;
 
@@ -145,6 +157,12 @@ pub enum Backend {
     /// Requires [`KktOptions::n_primal`] and a structurally symmetric matrix
     /// stored with both triangles; reads its lower triangle.
     SparseLdlt,
+    /// Schur complement on the primal block: `S` must be block-diagonal
+    /// (blocks of at most [`MAX_SCHUR_BLOCK`] unknowns, the connected
+    /// components of its pattern); each block is inverted densely and
+    /// `C = B S⁻¹ Bᵀ − D` factored by sparse LDLᵀ. Requires
+    /// [`KktOptions::n_primal`].
+    Schur,
 }
 
 /// Options of a [`KktSolver`].
@@ -216,6 +234,7 @@ enum Inner {
     Dense(DenseLu),
     SparseLu(Box<SparseLu>),
     SparseLdlt(Box<SparseLdlt>),
+    Schur(Box<Schur>),
 }
 
 /// Factors and solves one sparse square system many times: symbolic analysis
@@ -263,19 +282,37 @@ impl KktSolver {
                 a.n
             )));
         }
-        let backend = match options.backend {
+        let mut backend = match options.backend {
             Backend::Auto if a.n <= options.dense_threshold => Backend::Dense,
-            Backend::Auto if options.n_primal.is_some() => Backend::SparseLdlt,
+            Backend::Auto if options.n_primal.is_some() => Backend::Schur,
             Backend::Auto => Backend::SparseLu,
             b => b,
         };
+        let need_primal = |what: &str| {
+            options.n_primal.ok_or_else(|| {
+                KktError::Structure(format!("the {what} backend needs KktOptions::n_primal"))
+            })
+        };
+        let mut schur = None;
+        if backend == Backend::Schur {
+            let np = need_primal("Schur")?;
+            match Schur::new(a, np) {
+                Ok(s) => schur = Some(s),
+                // Auto: S is not block-diagonal with small blocks.
+                Err(KktError::Structure(_)) if options.backend == Backend::Auto => {
+                    backend = Backend::SparseLdlt;
+                }
+                Err(e) => return Err(e),
+            }
+        }
         let inner = match backend {
+            Backend::Schur => match schur {
+                Some(s) => Inner::Schur(Box::new(s)),
+                None => return Err(KktError::Structure("Schur analysis missing".to_string())),
+            },
             Backend::Dense => Inner::Dense(DenseLu::new(a.n, &a.col_ptr, &a.row_idx)),
             Backend::SparseLdlt => {
-                let np = options.n_primal.ok_or_else(|| {
-                    KktError::Structure("the LDLᵀ backend needs KktOptions::n_primal".to_string())
-                })?;
-                Inner::SparseLdlt(Box::new(SparseLdlt::new(a, np)?))
+                Inner::SparseLdlt(Box::new(SparseLdlt::new(a, need_primal("LDLᵀ")?)?))
             }
             Backend::SparseLu | Backend::Auto => Inner::SparseLu(Box::new(SparseLu::new(a)?)),
         };
@@ -321,22 +358,22 @@ impl KktSolver {
     pub fn factor(&mut self, values: &[f64]) -> Result<(), KktError> {
         assert_eq!(values.len(), self.a.values.len(), "one value per entry");
         self.factored = false;
-        if values.iter().any(|v| !v.is_finite()) {
-            return Err(KktError::NonFinite);
-        }
-        self.a.values.copy_from_slice(values);
-        // ‖A‖∞: largest absolute row sum.
+        // One pass: copy, ‖A‖∞ (largest absolute row sum; NaN or infinite
+        // for non-finite values).
         self.ax.fill(0.0);
-        for j in 0..self.a.n {
-            for k in self.a.col_ptr[j]..self.a.col_ptr[j + 1] {
-                self.ax[self.a.row_idx[k]] += self.a.values[k].abs();
-            }
+        for ((&i, v), &x) in self.a.row_idx.iter().zip(&mut self.a.values).zip(values) {
+            *v = x;
+            self.ax[i] += x.abs();
+        }
+        if self.ax.iter().any(|v| !v.is_finite()) {
+            return Err(KktError::NonFinite);
         }
         self.a_norm = self.ax.iter().fold(0.0, |m: f64, &x| m.max(x));
         match &mut self.inner {
             Inner::Dense(lu) => lu.factor(values)?,
             Inner::SparseLu(lu) => lu.factor(&self.a)?,
             Inner::SparseLdlt(ldlt) => ldlt.factor(&self.a)?,
+            Inner::Schur(schur) => schur.factor(&self.a)?,
         }
         self.factored = true;
         self.verified = false;
@@ -372,6 +409,7 @@ impl KktSolver {
             Inner::Dense(lu) => lu.solve_in_place(rhs),
             Inner::SparseLu(lu) => lu.solve_in_place(rhs),
             Inner::SparseLdlt(ldlt) => ldlt.solve_in_place(rhs),
+            Inner::Schur(schur) => schur.solve_in_place(rhs),
         }
         if rhs.iter().any(|v| !v.is_finite()) {
             return Err(KktError::Singular { unknown: None });
@@ -487,7 +525,12 @@ mod tests {
         let x_true = [1.0, -2.0, 0.5, 3.0, -1.0];
         let mut b = vec![0.0; 5];
         a.mul(&x_true, &mut b);
-        for backend in [Backend::Dense, Backend::SparseLu, Backend::SparseLdlt] {
+        for backend in [
+            Backend::Dense,
+            Backend::SparseLu,
+            Backend::SparseLdlt,
+            Backend::Schur,
+        ] {
             let x = solve_with(backend, 3, &a, &b).expect("nonsingular");
             for (xi, ti) in x.iter().zip(&x_true) {
                 assert!((xi - ti).abs() < 1e-13, "{backend:?}: {x:?}");
@@ -513,6 +556,13 @@ mod tests {
             solve_with(Backend::SparseLdlt, 2, &a, &b),
             Err(KktError::Singular { unknown: Some(3) })
         );
+        // The Schur complement's AMD may keep either copy last.
+        assert!(matches!(
+            solve_with(Backend::Schur, 2, &a, &b),
+            Err(KktError::Singular {
+                unknown: Some(2 | 3)
+            })
+        ));
         let sparse = solve_with(Backend::SparseLu, 2, &a, &b);
         assert!(
             matches!(

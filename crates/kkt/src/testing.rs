@@ -33,6 +33,17 @@ impl Lcg {
 /// `duplicate = Some((r, f))`: constraint row `r` times `f` (a redundant
 /// constraint). The structure depends only on `n_bodies` and `duplicate`.
 pub(crate) fn chain(n_bodies: usize, seed: u64, duplicate: Option<(usize, f64)>) -> Csc {
+    chain_with(n_bodies, seed, duplicate, true)
+}
+
+/// [`chain`] with `S = c M + BᵀB` (`augmented`) or `S = c M` (block-diagonal,
+/// for the Schur backend).
+pub(crate) fn chain_with(
+    n_bodies: usize,
+    seed: u64,
+    duplicate: Option<(usize, f64)>,
+    augmented: bool,
+) -> Csc {
     let mut rng = Lcg::new(seed);
     let np = 3 * n_bodies;
     // Constraint rows as (coordinate, value) lists.
@@ -71,8 +82,10 @@ pub(crate) fn chain(n_bodies: usize, seed: u64, duplicate: Option<(usize, f64)>)
         for &(p, bp) in row {
             cols[p].push((li, bp));
             cols[li].push((p, bp));
-            for &(q, bq) in row {
-                cols[q].push((p, bp * bq));
+            if augmented {
+                for &(q, bq) in row {
+                    cols[q].push((p, bp * bq));
+                }
             }
         }
     }

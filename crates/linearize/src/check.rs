@@ -17,6 +17,9 @@ pub struct DerivativeErrors {
     /// The acceleration right-hand side `c` against
     /// `−d²/ds² Φ(u + s u̇, t + s)` at `s = 0`.
     pub accel_rhs: f64,
+    /// The fused [`System::phi_b_into`] against `phi_into` and `b_into`
+    /// (relative to `max(1, |value|)`; round-off level when they agree).
+    pub fused: f64,
 }
 
 impl DerivativeErrors {
@@ -28,6 +31,7 @@ impl DerivativeErrors {
             .max(self.c_t)
             .max(self.phi_t)
             .max(self.accel_rhs)
+            .max(self.fused)
     }
 }
 
@@ -169,7 +173,20 @@ pub fn check_derivatives<S: System + ?Sized>(
         .collect();
     let accel_err = rel_err(&c.iter().map(|&x| vec![x]).collect::<Vec<_>>(), &c_fd);
 
+    // The fused evaluation against the separate ones.
+    let (mut phi_f, mut b_f) = (vec![0.0; m], vec![0.0; b.len()]);
+    sys.phi_b_into(t, u, &mut phi_f, &mut b_f);
+    let fused = phi_f
+        .iter()
+        .zip(&phi(sys, t, u))
+        .chain(b_f.iter().zip(&b))
+        .fold(0.0f64, |e, (x, y)| {
+            let d = (x - y).abs() / y.abs().max(1.0);
+            if d.is_nan() { f64::INFINITY } else { e.max(d) }
+        });
+
     DerivativeErrors {
+        fused,
         b: b_err,
         k_t: k_err,
         c_t: c_err,

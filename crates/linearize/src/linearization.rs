@@ -105,6 +105,7 @@ impl Coefficients {
 pub struct Linearization {
     n: usize,
     m: usize,
+    augmented: bool,
     mass_pattern: Pattern,
     b_pattern: Pattern,
     /// Values of `M` on the system's mass pattern.
@@ -186,6 +187,24 @@ impl Linearization {
     /// [`LinearizeError`] when a declared pattern has the wrong shape or an
     /// entry out of bounds.
     pub fn new<S: System + ?Sized>(sys: &S) -> Result<Self, LinearizeError> {
+        Self::with_augmentation(sys, true)
+    }
+
+    /// As [`new`](Self::new), with (`augmented`) or without the `BᵀB` term
+    /// in the KKT structure. Without it, [`assemble`](Self::assemble) ignores
+    /// [`Coefficients::c_bb`] and `S_T = c_u K_T + c_v C_T + c_a M`: for bodies
+    /// that interact only through constraints `S_T` is then block-diagonal,
+    /// which the Schur backend of mstar-kkt exploits. Both matrices give the
+    /// same `Δu`; the augmented one returns the multiplier part `Δλ + c_bb Φ`
+    /// (with `scale`), the plain one `Δλ`: from the constraint rows `B Δu = −Φ`,
+    /// `c_bb BᵀB Δu = −c_bb Bᵀ Φ` moves into the multipliers.
+    ///
+    /// # Errors
+    /// As [`new`](Self::new).
+    pub fn with_augmentation<S: System + ?Sized>(
+        sys: &S,
+        augmented: bool,
+    ) -> Result<Self, LinearizeError> {
         let n = sys.n_coords();
         let m = sys.n_constraints();
         let mass_pattern = checked(sys.mass_pattern(), "mass", n, n)?;
@@ -217,6 +236,7 @@ impl Linearization {
             b_pattern.entries.iter().map(|&(i, j)| (n + i, j)).collect();
         let bt_entries: Vec<(usize, usize)> =
             b_pattern.entries.iter().map(|&(i, j)| (j, n + i)).collect();
+        let no_entries = Vec::new();
         let (kkt, slots) = from_terms(
             n + m,
             &[
@@ -225,7 +245,7 @@ impl Linearization {
                 &g_u_pattern.entries,
                 &g_v_pattern.entries,
                 &mass_du_pattern.entries,
-                &bb_entries,
+                if augmented { &bb_entries } else { &no_entries },
                 &identity[..n],
                 &b_entries,
                 &bt_entries,
@@ -252,6 +272,7 @@ impl Linearization {
         Ok(Self {
             n,
             m,
+            augmented,
             mass: vec![0.0; mass_pattern.len()],
             b: vec![0.0; b_pattern.len()],
             hessian: vec![0.0; hessian_pattern.len()],
@@ -275,6 +296,26 @@ impl Linearization {
             m_star_mass,
             m_star_bb,
         })
+    }
+
+    /// Whether the KKT matrix carries the `BᵀB` term (see
+    /// [`with_augmentation`](Self::with_augmentation)).
+    #[must_use]
+    pub fn augmented(&self) -> bool {
+        self.augmented
+    }
+
+    /// Whether every diagonal entry of `M`, as last evaluated, is positive
+    /// (necessary for a positive definite `M`).
+    #[must_use]
+    pub fn mass_diagonal_positive(&self) -> bool {
+        let mut diag = vec![0.0; self.n];
+        for (&(i, j), &v) in self.mass_pattern.entries.iter().zip(&self.mass) {
+            if i == j {
+                diag[i] += v;
+            }
+        }
+        diag.iter().all(|&d| d > 0.0)
     }
 
     /// Number of coordinates `n`.
@@ -368,7 +409,8 @@ impl Linearization {
     /// − ∂g/∂u + ∂(Mü)/∂u`, `C_T = −∂g/∂u̇`), scaled by `scale`, plus
     /// `c_identity I`.
     pub fn assemble(&mut self, c: &Coefficients) {
-        if c.c_bb != 0.0 {
+        let c_bb = if self.augmented { c.c_bb } else { 0.0 };
+        if c_bb != 0.0 {
             self.eval_bb();
         }
         let s = c.scale;
@@ -384,8 +426,8 @@ impl Linearization {
         if c.c_v != 0.0 {
             scatter(vals, &sl.g_v, &self.g_v, -s * c.c_v);
         }
-        if c.c_bb != 0.0 {
-            scatter(vals, &sl.bb, &self.bb_values, s * c.c_bb);
+        if c_bb != 0.0 {
+            scatter(vals, &sl.bb, &self.bb_values, s * c_bb);
         }
         if c.c_identity != 0.0 {
             for &k in &sl.identity {
@@ -451,14 +493,52 @@ impl Linearization {
     }
 }
 
-/// `‖x‖∞` (NaN if any entry is NaN).
+/// `‖x‖∞` (NaN if any entry is NaN, else infinite if any entry is).
 #[must_use]
 pub fn max_abs(x: &[f64]) -> f64 {
-    x.iter().fold(0.0f64, |acc, &v| {
-        if v.is_nan() || acc.is_nan() {
-            f64::NAN
-        } else {
-            acc.max(v.abs())
+    // Four independent lanes the compiler can vectorize; NaN and ±inf turn
+    // `0 · v` into NaN, which the lane sums carry to the end.
+    let (mut m, mut z) = ([0.0f64; 4], [0.0f64; 4]);
+    let chunks = x.chunks_exact(4);
+    let tail = chunks.remainder();
+    for c in chunks {
+        for k in 0..4 {
+            let a = c[k].abs();
+            m[k] = if a > m[k] { a } else { m[k] };
+            z[k] += 0.0 * c[k];
         }
-    })
+    }
+    for (k, &v) in tail.iter().enumerate() {
+        let a = v.abs();
+        m[k] = if a > m[k] { a } else { m[k] };
+        z[k] += 0.0 * v;
+    }
+    let max = m[0].max(m[1]).max(m[2].max(m[3]));
+    if (z[0] + z[1] + z[2] + z[3]).is_nan() && max.is_finite() {
+        f64::NAN
+    } else {
+        max
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::max_abs;
+
+    #[test]
+    fn max_abs_finds_the_largest_magnitude_and_non_finite_entries() {
+        for len in 0usize..11 {
+            let mut x: Vec<f64> = (0..len).map(|i| i as f64 * 0.5 - 2.0).collect();
+            let want = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+            assert_eq!(max_abs(&x), want, "len {len}");
+            if len > 0 {
+                x[len - 1] = -7.5;
+                assert_eq!(max_abs(&x), 7.5);
+                x[len / 2] = f64::NAN;
+                assert!(max_abs(&x).is_nan(), "NaN at {} of {len}", len / 2);
+                x[len / 2] = f64::NEG_INFINITY;
+                assert_eq!(max_abs(&x), f64::INFINITY);
+            }
+        }
+    }
 }

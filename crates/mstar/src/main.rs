@@ -87,6 +87,9 @@ enum Init {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum NewtonArg {
+    /// Full with the Schur backend (large bodies-and-joints systems), modified
+    /// otherwise.
+    Auto,
     /// Refactor at every iteration.
     Full,
     /// Reuse the factorization while the iteration contracts fast.
@@ -123,7 +126,7 @@ struct IntegratorArgs {
     /// HHT α in [−1/3, 0] [default: −0.1].
     #[arg(long, allow_hyphen_values = true)]
     alpha: Option<f64>,
-    /// Newton variant [default: modified; paper: full].
+    /// Newton variant [default: auto; paper: full].
     #[arg(long, value_enum)]
     newton: Option<NewtonArg>,
     /// Relative Newton tolerance on ‖r‖ and ‖Φ‖ [default: 1e-10].
@@ -272,8 +275,9 @@ fn apply_integrator(args: &IntegratorArgs, c: &mut Config, paper_preset: bool) -
     }
     if let Some(n) = args.newton {
         c.newton = match n {
+            NewtonArg::Auto => Newton::Auto,
             NewtonArg::Full => Newton::Full,
-            NewtonArg::Modified => Newton::default(),
+            NewtonArg::Modified => Newton::MODIFIED,
         };
     }
     // Scheme: explicit --integrator, else implied by --beta/--gamma, --rho, --alpha.
@@ -332,6 +336,7 @@ fn describe(run: &PendulumRun) -> String {
         Start::Consistent => "consistent start".into(),
     };
     let newton = match c.newton {
+        Newton::Auto => "Newton (auto)".to_string(),
         Newton::Full => "full Newton".to_string(),
         Newton::Modified { max_rate } => format!("modified Newton (rate ≤ {max_rate})"),
     };
@@ -447,6 +452,14 @@ fn chain(args: &ChainArgs) -> Result<()> {
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
     let mut integ = mstar::Integrator::new(&sys, config, 0.0, &u0, &v0)?;
     let setup = clock.elapsed();
+    println!(
+        "KKT solver: {:?}; Newton: {}",
+        integ.backend(),
+        match integ.newton() {
+            Newton::Modified { max_rate } => format!("modified (rate ≤ {max_rate})"),
+            _ => "full (a fresh Jacobian at every iteration)".to_string(),
+        }
+    );
     let mut stream = args
         .out
         .as_deref()

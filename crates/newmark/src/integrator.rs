@@ -1,7 +1,7 @@
 //! The predictor-corrector Newton loop (paper §2.2, Fig. 2; `algorithm.md` §4),
 //! initial conditions (§3, §6) and step control.
 
-use mstar_kkt::{KktError, KktSolver};
+use mstar_kkt::{Backend, KktError, KktSolver};
 use mstar_linearize::{Coefficients, Linearization, max_abs};
 use mstar_model::{Sample, System, kinetic_energy};
 
@@ -163,20 +163,15 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                 want: m,
             });
         }
-        let lin = Linearization::new(sys)?;
-        // The KKT matrix's leading n unknowns are the coordinates (for LDLᵀ).
-        let kkt_options = mstar_kkt::KktOptions {
-            n_primal: config.kkt.n_primal.or(Some(n)),
-            ..config.kkt
-        };
-        let solver =
-            KktSolver::new(lin.kkt(), &kkt_options).map_err(|source| IntegrationError::Kkt {
-                context: "analysing the KKT pattern",
-                t: t0,
-                h: config.h,
-                unknown: None,
-                source,
-            })?;
+        let (lin, solver) = linear_algebra(sys, &config, t0, u0, v0)?;
+        let mut config = config;
+        if config.newton == Newton::Auto {
+            config.newton = if solver.backend() == Backend::Schur {
+                Newton::Full
+            } else {
+                Newton::MODIFIED
+            };
+        }
         let h = config.h;
         let mut this = Self {
             sys,
@@ -218,6 +213,18 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         this.residual = this.lin.residual_norm();
         this.constraint = this.lin.constraint_norm();
         Ok(this)
+    }
+
+    /// The Newton variant in use ([`Newton::Auto`] resolved).
+    #[must_use]
+    pub fn newton(&self) -> Newton {
+        self.config.newton
+    }
+
+    /// The KKT backend in use ([`Backend::Auto`] resolved).
+    #[must_use]
+    pub fn backend(&self) -> Backend {
+        self.solver.backend()
     }
 
     /// Current time.
@@ -346,7 +353,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     }
 
     fn factorized_every_iteration(&self) -> bool {
-        matches!(self.config.newton, Newton::Full)
+        matches!(self.config.newton, Newton::Full | Newton::Auto)
     }
 
     fn failure_error(&self, failure: Failure, h: f64, h_min: f64) -> IntegrationError {
@@ -462,7 +469,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         let n = self.sys.n_coords();
         let max_rate = match self.config.newton {
             Newton::Modified { max_rate } => max_rate,
-            Newton::Full => f64::INFINITY,
+            Newton::Full | Newton::Auto => f64::INFINITY,
         };
         let mut force_refactor = false;
         let mut previous_step = f64::INFINITY;
@@ -505,7 +512,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                 });
             }
             let refactor = match self.config.newton {
-                Newton::Full => true,
+                Newton::Full | Newton::Auto => true,
                 Newton::Modified { .. } => force_refactor || self.factored_h != Some(h),
             };
             if refactor {
@@ -536,14 +543,22 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                 s.a_alpha[i] += a_p * du[i];
             }
             // With M* in S_T (eq. 17) the solve returns Δλ + c_bb Φ (see
-            // `Config::exact_multiplier_update`); the paper keeps it.
-            let shift = if self.config.exact_multiplier_update {
+            // `Config::exact_multiplier_update`), without the BᵀB term (Schur
+            // backend, `Linearization::with_augmentation`) it returns Δλ; the
+            // paper keeps the shift c_bb Φ, the exact update does not.
+            let in_matrix = if self.lin.augmented() {
                 coefficients.c_bb
             } else {
                 0.0
             };
+            let kept = if self.config.exact_multiplier_update {
+                0.0
+            } else {
+                coefficients.c_bb
+            };
+            let shift = kept - in_matrix;
             for ((l, &d), &phi) in s.lambda.iter_mut().zip(dl).zip(&self.lin.phi) {
-                *l += d / coefficients.scale - shift * phi;
+                *l += d / coefficients.scale + shift * phi;
             }
             let step = max_abs(du);
             if step > max_rate * previous_step {
@@ -891,4 +906,47 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         }
         Ok(())
     }
+}
+
+/// The linearization and the KKT solver for `sys`. With [`Backend::Auto`] or
+/// [`Backend::Schur`] it first tries the KKT structure without the `BᵀB` term
+/// (`S_T` block-diagonal when bodies interact only through constraints) and
+/// keeps it when the Schur backend accepts it and, for `Auto`, `M`'s diagonal
+/// is positive (without `BᵀB` the blocks of `S_T` hold `β' M`); otherwise the
+/// augmented structure of eq. (17).
+fn linear_algebra<S: System + ?Sized>(
+    sys: &S,
+    config: &Config,
+    t0: f64,
+    u0: &[f64],
+    v0: &[f64],
+) -> Result<(Linearization, KktSolver), IntegrationError> {
+    let (n, m) = (sys.n_coords(), sys.n_constraints());
+    // The KKT matrix's leading n unknowns are the coordinates.
+    let options = mstar_kkt::KktOptions {
+        n_primal: config.kkt.n_primal.or(Some(n)),
+        ..config.kkt
+    };
+    let analyse = |lin: &Linearization| {
+        KktSolver::new(lin.kkt(), &options).map_err(|source| IntegrationError::Kkt {
+            context: "analysing the KKT pattern",
+            t: t0,
+            h: config.h,
+            unknown: None,
+            source,
+        })
+    };
+    if matches!(options.backend, Backend::Auto | Backend::Schur) {
+        let mut plain = Linearization::with_augmentation(sys, false)?;
+        let solver = analyse(&plain)?;
+        if solver.backend() == Backend::Schur {
+            plain.eval_residual(sys, t0, u0, v0, &vec![0.0; n], &vec![0.0; m]);
+            if options.backend == Backend::Schur || plain.mass_diagonal_positive() {
+                return Ok((plain, solver));
+            }
+        }
+    }
+    let lin = Linearization::new(sys)?;
+    let solver = analyse(&lin)?;
+    Ok((lin, solver))
 }

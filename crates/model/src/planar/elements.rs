@@ -505,3 +505,72 @@ impl Force {
         }
     }
 }
+
+/// The hot path of chains: a revolute joint's `Φ`, `B` and Hessian written
+/// directly, without the generic element's slot tables (same values, same
+/// entry order as [`Constraint::grad`] and [`Constraint::hess`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RevoluteKernel {
+    anchors: [Anchor; 2],
+    /// First global constraint row.
+    row0: usize,
+    /// Offsets of the element's entries in the B and Hessian value buffers.
+    b_off: usize,
+    h_off: usize,
+}
+
+impl RevoluteKernel {
+    /// The kernel of `c`, if it is a revolute joint.
+    pub(crate) fn of(c: &Constraint, b_off: usize, h_off: usize) -> Option<Self> {
+        matches!(c.joint, Joint::Revolute).then_some(Self {
+            anchors: c.anchors,
+            row0: c.row0,
+            b_off,
+            h_off,
+        })
+    }
+
+    /// `Φ = p_A − p_B` and its gradient: per row `k`, `[±1 on x/y, ±∂p/∂θ]` of
+    /// side A (when not the ground), then of side B.
+    #[inline]
+    pub(crate) fn phi_b(&self, u: &[f64], trig: &[(f64, f64)], phi: &mut [f64], b: &mut [f64]) {
+        let pa = self.anchors[0].point_cached(u, trig);
+        let pb = self.anchors[1].point_cached(u, trig);
+        phi[self.row0] = pa.p[0] - pb.p[0];
+        phi[self.row0 + 1] = pa.p[1] - pb.p[1];
+        let mut o = self.b_off;
+        for k in 0..2 {
+            for (anchor, pt, sign) in [(&self.anchors[0], &pa, 1.0), (&self.anchors[1], &pb, -1.0)]
+            {
+                match anchor {
+                    Anchor::Ground(_) => {}
+                    Anchor::Point { .. } => {
+                        b[o] = sign;
+                        o += 1;
+                    }
+                    Anchor::Rigid { .. } => {
+                        b[o] = sign;
+                        b[o + 1] = sign * pt.dp[k];
+                        o += 2;
+                    }
+                }
+            }
+        }
+    }
+
+    /// `μ_k ∂²Φ_k/∂θ²` on each rigid side's angle (rows `k = 0, 1`).
+    #[inline]
+    pub(crate) fn hessian(&self, u: &[f64], mu: &[f64], out: &mut [f64]) {
+        let pts = [self.anchors[0].point(u), self.anchors[1].point(u)];
+        let mut o = self.h_off;
+        for k in 0..2 {
+            let m = mu[self.row0 + k];
+            for (side, sign) in [(0, 1.0), (1, -1.0)] {
+                if let Anchor::Rigid { .. } = self.anchors[side] {
+                    out[o] = m * sign * pts[side].ddp[k];
+                    o += 1;
+                }
+            }
+        }
+    }
+}

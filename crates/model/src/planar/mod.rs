@@ -15,7 +15,7 @@ mod time;
 pub use chains::{bar_chain, point_mass_chain};
 pub use time::TimeFunction;
 
-use elements::{Constraint, Force, Joint, Load};
+use elements::{Constraint, Force, Joint, Load, RevoluteKernel};
 use geometry::{Anchor, Slots};
 
 use crate::{Pattern, System};
@@ -437,6 +437,10 @@ pub struct PlanarSystem {
     /// Offsets of each constraint's entries in the B and Hessian value buffers.
     b_offsets: Vec<usize>,
     h_offsets: Vec<usize>,
+    /// Revolute joints (the bulk of chains), evaluated without slot tables.
+    revolutes: Vec<RevoluteKernel>,
+    /// Indices of the other constraints.
+    others: Vec<usize>,
     g_u_offsets: Vec<usize>,
     g_v_offsets: Vec<usize>,
 }
@@ -489,7 +493,16 @@ impl PlanarSystem {
             gu.extend(global_pairs(&f.slots, &f.g_u));
             gv.extend(global_pairs(&f.slots, &f.g_v));
         }
+        let (mut revolutes, mut others) = (Vec::new(), Vec::new());
+        for (i, c) in constraints.iter().enumerate() {
+            match RevoluteKernel::of(c, b_offsets[i], h_offsets[i]) {
+                Some(k) => revolutes.push(k),
+                None => others.push(i),
+            }
+        }
         Self {
+            revolutes,
+            others,
             gravity: builder.gravity,
             bodies: builder.bodies.clone(),
             n,
@@ -632,7 +645,11 @@ impl System for PlanarSystem {
             for body in self.bodies.iter().filter(|b| b.inertia.is_some()) {
                 trig[body.x + 2] = u[body.x + 2].sin_cos();
             }
-            for (c, &off) in self.constraints.iter().zip(&self.b_offsets) {
+            for k in &self.revolutes {
+                k.phi_b(u, trig, phi, b);
+            }
+            for &i in &self.others {
+                let (c, off) = (&self.constraints[i], self.b_offsets[i]);
                 c.phi_grad(
                     t,
                     u,
@@ -656,7 +673,11 @@ impl System for PlanarSystem {
     }
 
     fn hessian_into(&self, _t: f64, u: &[f64], mu: &[f64], out: &mut [f64]) {
-        for (c, &off) in self.constraints.iter().zip(&self.h_offsets) {
+        for k in &self.revolutes {
+            k.hessian(u, mu, out);
+        }
+        for &i in &self.others {
+            let (c, off) = (&self.constraints[i], self.h_offsets[i]);
             let vals = &mut out[off..off + c.hess.len()];
             c.hess_values(u, vals);
             for (v, &(r, _, _)) in vals.iter_mut().zip(&c.hess) {
