@@ -1,8 +1,11 @@
 //! Time per step of an N-link bar chain (the benchmark: bars of 1 kg,
 //! 1 m on revolute joints, released horizontally; h = 1e-3, generalized-α
-//! ρ∞ = 0.8, Newton tolerance 1e-8 relative, modified Newton), and the phases
-//! of one Newton iteration: residual evaluation, Jacobians + KKT assembly,
-//! numeric factorization, solve.
+//! ρ∞ = 0.8, Newton tolerance 1e-8 relative, the default Newton and KKT
+//! solver: full Newton on the Schur complement), and the phases of one Newton
+//! iteration: residual evaluation, Jacobians + KKT assembly, numeric
+//! factorization and solve for each sparse backend (Schur complement on the
+//! unaugmented matrix; LDLᵀ and LU of the augmented KKT matrix with `M*`, LU
+//! up to N = 10⁴).
 //!
 //! Besides criterion's estimates it writes `target/studies/bench/counts.csv`
 //! (Newton iterations and factorizations per step, peak memory) for
@@ -11,17 +14,21 @@
 
 use std::fmt::Write as _;
 use std::hint::black_box;
-use std::time::Duration;
+use std::time::{Duration, Instant};
+
+/// Step size and the end of the timed interval, s.
+const H: f64 = 1e-3;
+const T_END: f64 = 1.0;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use mstar::kkt::KktSolver;
+use mstar::kkt::{Backend, KktOptions, KktSolver};
 use mstar::linearize::Linearization;
 use mstar::planar::{PlanarSystem, bar_chain};
 use mstar::{Config, Integrator, Scheme, System};
 
 fn config() -> Config {
     Config {
-        h: 1e-3,
+        h: H,
         tol: 1e-8,
         scheme: Scheme::GeneralizedAlpha { rho_inf: 0.8 },
         ..Config::default()
@@ -58,7 +65,25 @@ fn warmed(sys: &PlanarSystem, warm: usize) -> Integrator<'_, PlanarSystem> {
     integ
 }
 
+/// The targets are for one core: rayon's global pool gets one thread,
+/// and the two-thread figures run in a pool of their own.
+fn one_thread_globally() {
+    // Fails only if the global pool already exists (a second benchmark
+    // function): it then has one thread already.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build_global();
+}
+
+fn two_threads() -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .expect("a thread pool")
+}
+
 fn steps(c: &mut Criterion) {
+    one_thread_globally();
     let mut counts = String::from("n,steps,iterations_per_step,factorizations_per_step,peak_mib\n");
     let mut group = c.benchmark_group("chain/step");
     for n in sizes() {
@@ -67,8 +92,36 @@ fn steps(c: &mut Criterion) {
         group.measurement_time(Duration::from_secs(if n >= 10_000 { 20 } else { 5 }));
         let mut integ = warmed(&sys, 20);
         group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
-            b.iter(|| integ.step(f64::INFINITY).expect("step"));
+            // Criterion asks for as many steps as it likes; the chain is
+            // restarted (untimed) whenever it reaches T_END, so every timed
+            // step lies in (0.02 s, T_END] of the 1 s run and not in
+            // the violent whips of a long chain much later.
+            b.iter_custom(|iters| {
+                let (mut total, mut done) = (Duration::ZERO, 0);
+                while done < iters {
+                    if integ.time() >= T_END - 1e-9 {
+                        integ = warmed(&sys, 20);
+                    }
+                    let left = ((T_END - integ.time()) / H).round().max(1.0) as u64;
+                    let k = left.min(iters - done);
+                    let start = Instant::now();
+                    for _ in 0..k {
+                        integ.step(f64::INFINITY).expect("step");
+                    }
+                    total += start.elapsed();
+                    done += k;
+                }
+                total
+            });
         });
+        if n >= 10_000 {
+            // The same steps with two threads for the parallel element loops.
+            let pool = two_threads();
+            let mut integ = warmed(&sys, 20);
+            group.bench_with_input(BenchmarkId::new("2-threads", n), &n, |b, _| {
+                b.iter(|| pool.install(|| integ.step(f64::INFINITY).expect("step")));
+            });
+        }
         // Counts over 100 fresh steps after the same warm-up.
         let mut integ = warmed(&sys, 20);
         let before = integ.stats();
@@ -93,6 +146,8 @@ fn steps(c: &mut Criterion) {
 }
 
 fn phases(c: &mut Criterion) {
+    one_thread_globally();
+    let pool = two_threads();
     let mut group = c.benchmark_group("chain/phase");
     for n in sizes() {
         let sys = bar_chain(n);
@@ -101,10 +156,18 @@ fn phases(c: &mut Criterion) {
         let s = integ.sample();
         let params = config().scheme.params().expect("valid");
         let coefficients = params.coefficients(1e-3, true);
-        let mut lin = Linearization::new(&sys).expect("valid model");
+        // The default path: S_T without BᵀB, block-diagonal (Schur).
+        let mut lin = Linearization::with_augmentation(&sys, false).expect("valid model");
         lin.eval_residual(&sys, s.t, &s.u, &s.v, &s.a, &s.lambda);
         group.bench_with_input(BenchmarkId::new("residual", n), &n, |b, _| {
             b.iter(|| lin.eval_residual(&sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda));
+        });
+        group.bench_with_input(BenchmarkId::new("residual-2-threads", n), &n, |b, _| {
+            b.iter(|| {
+                pool.install(|| {
+                    lin.eval_residual(&sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda)
+                });
+            });
         });
         group.bench_with_input(BenchmarkId::new("jacobians+assembly", n), &n, |b, _| {
             b.iter(|| {
@@ -112,25 +175,47 @@ fn phases(c: &mut Criterion) {
                 lin.assemble(&coefficients);
             });
         });
-        let options = mstar::kkt::KktOptions {
-            n_primal: Some(sys.n_coords()),
-            ..mstar::kkt::KktOptions::default()
-        };
-        let mut solver = KktSolver::new(lin.kkt(), &options).expect("pattern");
-        group.bench_with_input(BenchmarkId::new("factor", n), &n, |b, _| {
-            b.iter(|| {
-                solver
-                    .factor(black_box(&lin.kkt().values))
-                    .expect("regular")
+        group.bench_with_input(
+            BenchmarkId::new("jacobians+assembly-2-threads", n),
+            &n,
+            |b, _| {
+                b.iter(|| {
+                    pool.install(|| {
+                        lin.eval_jacobians(&sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda);
+                        lin.assemble(&coefficients);
+                    });
+                });
+            },
+        );
+        let mut augmented = Linearization::new(&sys).expect("valid model");
+        augmented.eval_residual(&sys, s.t, &s.u, &s.v, &s.a, &s.lambda);
+        augmented.eval_jacobians(&sys, s.t, &s.u, &s.v, &s.a, &s.lambda);
+        augmented.assemble(&coefficients);
+        let mut backends = vec![
+            ("schur", Backend::Schur, &lin),
+            ("ldlt", Backend::SparseLdlt, &augmented),
+        ];
+        if n <= 10_000 {
+            backends.push(("lu", Backend::SparseLu, &augmented));
+        }
+        for (name, backend, l) in backends {
+            let options = KktOptions {
+                backend,
+                n_primal: Some(sys.n_coords()),
+                ..KktOptions::default()
+            };
+            let mut solver = KktSolver::new(l.kkt(), &options).expect("pattern");
+            group.bench_with_input(BenchmarkId::new(format!("factor-{name}"), n), &n, |b, _| {
+                b.iter(|| solver.factor(black_box(&l.kkt().values)).expect("regular"));
             });
-        });
-        let mut rhs = vec![0.0; lin.kkt().n];
-        group.bench_with_input(BenchmarkId::new("solve", n), &n, |b, _| {
-            b.iter(|| {
-                lin.kkt_rhs(coefficients.scale, &mut rhs);
-                solver.solve_in_place(black_box(&mut rhs)).expect("regular");
+            let mut rhs = vec![0.0; l.kkt().n];
+            group.bench_with_input(BenchmarkId::new(format!("solve-{name}"), n), &n, |b, _| {
+                b.iter(|| {
+                    l.kkt_rhs(coefficients.scale, &mut rhs);
+                    solver.solve_in_place(black_box(&mut rhs)).expect("regular");
+                });
             });
-        });
+        }
     }
     group.finish();
 }

@@ -63,7 +63,7 @@ pub fn run(max_n: usize) -> Result<()> {
         .context("the benchmark wrote no counts.csv")?;
     let mut table = Table::new(
         format!(
-            "chain of N bars, h = 1e-3, generalized-α ρ∞ = 0.8, tol 1e-8, modified Newton — {}",
+            "chain of N bars, h = 1e-3, generalized-α ρ∞ = 0.8, tol 1e-8, default Newton (full) and KKT solver (Schur), one thread — {}",
             machine()
         ),
         &[
@@ -71,12 +71,26 @@ pub fn run(max_n: usize) -> Result<()> {
             "µs/step",
             "µs/body/step",
             "Newton it./step",
+            "µs/Newton it.",
             "factorizations/step",
-            "residual µs",
-            "Jacobians+assembly µs",
-            "factor µs",
-            "solve µs",
+            "µs/step, 2 threads",
             "peak MiB",
+        ],
+    );
+    let mut phases = Table::new(
+        "phases of one Newton iteration (µs; Schur on the matrix without BᵀB, LDLᵀ and LU on the one with M*)",
+        &[
+            "N",
+            "residual",
+            "residual, 2 thr.",
+            "Jacobians+assembly",
+            "Jac.+asm., 2 thr.",
+            "factor Schur",
+            "solve Schur",
+            "factor LDLᵀ",
+            "solve LDLᵀ",
+            "factor LU",
+            "solve LU",
         ],
     );
     let (mut per_step, mut per_body) = (Vec::new(), Vec::new());
@@ -91,6 +105,7 @@ pub fn run(max_n: usize) -> Result<()> {
         let phase = |name: &str| {
             median_us(&format!("chain_phase/{name}/{n}")).map_or("-".into(), |v| format!("{v:.1}"))
         };
+        let iterations = f.get(2).and_then(|s| s.parse::<f64>().ok());
         per_step.push((n as f64, step));
         per_body.push((n as f64, step / n as f64));
         table.row(vec![
@@ -98,12 +113,24 @@ pub fn run(max_n: usize) -> Result<()> {
             format!("{step:.1}"),
             format!("{:.3}", step / n as f64),
             f.get(2).copied().unwrap_or("-").to_string(),
+            iterations.map_or("-".into(), |k| format!("{:.1}", step / k.max(1.0))),
             f.get(3).copied().unwrap_or("-").to_string(),
-            phase("residual"),
-            phase("jacobians+assembly"),
-            phase("factor"),
-            phase("solve"),
+            median_us(&format!("chain_step/2-threads/{n}"))
+                .map_or("-".into(), |v| format!("{v:.1}")),
             f.get(4).copied().unwrap_or("-").to_string(),
+        ]);
+        phases.row(vec![
+            n.to_string(),
+            phase("residual"),
+            phase("residual-2-threads"),
+            phase("jacobians+assembly"),
+            phase("jacobians+assembly-2-threads"),
+            phase("factor-schur"),
+            phase("solve-schur"),
+            phase("factor-ldlt"),
+            phase("solve-ldlt"),
+            phase("factor-lu"),
+            phase("solve-lu"),
         ]);
     }
     if per_step.is_empty() {
@@ -111,6 +138,8 @@ pub fn run(max_n: usize) -> Result<()> {
     }
     table.print();
     table.write_csv(&out.join("bench.csv"))?;
+    phases.print();
+    phases.write_csv(&out.join("phases.csv"))?;
     let figure = vec![
         Panel::new("time per step", "N (bodies)", "µs per step")
             .scale(Scale::LogLog)

@@ -21,7 +21,7 @@
 //! `(i, j)` with `i, j < n_primal`); a component larger than
 //! [`MAX_BLOCK`] unknowns makes the analysis fail (use LDLᵀ then).
 
-use crate::sparse_ldlt::SparseLdlt;
+use crate::sparse_ldlt::{SparseLdlt, kkt_ordering};
 use crate::{Csc, KktError};
 
 /// The largest diagonal block of `S` that the Schur backend inverts densely.
@@ -36,12 +36,14 @@ struct Block {
     s_entries: std::ops::Range<usize>,
     /// Its entries of `B`: `(position in the KKT values, local row, local j)`.
     b_entries: std::ops::Range<usize>,
-    /// The constraint rows touching it, ascending (indices into `rows`).
+    /// Its rows in `Parts::rows` (original constraint indices).
     rows: std::ops::Range<usize>,
+    /// Number of constraint rows touching it.
+    n_rows: usize,
     /// Offset of its inverse (`k × k`, row-major) in `inverse`.
     inverse: usize,
-    /// Offset of its `|rows|²` slots of `C` in `c_slots`.
-    c_slots: usize,
+    /// Its contributions to `C`: `(local row, local row, slot in C)`.
+    pairs: std::ops::Range<usize>,
 }
 
 /// The block structure while it is being built.
@@ -50,14 +52,13 @@ struct Parts {
     coords: Vec<usize>,
     s_entries: Vec<(usize, usize, usize)>,
     b_entries: Vec<(usize, usize, usize)>,
+    /// Each block's rows (original constraint indices), block after block.
     rows: Vec<usize>,
-    c_slots: Vec<usize>,
 }
 
 /// The analysed structure and reused buffers of the Schur backend.
 pub(crate) struct Schur {
     n_primal: usize,
-    m: usize,
     blocks: Vec<Block>,
     /// Unknowns of all blocks, block after block.
     coords: Vec<usize>,
@@ -65,24 +66,38 @@ pub(crate) struct Schur {
     s_entries: Vec<(usize, usize, usize)>,
     /// `(KKT value position, local row, local column)` of every block's `B`.
     b_entries: Vec<(usize, usize, usize)>,
-    /// Position in `c.values` of `C[r, s]` for every block's row pairs.
-    c_slots: Vec<usize>,
-    /// Position in the KKT values of each entry of `D` and its slot in `C`.
+    /// `(local row r, local row s, position of C[r, s] in c.values)` for the
+    /// pairs in the triangle the factorization reads.
+    pairs: Vec<(u16, u16, u32)>,
+    /// Position in the KKT values of each entry of `D` and its slot in `C`
+    /// (read triangle only).
     d_entries: Vec<(usize, usize)>,
     /// Dense inverses of the blocks.
     inverse: Vec<f64>,
     /// Whether every block is the unknown `i` alone, in order (`S` diagonal):
     /// `inverse[i]` is then `1 / S_ii`.
     diagonal: bool,
-    /// `C` (both triangles).
+    /// For a diagonal `S`, compactly: the position of `S_jj` in the KKT values
+    /// and the range of column `j`'s pairs (`pair_ptr[j]..pair_ptr[j + 1]`).
+    diag_s: Vec<usize>,
+    pair_ptr: Vec<usize>,
+    /// `C`, both triangles stored, in its elimination (AMD) order; only the
+    /// triangle the factorization reads is filled.
     c: Csc,
+    /// `c_inv[r]` = position of constraint `r` in `C`'s order; `c_fwd` the
+    /// inverse.
+    c_inv: Vec<usize>,
+    c_fwd: Vec<usize>,
     ldlt: SparseLdlt,
-    /// Scratch: a block (row-major) and `B_K S_K⁻¹`.
+    /// Scratch: a block (row-major), `B_K` (rows × k) and `B_K S_K⁻¹`.
     block: Vec<f64>,
+    bk: Vec<f64>,
     w: Vec<f64>,
-    /// Scratch of length `n_primal`.
+    /// Scratch of length `n_primal` and `m` (in `C`'s order).
     x: Vec<f64>,
-    /// The `B` entries of the KKT matrix by primal column: `(row − n, position)`.
+    y: Vec<f64>,
+    /// The `B` entries of the KKT matrix by primal column: `(position of the
+    /// row in C's order, position in the KKT values)`.
     b_col_ptr: Vec<usize>,
     b_cols: Vec<(usize, usize)>,
     /// The values of the last factored KKT matrix's `B` entries, by column.
@@ -130,9 +145,7 @@ impl Schur {
             s_entries: Vec::new(),
             b_entries: Vec::new(),
             rows: Vec::new(),
-            c_slots: Vec::new(),
         };
-        let mut c_pairs: Vec<(usize, usize)> = Vec::new();
         let (mut inv_len, mut max_k, mut max_rows) = (0, 0, 0);
         for group in members.iter().filter(|g| !g.is_empty()) {
             let k = group.len();
@@ -154,12 +167,13 @@ impl Schur {
                     if i < n {
                         this.s_entries.push((p, local[i], local[j]));
                     } else if row_local[i - n] == usize::MAX {
-                        row_local[i - n] = this.rows.len() - r0;
+                        row_local[i - n] = 0;
                         this.rows.push(i - n);
                     }
                 }
             }
-            // Rows ascending (for a reproducible pattern), then local indices.
+            // Rows ascending, then local indices: for one unknown, the order
+            // of its column's B entries.
             this.rows[r0..].sort_unstable();
             for (l, &r) in this.rows[r0..].iter().enumerate() {
                 row_local[r] = l;
@@ -172,13 +186,8 @@ impl Schur {
                     }
                 }
             }
-            let rows = &this.rows[r0..];
-            for &r in rows {
-                for &s in rows {
-                    c_pairs.push((r, s));
-                }
-            }
-            for &r in rows {
+            let n_rows = this.rows.len() - r0;
+            for &r in &this.rows[r0..] {
                 row_local[r] = usize::MAX;
             }
             this.blocks.push(Block {
@@ -186,88 +195,127 @@ impl Schur {
                 s_entries: s0..this.s_entries.len(),
                 b_entries: b0..this.b_entries.len(),
                 rows: r0..this.rows.len(),
+                n_rows,
                 inverse: inv_len,
-                c_slots: 0,
+                pairs: 0..0,
             });
             inv_len += k * k;
             max_k = max_k.max(k);
-            max_rows = max_rows.max(rows.len());
+            max_rows = max_rows.max(n_rows);
         }
-        // D: the multiplier block of the KKT matrix.
+        if max_rows > usize::from(u16::MAX) {
+            return Err(KktError::Structure(format!(
+                "a block of S touches {max_rows} constraint rows; the Schur backend takes at most {}",
+                u16::MAX
+            )));
+        }
+        // C's pattern (original constraint order): every block's row pairs,
+        // D's entries, and the diagonal.
         let mut d_pos = Vec::new();
         for j in n..a.n {
             for p in a.col_ptr[j]..a.col_ptr[j + 1] {
-                let i = a.row_idx[p];
-                if i >= n {
-                    d_pos.push((p, i - n, j - n));
-                    c_pairs.push((i - n, j - n));
+                if a.row_idx[p] >= n {
+                    d_pos.push((p, a.row_idx[p] - n, j - n));
                 }
             }
         }
-        // Every multiplier keeps a diagonal entry (an unconstrained row would
-        // otherwise have an empty column in C: reported by the pivot check).
-        c_pairs.extend((0..m).map(|r| (r, r)));
-        // C's pattern: (row, column) pairs, sorted by column then row, unique.
-        let mut sorted: Vec<(usize, usize)> = c_pairs.iter().map(|&(r, s)| (s, r)).collect();
-        sorted.sort_unstable();
-        sorted.dedup();
-        let mut c = Csc {
-            n: m,
-            col_ptr: vec![0; m + 1],
-            row_idx: Vec::with_capacity(sorted.len()),
-            values: vec![0.0; sorted.len()],
-        };
-        for &(col, row) in &sorted {
-            c.col_ptr[col + 1] += 1;
-            c.row_idx.push(row);
-        }
-        for j in 0..m {
-            c.col_ptr[j + 1] += c.col_ptr[j];
-        }
-        let slot = |r: usize, s: usize| -> usize {
-            let col = &c.row_idx[c.col_ptr[s]..c.col_ptr[s + 1]];
-            c.col_ptr[s] + col.binary_search(&r).unwrap_or(0)
-        };
-        for b in &mut this.blocks {
-            b.c_slots = this.c_slots.len();
+        let mut pattern: Vec<(usize, usize)> = Vec::new();
+        for b in &this.blocks {
             let rows = &this.rows[b.rows.clone()];
             for &r in rows {
                 for &s in rows {
-                    this.c_slots.push(slot(r, s));
+                    pattern.push((s, r));
                 }
             }
         }
-        let d_entries = d_pos.iter().map(|&(p, r, s)| (p, slot(r, s))).collect();
-        // B by primal column, for the products in the solve.
+        pattern.extend(d_pos.iter().map(|&(_, r, s)| (s, r)));
+        pattern.extend((0..m).map(|r| (r, r)));
+        let c_orig = csc_of(m, &mut pattern);
+        // (csc_of sorted and deduplicated `pattern`: it is C's entry list.)
+        // AMD on C, then C itself in that order (faer factors it in place).
+        let (c_fwd, c_inv) = kkt_ordering(&c_orig, m, Default::default())?;
+        let mut permuted: Vec<(usize, usize)> =
+            pattern.iter().map(|&(s, r)| (c_inv[s], c_inv[r])).collect();
+        let mut c = csc_of(m, &mut permuted);
+        let ldlt = SparseLdlt::preordered(&c)?;
+        let upper = ldlt.reads_upper();
+        let read = |r: usize, s: usize| if upper { r <= s } else { r >= s };
+        let slot = |c: &Csc, r: usize, s: usize| -> usize {
+            let col = &c.row_idx[c.col_ptr[s]..c.col_ptr[s + 1]];
+            c.col_ptr[s] + col.binary_search(&r).unwrap_or(0)
+        };
+        let mut pairs = Vec::new();
+        let mut blocks = this.blocks;
+        for b in &mut blocks {
+            let start = pairs.len();
+            let rows = &this.rows[b.rows.clone()];
+            for (lr, &r) in rows.iter().enumerate() {
+                for (ls, &s) in rows.iter().enumerate() {
+                    let (pr, ps) = (c_inv[r], c_inv[s]);
+                    if read(pr, ps) {
+                        let at = u32::try_from(slot(&c, pr, ps)).map_err(|_| {
+                            KktError::Structure("C has more than 2³² entries".to_string())
+                        })?;
+                        // Lossless: both below max_rows ≤ u16::MAX.
+                        pairs.push((lr as u16, ls as u16, at));
+                    }
+                }
+            }
+            b.pairs = start..pairs.len();
+        }
+        let d_entries = d_pos
+            .iter()
+            .filter(|&&(_, r, s)| read(c_inv[r], c_inv[s]))
+            .map(|&(p, r, s)| (p, slot(&c, c_inv[r], c_inv[s])))
+            .collect();
+        // B by primal column, rows in C's order, for the products in the solve.
         let (mut b_col_ptr, mut b_cols) = (vec![0; n + 1], Vec::new());
         for j in 0..n {
             for p in a.col_ptr[j]..a.col_ptr[j + 1] {
                 let i = a.row_idx[p];
                 if i >= n {
-                    b_cols.push((i - n, p));
+                    b_cols.push((c_inv[i - n], p));
                 }
             }
             b_col_ptr[j + 1] = b_cols.len();
         }
-        let ldlt = SparseLdlt::new(&c, m)?;
         let diagonal = this.coords.iter().enumerate().all(|(i, &c)| i == c)
-            && this.blocks.iter().all(|b| b.coords.len() == 1);
+            && blocks.iter().all(|b| b.coords.len() == 1);
+        c.values.fill(0.0);
+        let (diag_s, pair_ptr) = if diagonal {
+            (
+                blocks
+                    .iter()
+                    .map(|b| this.s_entries[b.s_entries.start].0)
+                    .collect(),
+                std::iter::once(0)
+                    .chain(blocks.iter().map(|b| b.pairs.end))
+                    .collect(),
+            )
+        } else {
+            (Vec::new(), Vec::new())
+        };
         Ok(Self {
-            diagonal,
             n_primal: n,
-            m,
-            blocks: this.blocks,
+            diagonal,
+            diag_s,
+            pair_ptr,
+            blocks,
             coords: this.coords,
             s_entries: this.s_entries,
             b_entries: this.b_entries,
-            c_slots: this.c_slots,
+            pairs,
             d_entries,
             inverse: vec![0.0; inv_len],
             c,
+            c_inv,
+            c_fwd,
             ldlt,
             block: vec![0.0; max_k * max_k],
+            bk: vec![0.0; max_rows * max_k],
             w: vec![0.0; max_rows * max_k],
             x: vec![0.0; n],
+            y: vec![0.0; m],
             b_values: vec![0.0; b_cols.len()],
             b_col_ptr,
             b_cols,
@@ -282,33 +330,47 @@ impl Schur {
     pub(crate) fn factor(&mut self, a: &Csc) -> Result<(), KktError> {
         let values = &a.values;
         self.c.values.fill(0.0);
+        for (v, &(_, p)) in self.b_values.iter_mut().zip(&self.b_cols) {
+            *v = values[p];
+        }
+        if self.diagonal {
+            self.factor_diagonal(values)?;
+        } else {
+            self.factor_blocks(values)?;
+        }
+        for &(p, slot) in &self.d_entries {
+            self.c.values[slot] -= values[p];
+        }
+        self.ldlt.factor(&self.c).map_err(|e| match e {
+            KktError::Singular { unknown } => KktError::Singular {
+                unknown: unknown.map(|k| self.n_primal + self.c_fwd[k]),
+            },
+            e => e,
+        })
+    }
+
+    /// `S` diagonal: `C += b_r b_s / S_jj` over the pairs of each column `j`.
+    fn factor_diagonal(&mut self, values: &[f64]) -> Result<(), KktError> {
+        for (j, (&p, inv_j)) in self.diag_s.iter().zip(&mut self.inverse).enumerate() {
+            // One unknown: its only S entry is the diagonal.
+            let s = values[p];
+            if s == 0.0 {
+                return Err(KktError::Singular { unknown: Some(j) });
+            }
+            let inv = 1.0 / s;
+            *inv_j = inv;
+            let bv = &self.b_values[self.b_col_ptr[j]..self.b_col_ptr[j + 1]];
+            for &(r, s, slot) in &self.pairs[self.pair_ptr[j]..self.pair_ptr[j + 1]] {
+                self.c.values[slot as usize] += bv[usize::from(r)] * inv * bv[usize::from(s)];
+            }
+        }
+        Ok(())
+    }
+
+    /// General blocks: dense `S_K⁻¹`, `W = B_K S_K⁻¹`, `C += W B_Kᵀ`.
+    fn factor_blocks(&mut self, values: &[f64]) -> Result<(), KktError> {
         for b in &self.blocks {
             let k = b.coords.len();
-            if k == 1 {
-                // One unknown (a diagonal S): C += b_r b_s / s.
-                let s: f64 = self.s_entries[b.s_entries.clone()]
-                    .iter()
-                    .map(|&(p, _, _)| values[p])
-                    .sum();
-                if s == 0.0 {
-                    return Err(KktError::Singular {
-                        unknown: Some(self.coords[b.coords.start]),
-                    });
-                }
-                let inv = 1.0 / s;
-                self.inverse[b.inverse] = inv;
-                let entries = &self.b_entries[b.b_entries.clone()];
-                let nr = entries.len();
-                let slots = &self.c_slots[b.c_slots..b.c_slots + nr * nr];
-                // With k = 1 every row appears once, in ascending order.
-                for (r, &(pr, _, _)) in entries.iter().enumerate() {
-                    let w = values[pr] * inv;
-                    for (s, &(ps, _, _)) in entries.iter().enumerate() {
-                        self.c.values[slots[r * nr + s]] += w * values[ps];
-                    }
-                }
-                continue;
-            }
             let blk = &mut self.block[..k * k];
             blk.fill(0.0);
             for &(p, i, j) in &self.s_entries[b.s_entries.clone()] {
@@ -318,66 +380,56 @@ impl Schur {
             invert(blk, inv, k).map_err(|l| KktError::Singular {
                 unknown: Some(self.coords[b.coords.start + l]),
             })?;
-            // W = B_K S_K⁻¹ (rows × k), then C_K = W B_Kᵀ.
-            let nr = b.rows.len();
-            let w = &mut self.w[..nr * k];
-            w.fill(0.0);
+            let nr = b.n_rows;
+            let bk = &mut self.bk[..nr * k];
+            bk.fill(0.0);
             for &(p, r, j) in &self.b_entries[b.b_entries.clone()] {
-                let bv = values[p];
+                bk[r * k + j] += values[p];
+            }
+            let w = &mut self.w[..nr * k];
+            for r in 0..nr {
                 for l in 0..k {
-                    w[r * k + l] += bv * inv[j * k + l];
+                    w[r * k + l] = (0..k).map(|j| bk[r * k + j] * inv[j * k + l]).sum();
                 }
             }
-            let slots = &self.c_slots[b.c_slots..b.c_slots + nr * nr];
-            for &(p, s, j) in &self.b_entries[b.b_entries.clone()] {
-                let bv = values[p];
-                for r in 0..nr {
-                    self.c.values[slots[r * nr + s]] += w[r * k + j] * bv;
-                }
+            for &(r, s, slot) in &self.pairs[b.pairs.clone()] {
+                let (r, s) = (usize::from(r), usize::from(s));
+                let v: f64 = (0..k).map(|l| w[r * k + l] * bk[s * k + l]).sum();
+                self.c.values[slot as usize] += v;
             }
         }
-        for &(p, slot) in &self.d_entries {
-            self.c.values[slot] -= values[p];
-        }
-        for (v, &(_, p)) in self.b_values.iter_mut().zip(&self.b_cols) {
-            *v = values[p];
-        }
-        self.ldlt.factor(&self.c).map_err(|e| match e {
-            KktError::Singular { unknown } => KktError::Singular {
-                unknown: unknown.map(|r| self.n_primal + r),
-            },
-            e => e,
-        })
+        Ok(())
     }
 
     /// Solves in place with the last factorization.
     pub(crate) fn solve_in_place(&mut self, rhs: &mut [f64]) {
         let n = self.n_primal;
         let (f, g) = rhs.split_at_mut(n);
-        // x = S⁻¹ f.
-        self.apply_inverse(f);
-        // C y = B S⁻¹ f − g.
-        for v in g.iter_mut() {
-            *v = -*v;
+        // y = −g in C's order, x = S⁻¹ f, then y += B x: C y = B S⁻¹ f − g.
+        for (r, &gr) in g.iter().enumerate() {
+            self.y[self.c_inv[r]] = -gr;
         }
+        self.apply_inverse(f);
         for j in 0..n {
             let xj = self.x[j];
             for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
-                g[self.b_cols[q].0] += self.b_values[q] * xj;
+                self.y[self.b_cols[q].0] += self.b_values[q] * xj;
             }
         }
-        debug_assert_eq!(g.len(), self.m);
-        self.ldlt.solve_in_place(g);
+        self.ldlt.solve_in_place(&mut self.y);
         // x = S⁻¹ (f − Bᵀ y).
         for (j, fj) in f.iter_mut().enumerate() {
             let mut s = *fj;
             for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
-                s -= self.b_values[q] * g[self.b_cols[q].0];
+                s -= self.b_values[q] * self.y[self.b_cols[q].0];
             }
             *fj = s;
         }
         self.apply_inverse(f);
         f.copy_from_slice(&self.x);
+        for (r, gr) in g.iter_mut().enumerate() {
+            *gr = self.y[self.c_inv[r]];
+        }
     }
 
     /// `self.x = S⁻¹ f` block by block.
@@ -398,6 +450,27 @@ impl Schur {
             }
         }
     }
+}
+
+/// The `n × n` CSC pattern of the `(column, row)` pairs (sorted and
+/// deduplicated in place), values zero.
+fn csc_of(n: usize, pairs: &mut Vec<(usize, usize)>) -> Csc {
+    pairs.sort_unstable();
+    pairs.dedup();
+    let mut c = Csc {
+        n,
+        col_ptr: vec![0; n + 1],
+        row_idx: Vec::with_capacity(pairs.len()),
+        values: vec![0.0; pairs.len()],
+    };
+    for &(col, row) in pairs.iter() {
+        c.col_ptr[col + 1] += 1;
+        c.row_idx.push(row);
+    }
+    for j in 0..n {
+        c.col_ptr[j + 1] += c.col_ptr[j];
+    }
+    c
 }
 
 /// Inverts the row-major `k × k` matrix `a` (destroyed) into `inv` by

@@ -58,6 +58,8 @@ pub(crate) struct SparseLdlt {
     /// `Σ_j l_kj² |d_j|` per (permuted) unknown, for the pivot check.
     scale: Vec<f64>,
     mem: MemBuffer,
+    /// The triangle faer reads (the matrix stores both).
+    side: Side,
 }
 
 impl SparseLdlt {
@@ -101,7 +103,59 @@ impl SparseLdlt {
             diag_pos,
             scale: vec![0.0; n],
             mem,
+            side: Side::Lower,
         })
+    }
+
+    /// Analyses `a`, stored with both triangles and already in elimination
+    /// order (no permutation: faer then factors the values in place, without
+    /// the permuted copy of [`new`](Self::new)).
+    pub(crate) fn preordered(a: &Csc) -> Result<Self, KktError> {
+        let n = a.n;
+        check_symmetric_structure(a)?;
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, &a.col_ptr, None, &a.row_idx);
+        let symbolic = factorize_symbolic_cholesky(
+            sym,
+            Side::Upper,
+            SymmetricOrdering::Identity,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| match e {
+            faer::sparse::FaerError::OutOfMemory => KktError::OutOfMemory,
+            e => KktError::Backend(format!("{e:?}")),
+        })?;
+        // faer's simplicial kernel reads the upper triangle, its supernodal
+        // one the lower: give it the one it reads, so it copies nothing.
+        let side = match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(_) => Side::Upper,
+            SymbolicCholeskyRaw::Supernodal(_) => Side::Lower,
+        };
+        let req = StackReq::any_of(&[
+            symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+        ]);
+        let mem = MemBuffer::try_new(req).map_err(|_| KktError::OutOfMemory)?;
+        let diag_pos = (0..n)
+            .map(|j| {
+                let col = &a.row_idx[a.col_ptr[j]..a.col_ptr[j + 1]];
+                col.binary_search(&j)
+                    .map_or(usize::MAX, |k| a.col_ptr[j] + k)
+            })
+            .collect();
+        Ok(Self {
+            l_values: vec![0.0; symbolic.len_val()],
+            symbolic,
+            fwd: (0..n).collect(),
+            diag_pos,
+            scale: vec![0.0; n],
+            mem,
+            side,
+        })
+    }
+
+    /// Whether factorizations read only the upper triangle (else the lower).
+    pub(crate) fn reads_upper(&self) -> bool {
+        self.side == Side::Upper
     }
 
     /// Whether faer chose its supernodal (blocked) factorization.
@@ -126,7 +180,7 @@ impl SparseLdlt {
         let result = self.symbolic.factorize_numeric_ldlt(
             &mut self.l_values,
             mat,
-            Side::Lower,
+            self.side,
             LdltRegularization::default(),
             Par::Seq,
             stack,

@@ -35,5 +35,6 @@ mod csc;
 mod linearization;
 
 pub use check::{DerivativeErrors, check_derivatives};
-pub use linearization::{Coefficients, Linearization, LinearizeError, max_abs};
+pub use linearization::{Coefficients, Linearization, LinearizeError};
 pub use mstar_kkt::Csc;
+pub use mstar_kkt::max_abs;

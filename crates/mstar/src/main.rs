@@ -6,6 +6,7 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
+use mstar::kkt::Backend;
 use mstar::pendulum::PendulumRun;
 use mstar::{Config, Newton, Sample, Scheme, Start, System, csv};
 
@@ -97,6 +98,20 @@ enum NewtonArg {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+enum KktArg {
+    /// Chosen from the size and structure (see --help).
+    Auto,
+    /// Dense LU with partial pivoting.
+    Dense,
+    /// Sparse LU (faer) of the KKT matrix with M*.
+    Lu,
+    /// Sparse LDLᵀ (faer) of the KKT matrix with M*, in a KKT ordering.
+    Ldlt,
+    /// Schur complement on the block-diagonal S_T (without BᵀB).
+    Schur,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum Reference {
     /// Classic RK4 on θ̈ = −(g/l) sin θ, reconstructed in [x, y, θ].
     Rk4,
@@ -129,6 +144,10 @@ struct IntegratorArgs {
     /// Newton variant [default: auto; paper: full].
     #[arg(long, value_enum)]
     newton: Option<NewtonArg>,
+    /// KKT solver [default: auto: dense up to 24 unknowns, else Schur when the
+    /// bodies interact only through constraints and have mass, else LDLᵀ].
+    #[arg(long, value_enum)]
+    kkt: Option<KktArg>,
     /// Relative Newton tolerance on ‖r‖ and ‖Φ‖ [default: 1e-10].
     #[arg(long)]
     tol: Option<f64>,
@@ -278,6 +297,15 @@ fn apply_integrator(args: &IntegratorArgs, c: &mut Config, paper_preset: bool) -
             NewtonArg::Auto => Newton::Auto,
             NewtonArg::Full => Newton::Full,
             NewtonArg::Modified => Newton::MODIFIED,
+        };
+    }
+    if let Some(k) = args.kkt {
+        c.kkt.backend = match k {
+            KktArg::Auto => Backend::Auto,
+            KktArg::Dense => Backend::Dense,
+            KktArg::Lu => Backend::SparseLu,
+            KktArg::Ldlt => Backend::SparseLdlt,
+            KktArg::Schur => Backend::Schur,
         };
     }
     // Scheme: explicit --integrator, else implied by --beta/--gamma, --rho, --alpha.
@@ -602,7 +630,11 @@ mod tests {
             "chain", "--links", "3", "--rho", "0.8", "--h", "0.002", "--newton", "full",
         ])?;
         assert_eq!((c.h, c.newton), (0.002, Newton::Full));
+        assert_eq!(c.kkt.backend, Backend::Auto);
         assert_eq!(c.scheme, Scheme::GeneralizedAlpha { rho_inf: 0.8 });
+        let c = parse_chain(&["chain", "--links", "3", "--kkt", "ldlt"])?;
+        assert_eq!(c.kkt.backend, Backend::SparseLdlt);
+        assert!(parse_chain(&["chain", "--links", "3", "--kkt", "qr"]).is_err());
         assert!(parse_chain(&["chain", "--links", "0"]).is_err());
         assert!(parse_chain(&["chain", "--links", "5", "--t-end", "-1"]).is_err());
         Ok(())

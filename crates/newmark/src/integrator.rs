@@ -62,14 +62,6 @@ impl State {
             lambda: vec![0.0; m],
         }
     }
-
-    fn copy_from(&mut self, other: &Self) {
-        self.u.copy_from_slice(&other.u);
-        self.v.copy_from_slice(&other.v);
-        self.a.copy_from_slice(&other.a);
-        self.a_alpha.copy_from_slice(&other.a_alpha);
-        self.lambda.copy_from_slice(&other.lambda);
-    }
 }
 
 /// Integrates a [`System`] in time with the configured scheme: Newmark /
@@ -421,11 +413,13 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     }
 
     fn accept(&mut self, h: f64, iterations: usize) {
+        // Buffers change roles instead of being copied: the predictor rewrites
+        // every field of `trial` before it is read again.
         if self.config.predictor == Predictor::Extrapolated {
-            self.previous.copy_from(&self.state);
+            std::mem::swap(&mut self.previous, &mut self.state);
             self.previous_h = Some(h);
         }
-        self.state.copy_from(&self.trial);
+        std::mem::swap(&mut self.state, &mut self.trial);
         if h == self.h_anchor {
             self.steps_at_h += 1;
         } else {

@@ -520,6 +520,11 @@ pub(crate) struct RevoluteKernel {
 }
 
 impl RevoluteKernel {
+    /// First global constraint row, and offsets in the B and Hessian values.
+    pub(crate) fn offsets(&self) -> (usize, usize, usize) {
+        (self.row0, self.b_off, self.h_off)
+    }
+
     /// The kernel of `c`, if it is a revolute joint.
     pub(crate) fn of(c: &Constraint, b_off: usize, h_off: usize) -> Option<Self> {
         matches!(c.joint, Joint::Revolute).then_some(Self {
@@ -532,13 +537,22 @@ impl RevoluteKernel {
 
     /// `Φ = p_A − p_B` and its gradient: per row `k`, `[±1 on x/y, ±∂p/∂θ]` of
     /// side A (when not the ground), then of side B.
+    /// `phi` and `b` start at global row `base.0` and value `base.1`.
     #[inline]
-    pub(crate) fn phi_b(&self, u: &[f64], trig: &[(f64, f64)], phi: &mut [f64], b: &mut [f64]) {
+    pub(crate) fn phi_b(
+        &self,
+        u: &[f64],
+        trig: &[(f64, f64)],
+        phi: &mut [f64],
+        b: &mut [f64],
+        base: (usize, usize),
+    ) {
         let pa = self.anchors[0].point_cached(u, trig);
         let pb = self.anchors[1].point_cached(u, trig);
-        phi[self.row0] = pa.p[0] - pb.p[0];
-        phi[self.row0 + 1] = pa.p[1] - pb.p[1];
-        let mut o = self.b_off;
+        let row = self.row0 - base.0;
+        phi[row] = pa.p[0] - pb.p[0];
+        phi[row + 1] = pa.p[1] - pb.p[1];
+        let mut o = self.b_off - base.1;
         for k in 0..2 {
             for (anchor, pt, sign) in [(&self.anchors[0], &pa, 1.0), (&self.anchors[1], &pb, -1.0)]
             {
@@ -558,11 +572,12 @@ impl RevoluteKernel {
         }
     }
 
-    /// `μ_k ∂²Φ_k/∂θ²` on each rigid side's angle (rows `k = 0, 1`).
+    /// `μ_k ∂²Φ_k/∂θ²` on each rigid side's angle (rows `k = 0, 1`); `out`
+    /// starts at Hessian value `base`.
     #[inline]
-    pub(crate) fn hessian(&self, u: &[f64], mu: &[f64], out: &mut [f64]) {
+    pub(crate) fn hessian(&self, u: &[f64], mu: &[f64], out: &mut [f64], base: usize) {
         let pts = [self.anchors[0].point(u), self.anchors[1].point(u)];
-        let mut o = self.h_off;
+        let mut o = self.h_off - base;
         for k in 0..2 {
             let m = mu[self.row0 + k];
             for (side, sign) in [(0, 1.0), (1, -1.0)] {

@@ -18,6 +18,8 @@ pub use time::TimeFunction;
 use elements::{Constraint, Force, Joint, Load, RevoluteKernel};
 use geometry::{Anchor, Slots};
 
+use rayon::prelude::*;
+
 use crate::{Pattern, System};
 
 thread_local! {
@@ -441,6 +443,8 @@ pub struct PlanarSystem {
     revolutes: Vec<RevoluteKernel>,
     /// Indices of the other constraints.
     others: Vec<usize>,
+    /// Global indices of the rigid bodies' angles.
+    angles: Vec<usize>,
     g_u_offsets: Vec<usize>,
     g_v_offsets: Vec<usize>,
 }
@@ -454,7 +458,49 @@ fn global_pairs<'a>(
         .map(|&(a, b)| (slots.global[a], slots.global[b]))
 }
 
+/// A chunk of revolute joints and where its output starts: global row, B
+/// value, Hessian value.
+type Part<'a> = (&'a [RevoluteKernel], (usize, usize, usize));
+
+/// Revolute joints per parallel task.
+const PARALLEL_CHUNK: usize = 2048;
+
+/// Splits `x` into consecutive parts starting at `bases` (the first part at 0
+/// whatever the first base says; bases ascending).
+fn split_at_bases(x: &mut [f64], bases: impl Iterator<Item = usize>) -> Vec<&mut [f64]> {
+    let mut parts = Vec::new();
+    let (mut rest, mut at) = (x, 0);
+    for base in bases.skip(1) {
+        let (head, tail) = rest.split_at_mut(base - at);
+        parts.push(head);
+        (rest, at) = (tail, base);
+    }
+    parts.push(rest);
+    parts
+}
+
 impl PlanarSystem {
+    /// The revolute joints in chunks for rayon, each with the global row, B
+    /// value and Hessian value at which its output part starts (0 for the
+    /// first chunk); empty when the work is sequential: fewer than two
+    /// chunks' worth of joints, or one thread in rayon's current pool.
+    fn parallel_parts(&self) -> Vec<Part<'_>> {
+        let threads = rayon::current_num_threads();
+        if threads < 2 || self.revolutes.len() < 2 * PARALLEL_CHUNK {
+            return Vec::new();
+        }
+        let size = self
+            .revolutes
+            .len()
+            .div_ceil(4 * threads)
+            .max(PARALLEL_CHUNK);
+        self.revolutes
+            .chunks(size)
+            .enumerate()
+            .map(|(i, ks)| (ks, if i == 0 { (0, 0, 0) } else { ks[0].offsets() }))
+            .collect()
+    }
+
     fn assemble(
         builder: &PlanarBuilder,
         constraints: Vec<Constraint>,
@@ -500,9 +546,16 @@ impl PlanarSystem {
                 None => others.push(i),
             }
         }
+        let angles = builder
+            .bodies
+            .iter()
+            .filter(|b| b.inertia.is_some())
+            .map(|b| b.x + 2)
+            .collect();
         Self {
             revolutes,
             others,
+            angles,
             gravity: builder.gravity,
             bodies: builder.bodies.clone(),
             n,
@@ -642,11 +695,26 @@ impl System for PlanarSystem {
         // Each body's (sin θ, cos θ) once, not once per joint it takes part in.
         TRIG.with_borrow_mut(|trig| {
             trig.resize(self.n, (0.0, 1.0));
-            for body in self.bodies.iter().filter(|b| b.inertia.is_some()) {
-                trig[body.x + 2] = u[body.x + 2].sin_cos();
+            for &x in &self.angles {
+                trig[x] = u[x].sin_cos();
             }
-            for k in &self.revolutes {
-                k.phi_b(u, trig, phi, b);
+            let trig: &[(f64, f64)] = trig;
+            let revolutes = |ks: &[RevoluteKernel], phi: &mut [f64], b: &mut [f64], base| {
+                for k in ks {
+                    k.phi_b(u, trig, phi, b, base);
+                }
+            };
+            let parts = self.parallel_parts();
+            if parts.is_empty() {
+                revolutes(&self.revolutes, phi, b, (0, 0));
+            } else {
+                let phi_parts = split_at_bases(phi, parts.iter().map(|p| p.1.0));
+                let b_parts = split_at_bases(b, parts.iter().map(|p| p.1.1));
+                parts
+                    .into_par_iter()
+                    .zip(phi_parts)
+                    .zip(b_parts)
+                    .for_each(|(((ks, base), phi), b)| revolutes(ks, phi, b, (base.0, base.1)));
             }
             for &i in &self.others {
                 let (c, off) = (&self.constraints[i], self.b_offsets[i]);
@@ -673,8 +741,21 @@ impl System for PlanarSystem {
     }
 
     fn hessian_into(&self, _t: f64, u: &[f64], mu: &[f64], out: &mut [f64]) {
-        for k in &self.revolutes {
-            k.hessian(u, mu, out);
+        let parts = self.parallel_parts();
+        if parts.is_empty() {
+            for k in &self.revolutes {
+                k.hessian(u, mu, out, 0);
+            }
+        } else {
+            let out_parts = split_at_bases(out, parts.iter().map(|p| p.1.2));
+            parts
+                .into_par_iter()
+                .zip(out_parts)
+                .for_each(|((ks, base), out)| {
+                    for k in ks {
+                        k.hessian(u, mu, out, base.2);
+                    }
+                });
         }
         for &i in &self.others {
             let (c, off) = (&self.constraints[i], self.h_offsets[i]);
