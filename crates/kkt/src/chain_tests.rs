@@ -304,6 +304,51 @@ fn empty_system() {
 }
 
 #[test]
+fn regularized_ldlt_solves_regular_chains_and_rejects_redundant_ones() {
+    let regularized = |n_bodies: usize| KktOptions {
+        ldlt_regularization: Some(1e-10),
+        ..options(Backend::SparseLdlt, n_bodies)
+    };
+    let solve_reg = |n_bodies: usize, a: &Csc, b: &[f64]| {
+        let mut s = KktSolver::new(a, &regularized(n_bodies))?;
+        s.factor(&a.values)?;
+        let mut x = b.to_vec();
+        s.solve_in_place(&mut x).map(|()| x)
+    };
+    for n_bodies in [1, 10, 1000] {
+        let a = chain(n_bodies, 7, None);
+        let mut b = vec![0.0; a.n];
+        a.mul(&vector(a.n, 3), &mut b);
+        let plain = solve(Backend::SparseLdlt, n_bodies, &a, &b).expect("regular chain");
+        let reg = solve_reg(n_bodies, &a, &b).expect("regular chain");
+        let diff = relative_difference(&plain, &reg);
+        assert!(diff <= 1e-12, "N = {n_bodies}: {diff:e}");
+    }
+    // A redundant constraint with an inconsistent right-hand side: the
+    // regularized pivot hides the zero one, and the answer is either an error
+    // or multipliers of order 1/δ that pass the backward-error checks (why
+    // regularization is off by default: unregularized, this is an error
+    // naming the multiplier, see above).
+    let (a, b) = redundant(10, 7, 1.0 / 3.0, false);
+    match solve_reg(10, &a, &b) {
+        Err(KktError::Singular { .. } | KktError::Inaccurate { .. }) => {}
+        Ok(x) => {
+            let largest = crate::max_abs(&x[30..]);
+            assert!(largest > 1e6, "multipliers up to {largest:e}");
+        }
+        Err(e) => panic!("{e:?}"),
+    }
+    let bad = KktOptions {
+        ldlt_regularization: Some(0.0),
+        ..options(Backend::SparseLdlt, 10)
+    };
+    assert!(matches!(
+        KktSolver::new(&chain(10, 1, None), &bad),
+        Err(KktError::Structure(_))
+    ));
+}
+
+#[test]
 fn schur_matches_ldlt_and_lu_on_chains() {
     for n_bodies in [1, 10, 1000] {
         let a = chain_with(n_bodies, 7, None, false);
@@ -355,6 +400,18 @@ fn schur_names_a_redundant_constraint_or_a_singular_block() {
         matches!(result, Err(KktError::Singular { unknown: Some(k) }) if (12..15).contains(&k)),
         "{result:?}"
     );
+}
+
+#[test]
+fn schur_rejects_non_finite_values_anywhere_it_reads() {
+    let a = chain_with(10, 3, None, false);
+    for k in [0, a.col_ptr[5] + 1, a.nnz() - 1] {
+        let mut bad = a.clone();
+        bad.values[k] = f64::NAN;
+        let mut s = KktSolver::new(&a, &options(Backend::Schur, 10)).expect("structure");
+        assert_eq!(s.factor(&bad.values), Err(KktError::NonFinite), "entry {k}");
+        s.factor(&a.values).expect("recovers");
+    }
 }
 
 #[test]

@@ -20,7 +20,8 @@
 //!   3× faster than the LU's on chain-shaped systems, to the same accuracy;
 //!   pivots at the rounding level (redundant constraints) are rejected. When
 //!   `S` is indefinite the factorization may still succeed; the checks of the
-//!   solution below decide.
+//!   solution below decide. Optionally with signed dynamic regularization
+//!   and iterative refinement ([`KktOptions::ldlt_regularization`]).
 //! - [`Backend::Schur`]: the Schur complement on the primal block `S`, for
 //!   KKT matrices whose `S` is block-diagonal with blocks of at most
 //!   [`MAX_SCHUR_BLOCK`] unknowns (bodies that interact only through
@@ -161,7 +162,10 @@ pub enum Backend {
     /// (blocks of at most [`MAX_SCHUR_BLOCK`] unknowns, the connected
     /// components of its pattern); each block is inverted densely and
     /// `C = B S⁻¹ Bᵀ − D` factored by sparse LDLᵀ. Requires
-    /// [`KktOptions::n_primal`].
+    /// [`KktOptions::n_primal`]. Reads `S`, `B` (rows after `n_primal`,
+    /// columns before) and `D` only: the matrix must be symmetric, as KKT
+    /// matrices are; it keeps compact copies of them instead of the whole
+    /// matrix, for its residual check too.
     Schur,
 }
 
@@ -181,7 +185,20 @@ pub struct KktOptions {
     /// [`Backend::SparseLdlt`] and makes [`Backend::Auto`] choose it; ignored
     /// by the LU backends (default: `None`).
     pub n_primal: Option<usize>,
+    /// Signed dynamic regularization of [`Backend::SparseLdlt`] (default:
+    /// `None`, off): a pivot of the wrong sign (primal unknowns must give
+    /// positive pivots, multipliers negative ones: the matrix is
+    /// quasi-definite) or of magnitude at most `δ · max |a_ij|` is replaced by
+    /// `±δ · max |a_ij|`, and every solution is refined iteratively (up to
+    /// [`REFINEMENT_STEPS`] steps) against the unregularized matrix. It turns
+    /// zero pivots into a perturbed factorization instead of an error; the
+    /// residual check still rejects what refinement cannot repair. Ignored by
+    /// the other backends.
+    pub ldlt_regularization: Option<f64>,
 }
+
+/// Most iterative-refinement steps per solve with a regularized LDLᵀ.
+pub const REFINEMENT_STEPS: usize = 3;
 
 impl Default for KktOptions {
     fn default() -> Self {
@@ -190,6 +207,7 @@ impl Default for KktOptions {
             dense_threshold: 24,
             residual_tolerance: 1e-8,
             n_primal: None,
+            ldlt_regularization: None,
         }
     }
 }
@@ -312,7 +330,17 @@ impl KktSolver {
             },
             Backend::Dense => Inner::Dense(DenseLu::new(a.n, &a.col_ptr, &a.row_idx)),
             Backend::SparseLdlt => {
-                Inner::SparseLdlt(Box::new(SparseLdlt::new(a, need_primal("LDLᵀ")?)?))
+                let np = need_primal("LDLᵀ")?;
+                let mut ldlt = SparseLdlt::new(a, np)?;
+                if let Some(delta) = options.ldlt_regularization {
+                    if !(0.0..1.0).contains(&delta) || delta == 0.0 {
+                        return Err(KktError::Structure(format!(
+                            "the LDLᵀ regularization δ must be in (0, 1), got {delta}"
+                        )));
+                    }
+                    ldlt.set_regularization(np, delta);
+                }
+                Inner::SparseLdlt(Box::new(ldlt))
             }
             Backend::SparseLu | Backend::Auto => Inner::SparseLu(Box::new(SparseLu::new(a)?)),
         };
@@ -358,6 +386,15 @@ impl KktSolver {
     pub fn factor(&mut self, values: &[f64]) -> Result<(), KktError> {
         assert_eq!(values.len(), self.a.values.len(), "one value per entry");
         self.factored = false;
+        if let Inner::Schur(schur) = &mut self.inner {
+            // The Schur backend keeps compact copies of S, B and D itself: no
+            // copy of the whole matrix, and its own products and norm.
+            schur.factor(values)?;
+            self.a_norm = schur.norm_inf(&mut self.ax);
+            self.factored = true;
+            self.verified = false;
+            return Ok(());
+        }
         // One pass: copy, ‖A‖∞ (largest absolute row sum; NaN or infinite
         // for non-finite values).
         self.ax.fill(0.0);
@@ -373,7 +410,7 @@ impl KktSolver {
             Inner::Dense(lu) => lu.factor(values)?,
             Inner::SparseLu(lu) => lu.factor(&self.a)?,
             Inner::SparseLdlt(ldlt) => ldlt.factor(&self.a)?,
-            Inner::Schur(schur) => schur.factor(&self.a)?,
+            Inner::Schur(_) => {}
         }
         self.factored = true;
         self.verified = false;
@@ -405,13 +442,19 @@ impl KktSolver {
         if !bn.is_finite() {
             return Err(KktError::NonFinite);
         }
-        if !self.verified {
+        let refine = matches!(&self.inner, Inner::SparseLdlt(l) if l.is_regularized());
+        if !self.verified || refine {
             self.rhs.copy_from_slice(rhs);
         }
         match &mut self.inner {
             Inner::Dense(lu) => lu.solve_in_place(rhs),
             Inner::SparseLu(lu) => lu.solve_in_place(rhs),
-            Inner::SparseLdlt(ldlt) => ldlt.solve_in_place(rhs),
+            Inner::SparseLdlt(ldlt) => {
+                ldlt.solve_in_place(rhs);
+                if refine {
+                    self.refine(rhs, bn);
+                }
+            }
             Inner::Schur(schur) => schur.solve_in_place(rhs),
         }
         let xn = max_abs(rhs);
@@ -422,7 +465,10 @@ impl KktSolver {
         // then holds for every further right-hand side, so it runs on the first
         // solve after each `factor` (modified Newton reuses factors often).
         if !self.verified {
-            self.a.mul(rhs, &mut self.ax);
+            match &self.inner {
+                Inner::Schur(schur) => schur.mul(rhs, &mut self.ax),
+                _ => self.a.mul(rhs, &mut self.ax),
+            }
             let res = self
                 .ax
                 .iter()
@@ -444,6 +490,33 @@ impl KktSolver {
             return Err(KktError::Singular { unknown: None });
         }
         Ok(())
+    }
+}
+
+impl KktSolver {
+    /// Iterative refinement of `x` against the stored (unregularized) matrix:
+    /// `x += A_reg⁻¹ (b − A x)` until the relative residual is at the rounding
+    /// level or [`REFINEMENT_STEPS`] steps are done.
+    fn refine(&mut self, x: &mut [f64], bn: f64) {
+        let Inner::SparseLdlt(ldlt) = &mut self.inner else {
+            return;
+        };
+        for _ in 0..REFINEMENT_STEPS {
+            self.a.mul(x, &mut self.ax);
+            let mut res = 0.0f64;
+            for (r, &b) in self.ax.iter_mut().zip(&self.rhs) {
+                *r = b - *r;
+                res = res.max(r.abs());
+            }
+            let scale = self.a_norm * max_abs(x) + bn;
+            if res <= 4.0 * f64::EPSILON * scale {
+                return;
+            }
+            ldlt.solve_in_place(&mut self.ax);
+            for (xi, d) in x.iter_mut().zip(&self.ax) {
+                *xi += d;
+            }
+        }
     }
 }
 

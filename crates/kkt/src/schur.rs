@@ -27,6 +27,10 @@ use crate::{Csc, KktError};
 /// The largest diagonal block of `S` that the Schur backend inverts densely.
 pub const MAX_BLOCK: usize = 12;
 
+/// How much larger (in stored values) the factor of `C` in the constraints'
+/// own order may be than with AMD and still be preferred for its locality.
+const FILL_SLACK: f64 = 1.25;
+
 /// One diagonal block of `S`.
 #[derive(Clone, Debug)]
 struct Block {
@@ -72,6 +76,13 @@ pub(crate) struct Schur {
     /// Position in the KKT values of each entry of `D` and its slot in `C`
     /// (read triangle only).
     d_entries: Vec<(usize, usize)>,
+    /// Every entry of `D`: `(KKT value position, row, column)` (multiplier
+    /// indices), for products with the whole matrix.
+    d_all: Vec<(usize, usize, usize)>,
+    /// The values of `S` (parallel to `s_entries`) and `D` (to `d_all`) of the
+    /// last factorization: with `b_values` the whole matrix, compactly.
+    s_values: Vec<f64>,
+    d_values: Vec<f64>,
     /// Dense inverses of the blocks.
     inverse: Vec<f64>,
     /// Whether every block is the unknown `i` alone, in order (`S` diagonal):
@@ -232,12 +243,24 @@ impl Schur {
         pattern.extend((0..m).map(|r| (r, r)));
         let c_orig = csc_of(m, &mut pattern);
         // (csc_of sorted and deduplicated `pattern`: it is C's entry list.)
-        // AMD on C, then C itself in that order (faer factors it in place).
+        // C in its elimination order (faer then factors it in place): the
+        // constraints' own order when its factor is at most FILL_SLACK times
+        // larger than with AMD (a chain's joints in order are already banded,
+        // and keeping them in order keeps every pass over C and y local in
+        // memory), else AMD.
+        let natural = SparseLdlt::preordered(&c_orig)?;
         let (c_fwd, c_inv) = kkt_ordering(&c_orig, m, Default::default())?;
         let mut permuted: Vec<(usize, usize)> =
             pattern.iter().map(|&(s, r)| (c_inv[s], c_inv[r])).collect();
-        let mut c = csc_of(m, &mut permuted);
-        let ldlt = SparseLdlt::preordered(&c)?;
+        let c_amd = csc_of(m, &mut permuted);
+        let amd = SparseLdlt::preordered(&c_amd)?;
+        let (c_fwd, c_inv, mut c, ldlt) =
+            if natural.factor_len() as f64 <= FILL_SLACK * amd.factor_len() as f64 {
+                let identity: Vec<usize> = (0..m).collect();
+                (identity.clone(), identity, c_orig, natural)
+            } else {
+                (c_fwd, c_inv, c_amd, amd)
+            };
         let upper = ldlt.reads_upper();
         let read = |r: usize, s: usize| if upper { r <= s } else { r >= s };
         let slot = |c: &Csc, r: usize, s: usize| -> usize {
@@ -295,6 +318,7 @@ impl Schur {
         } else {
             (Vec::new(), Vec::new())
         };
+        let n_s_entries = this.s_entries.len();
         Ok(Self {
             n_primal: n,
             diagonal,
@@ -306,6 +330,9 @@ impl Schur {
             b_entries: this.b_entries,
             pairs,
             d_entries,
+            s_values: vec![0.0; n_s_entries],
+            d_values: vec![0.0; d_pos.len()],
+            d_all: d_pos,
             inverse: vec![0.0; inv_len],
             c,
             c_inv,
@@ -327,11 +354,24 @@ impl Schur {
     /// # Errors
     /// [`KktError::Singular`] naming the primal unknown without a pivot in its
     /// block, or the multiplier whose pivot in `C` vanishes.
-    pub(crate) fn factor(&mut self, a: &Csc) -> Result<(), KktError> {
-        let values = &a.values;
+    pub(crate) fn factor(&mut self, values: &[f64]) -> Result<(), KktError> {
         self.c.values.fill(0.0);
+        // Gather S, B and D (all the matrix: its Bᵀ mirrors B), checking them.
+        let mut finite = 0.0;
         for (v, &(_, p)) in self.b_values.iter_mut().zip(&self.b_cols) {
             *v = values[p];
+            finite += 0.0 * *v;
+        }
+        for (v, &(p, _, _)) in self.s_values.iter_mut().zip(&self.s_entries) {
+            *v = values[p];
+            finite += 0.0 * *v;
+        }
+        for (v, &(p, _, _)) in self.d_values.iter_mut().zip(&self.d_all) {
+            *v = values[p];
+            finite += 0.0 * *v;
+        }
+        if f64::is_nan(finite) {
+            return Err(KktError::NonFinite);
         }
         if self.diagonal {
             self.factor_diagonal(values)?;
@@ -341,6 +381,7 @@ impl Schur {
         for &(p, slot) in &self.d_entries {
             self.c.values[slot] -= values[p];
         }
+        // (D's read triangle, from the caller's values.)
         self.ldlt.factor(&self.c).map_err(|e| match e {
             KktError::Singular { unknown } => KktError::Singular {
                 unknown: unknown.map(|k| self.n_primal + self.c_fwd[k]),
@@ -399,6 +440,74 @@ impl Schur {
             }
         }
         Ok(())
+    }
+
+    /// `y = A x` for the last factored matrix, from the compact copies of
+    /// `S`, `B` and `D` (`A = [[S, Bᵀ], [B, D]]`).
+    pub(crate) fn mul(&self, x: &[f64], y: &mut [f64]) {
+        let n = self.n_primal;
+        y.fill(0.0);
+        let (yp, ym) = y.split_at_mut(n);
+        let (xp, xm) = x.split_at(n);
+        if self.diagonal {
+            for ((yj, &s), &xj) in yp.iter_mut().zip(&self.s_values).zip(xp) {
+                *yj = s * xj;
+            }
+        } else {
+            for b in &self.blocks {
+                let coords = &self.coords[b.coords.clone()];
+                for (&(_, i, j), &v) in self.s_entries[b.s_entries.clone()]
+                    .iter()
+                    .zip(&self.s_values[b.s_entries.clone()])
+                {
+                    yp[coords[i]] += v * xp[coords[j]];
+                }
+            }
+        }
+        for j in 0..n {
+            let (mut acc, xj) = (yp[j], xp[j]);
+            for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
+                let r = self.c_fwd[self.b_cols[q].0];
+                acc += self.b_values[q] * xm[r];
+                ym[r] += self.b_values[q] * xj;
+            }
+            yp[j] = acc;
+        }
+        for (&(_, r, s), &v) in self.d_all.iter().zip(&self.d_values) {
+            ym[r] += v * xm[s];
+        }
+    }
+
+    /// `‖A‖∞`, the largest absolute row sum of the last factored matrix.
+    pub(crate) fn norm_inf(&self, work: &mut [f64]) -> f64 {
+        let n = self.n_primal;
+        work.fill(0.0);
+        let (wp, wm) = work.split_at_mut(n);
+        if self.diagonal {
+            for (w, s) in wp.iter_mut().zip(&self.s_values) {
+                *w = s.abs();
+            }
+        }
+        for b in self.blocks.iter().filter(|_| !self.diagonal) {
+            let coords = &self.coords[b.coords.clone()];
+            for (&(_, i, _), &v) in self.s_entries[b.s_entries.clone()]
+                .iter()
+                .zip(&self.s_values[b.s_entries.clone()])
+            {
+                wp[coords[i]] += v.abs();
+            }
+        }
+        for j in 0..n {
+            for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
+                let v = self.b_values[q].abs();
+                wp[j] += v;
+                wm[self.c_fwd[self.b_cols[q].0]] += v;
+            }
+        }
+        for (&(_, r, _), &v) in self.d_all.iter().zip(&self.d_values) {
+            wm[r] += v.abs();
+        }
+        work.iter().fold(0.0, |m: f64, &x| m.max(x))
     }
 
     /// Solves in place with the last factorization.

@@ -60,6 +60,9 @@ pub(crate) struct SparseLdlt {
     mem: MemBuffer,
     /// The triangle faer reads (the matrix stores both).
     side: Side,
+    /// Signed dynamic regularization: the expected pivot signs (original
+    /// order: `+1` primal, `−1` multiplier) and `δ` relative to `max |a_ij|`.
+    regularization: Option<(Vec<i8>, f64)>,
 }
 
 impl SparseLdlt {
@@ -104,6 +107,7 @@ impl SparseLdlt {
             scale: vec![0.0; n],
             mem,
             side: Side::Lower,
+            regularization: None,
         })
     }
 
@@ -150,7 +154,13 @@ impl SparseLdlt {
             scale: vec![0.0; n],
             mem,
             side,
+            regularization: None,
         })
+    }
+
+    /// Number of stored values of the factor.
+    pub(crate) fn factor_len(&self) -> usize {
+        self.l_values.len()
     }
 
     /// Whether factorizations read only the upper triangle (else the lower).
@@ -170,23 +180,53 @@ impl SparseLdlt {
         &self.fwd
     }
 
+    /// Whether [`set_regularization`](Self::set_regularization) was called.
+    pub(crate) fn is_regularized(&self) -> bool {
+        self.regularization.is_some()
+    }
+
+    /// Turns on signed dynamic regularization: a pivot of the wrong sign or of
+    /// magnitude at most `delta · max |a_ij|` becomes `±delta · max |a_ij|`
+    /// (`+` for the first `n_primal` unknowns, `−` for the multipliers). The
+    /// pivot check is then off; the caller refines the solutions.
+    pub(crate) fn set_regularization(&mut self, n_primal: usize, delta: f64) {
+        let n = self.diag_pos.len();
+        let signs = (0..n).map(|i| if i < n_primal { 1 } else { -1 }).collect();
+        self.regularization = Some((signs, delta));
+    }
+
     pub(crate) fn factor(&mut self, a: &Csc) -> Result<(), KktError> {
         let sym = SymbolicSparseColMatRef::new_checked(a.n, a.n, &a.col_ptr, None, &a.row_idx);
         let mat = SparseColMatRef::new(sym, &a.values);
         let stack = MemStack::new(&mut self.mem);
-        // No regularization: with this ordering the pivots of a regular
-        // quasi-definite matrix are bounded away from zero, and a perturbed
-        // pivot would only hide a singular matrix from the check below.
+        // By default no regularization: with this ordering the pivots of a
+        // regular quasi-definite matrix are bounded away from zero, and a
+        // perturbed pivot would only hide a singular matrix from the check
+        // below.
+        let regularization = match &self.regularization {
+            Some((signs, delta)) => {
+                let size = a.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                LdltRegularization {
+                    dynamic_regularization_signs: Some(signs),
+                    dynamic_regularization_delta: delta * size,
+                    dynamic_regularization_epsilon: delta * size,
+                }
+            }
+            None => LdltRegularization::default(),
+        };
         let result = self.symbolic.factorize_numeric_ldlt(
             &mut self.l_values,
             mat,
             self.side,
-            LdltRegularization::default(),
+            regularization,
             Par::Seq,
             stack,
             Default::default(),
         );
         match result {
+            // Regularized: no pivot is zero, the caller's refinement and
+            // residual check judge the solution.
+            Ok(_) if self.regularization.is_some() => return Ok(()),
             Ok(_) => {}
             Err(LdltError::ZeroPivot { index }) => {
                 // faer's simplicial kernel reports the pivot 1-based, its dense
