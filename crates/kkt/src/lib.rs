@@ -58,6 +58,7 @@
 #[cfg(test)]
 mod chain_tests;
 mod dense;
+mod envelope;
 mod schur;
 mod sparse_ldlt;
 mod sparse_lu;
@@ -390,7 +391,7 @@ impl KktSolver {
             // The Schur backend keeps compact copies of S, B and D itself: no
             // copy of the whole matrix, and its own products and norm.
             schur.factor(values)?;
-            self.a_norm = schur.norm_inf(&mut self.ax);
+            self.a_norm = schur.norm_inf();
             self.factored = true;
             self.verified = false;
             return Ok(());

@@ -21,6 +21,7 @@
 //! `(i, j)` with `i, j < n_primal`); a component larger than
 //! [`MAX_BLOCK`] unknowns makes the analysis fail (use LDLᵀ then).
 
+use crate::envelope::EnvelopeLdlt;
 use crate::sparse_ldlt::{SparseLdlt, kkt_ordering};
 use crate::{Csc, KktError};
 
@@ -73,8 +74,8 @@ pub(crate) struct Schur {
     /// `(local row r, local row s, position of C[r, s] in c.values)` for the
     /// pairs in the triangle the factorization reads.
     pairs: Vec<(u16, u16, u32)>,
-    /// Position in the KKT values of each entry of `D` and its slot in `C`
-    /// (read triangle only).
+    /// Index in `d_all` of each entry of `D` in the read triangle, and its
+    /// slot in `C`.
     d_entries: Vec<(usize, usize)>,
     /// Every entry of `D`: `(KKT value position, row, column)` (multiplier
     /// indices), for products with the whole matrix.
@@ -92,14 +93,12 @@ pub(crate) struct Schur {
     /// and the range of column `j`'s pairs (`pair_ptr[j]..pair_ptr[j + 1]`).
     diag_s: Vec<usize>,
     pair_ptr: Vec<usize>,
-    /// `C`, both triangles stored, in its elimination (AMD) order; only the
-    /// triangle the factorization reads is filled.
-    c: Csc,
+    /// `C` and its factorization, in `C`'s elimination order.
+    cf: CFactor,
     /// `c_inv[r]` = position of constraint `r` in `C`'s order; `c_fwd` the
     /// inverse.
     c_inv: Vec<usize>,
     c_fwd: Vec<usize>,
-    ldlt: SparseLdlt,
     /// Scratch: a block (row-major), `B_K` (rows × k) and `B_K S_K⁻¹`.
     block: Vec<f64>,
     bk: Vec<f64>,
@@ -110,7 +109,11 @@ pub(crate) struct Schur {
     /// The `B` entries of the KKT matrix by primal column: `(position of the
     /// row in C's order, position in the KKT values)`.
     b_col_ptr: Vec<usize>,
-    b_cols: Vec<(usize, usize)>,
+    b_cols: Vec<(u32, u32)>,
+    /// Whether `C`'s order is the constraints' own (`c_fwd` the identity).
+    natural: bool,
+    /// Absolute row sums of the last factored matrix (`n + m`).
+    row_sums: Vec<f64>,
     /// The values of the last factored KKT matrix's `B` entries, by column.
     b_values: Vec<f64>,
 }
@@ -243,30 +246,46 @@ impl Schur {
         pattern.extend((0..m).map(|r| (r, r)));
         let c_orig = csc_of(m, &mut pattern);
         // (csc_of sorted and deduplicated `pattern`: it is C's entry list.)
-        // C in its elimination order (faer then factors it in place): the
-        // constraints' own order when its factor is at most FILL_SLACK times
-        // larger than with AMD (a chain's joints in order are already banded,
-        // and keeping them in order keeps every pass over C and y local in
-        // memory), else AMD.
-        let natural = SparseLdlt::preordered(&c_orig)?;
+        // How C is factored: in the constraints' own order by its envelope
+        // when that is at most FILL_SLACK times the factor AMD gives (a
+        // chain's joints in order: a band of width 3, factored and solved in
+        // sequential passes), else by faer's sparse LDLᵀ after AMD, on the
+        // one triangle it reads (faer then factors it in place).
+        let first: Vec<usize> = (0..m)
+            .map(|i| c_orig.row_idx[c_orig.col_ptr[i]..c_orig.col_ptr[i + 1]][0].min(i))
+            .collect();
+        let envelope = EnvelopeLdlt::new(first);
         let (c_fwd, c_inv) = kkt_ordering(&c_orig, m, Default::default())?;
         let mut permuted: Vec<(usize, usize)> =
             pattern.iter().map(|&(s, r)| (c_inv[s], c_inv[r])).collect();
         let c_amd = csc_of(m, &mut permuted);
         let amd = SparseLdlt::preordered(&c_amd)?;
-        let (c_fwd, c_inv, mut c, ldlt) =
-            if natural.factor_len() as f64 <= FILL_SLACK * amd.factor_len() as f64 {
-                let identity: Vec<usize> = (0..m).collect();
-                (identity.clone(), identity, c_orig, natural)
-            } else {
-                (c_fwd, c_inv, c_amd, amd)
+        let (c_fwd, c_inv, cf) = if envelope.len() as f64 <= FILL_SLACK * amd.factor_len() as f64 {
+            let identity: Vec<usize> = (0..m).collect();
+            (identity.clone(), identity, CFactor::Envelope(envelope))
+        } else {
+            let upper = amd.reads_upper();
+            let mut triangle: Vec<(usize, usize)> = (0..m)
+                .flat_map(|s| {
+                    c_amd.row_idx[c_amd.col_ptr[s]..c_amd.col_ptr[s + 1]]
+                        .iter()
+                        .map(move |&r| (s, r))
+                })
+                .filter(|&(s, r)| if upper { r <= s } else { r >= s })
+                .collect();
+            let c_tri = csc_of(m, &mut triangle);
+            let cf = match SparseLdlt::preordered_triangle(&c_tri, upper)? {
+                Some(ldlt) => CFactor::Sparse { c: c_tri, ldlt },
+                None => CFactor::Sparse {
+                    c: c_amd,
+                    ldlt: amd,
+                },
             };
-        let upper = ldlt.reads_upper();
-        let read = |r: usize, s: usize| if upper { r <= s } else { r >= s };
-        let slot = |c: &Csc, r: usize, s: usize| -> usize {
-            let col = &c.row_idx[c.col_ptr[s]..c.col_ptr[s + 1]];
-            c.col_ptr[s] + col.binary_search(&r).unwrap_or(0)
+            (c_fwd, c_inv, cf)
         };
+        let read = |r: usize, s: usize| cf.reads(r, s);
+        let slot = |cf: &CFactor, r: usize, s: usize| cf.slot(r, s);
+        let c = &cf;
         let mut pairs = Vec::new();
         let mut blocks = this.blocks;
         for b in &mut blocks {
@@ -276,7 +295,7 @@ impl Schur {
                 for (ls, &s) in rows.iter().enumerate() {
                     let (pr, ps) = (c_inv[r], c_inv[s]);
                     if read(pr, ps) {
-                        let at = u32::try_from(slot(&c, pr, ps)).map_err(|_| {
+                        let at = u32::try_from(slot(c, pr, ps)).map_err(|_| {
                             KktError::Structure("C has more than 2³² entries".to_string())
                         })?;
                         // Lossless: both below max_rows ≤ u16::MAX.
@@ -288,8 +307,9 @@ impl Schur {
         }
         let d_entries = d_pos
             .iter()
-            .filter(|&&(_, r, s)| read(c_inv[r], c_inv[s]))
-            .map(|&(p, r, s)| (p, slot(&c, c_inv[r], c_inv[s])))
+            .enumerate()
+            .filter(|&(_, &(_, r, s))| read(c_inv[r], c_inv[s]))
+            .map(|(k, &(_, r, s))| (k, slot(c, c_inv[r], c_inv[s])))
             .collect();
         // B by primal column, rows in C's order, for the products in the solve.
         let (mut b_col_ptr, mut b_cols) = (vec![0; n + 1], Vec::new());
@@ -297,14 +317,21 @@ impl Schur {
             for p in a.col_ptr[j]..a.col_ptr[j + 1] {
                 let i = a.row_idx[p];
                 if i >= n {
-                    b_cols.push((c_inv[i - n], p));
+                    let fits = |x: usize| {
+                        u32::try_from(x).map_err(|_| {
+                            KktError::Structure(
+                                "the Schur backend indexes the KKT entries with 32 bits"
+                                    .to_string(),
+                            )
+                        })
+                    };
+                    b_cols.push((fits(c_inv[i - n])?, fits(p)?));
                 }
             }
             b_col_ptr[j + 1] = b_cols.len();
         }
         let diagonal = this.coords.iter().enumerate().all(|(i, &c)| i == c)
             && blocks.iter().all(|b| b.coords.len() == 1);
-        c.values.fill(0.0);
         let (diag_s, pair_ptr) = if diagonal {
             (
                 blocks
@@ -319,6 +346,7 @@ impl Schur {
             (Vec::new(), Vec::new())
         };
         let n_s_entries = this.s_entries.len();
+        let natural = c_fwd.iter().enumerate().all(|(k, &r)| k == r);
         Ok(Self {
             n_primal: n,
             diagonal,
@@ -334,19 +362,26 @@ impl Schur {
             d_values: vec![0.0; d_pos.len()],
             d_all: d_pos,
             inverse: vec![0.0; inv_len],
-            c,
+            cf,
             c_inv,
             c_fwd,
-            ldlt,
             block: vec![0.0; max_k * max_k],
             bk: vec![0.0; max_rows * max_k],
             w: vec![0.0; max_rows * max_k],
             x: vec![0.0; n],
             y: vec![0.0; m],
             b_values: vec![0.0; b_cols.len()],
+            natural,
+            row_sums: vec![0.0; a.n],
             b_col_ptr,
             b_cols,
         })
+    }
+
+    /// Whether `C` is factored by its envelope (else by faer after AMD).
+    #[cfg(test)]
+    pub(crate) fn uses_envelope(&self) -> bool {
+        matches!(self.cf, CFactor::Envelope(_))
     }
 
     /// Inverts every block of `S`, forms `C = B S⁻¹ Bᵀ − D` and factors it.
@@ -355,16 +390,40 @@ impl Schur {
     /// [`KktError::Singular`] naming the primal unknown without a pivot in its
     /// block, or the multiplier whose pivot in `C` vanishes.
     pub(crate) fn factor(&mut self, values: &[f64]) -> Result<(), KktError> {
-        self.c.values.fill(0.0);
+        self.cf.values_mut().fill(0.0);
         // Gather S, B and D (all the matrix: its Bᵀ mirrors B), checking them.
+        // With B, its part of the absolute row sums (for `norm_inf`).
         let mut finite = 0.0;
-        for (v, &(_, p)) in self.b_values.iter_mut().zip(&self.b_cols) {
-            *v = values[p];
-            finite += 0.0 * *v;
+        let n = self.n_primal;
+        self.row_sums.fill(0.0);
+        let (wp, wm) = self.row_sums.split_at_mut(n);
+        for (j, w) in wp.iter_mut().enumerate() {
+            let mut column = 0.0;
+            for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
+                let (row, p) = self.b_cols[q];
+                let v = values[p as usize];
+                self.b_values[q] = v;
+                finite += 0.0 * v;
+                column += v.abs();
+                let r = if self.natural {
+                    row as usize
+                } else {
+                    self.c_fwd[row as usize]
+                };
+                wm[r] += v.abs();
+            }
+            *w = column;
         }
-        for (v, &(p, _, _)) in self.s_values.iter_mut().zip(&self.s_entries) {
-            *v = values[p];
-            finite += 0.0 * *v;
+        if self.diagonal {
+            for (v, &p) in self.s_values.iter_mut().zip(&self.diag_s) {
+                *v = values[p];
+                finite += 0.0 * *v;
+            }
+        } else {
+            for (v, &(p, _, _)) in self.s_values.iter_mut().zip(&self.s_entries) {
+                *v = values[p];
+                finite += 0.0 * *v;
+            }
         }
         for (v, &(p, _, _)) in self.d_values.iter_mut().zip(&self.d_all) {
             *v = values[p];
@@ -374,15 +433,14 @@ impl Schur {
             return Err(KktError::NonFinite);
         }
         if self.diagonal {
-            self.factor_diagonal(values)?;
+            self.factor_diagonal()?;
         } else {
             self.factor_blocks(values)?;
         }
-        for &(p, slot) in &self.d_entries {
-            self.c.values[slot] -= values[p];
+        for &(k, slot) in &self.d_entries {
+            self.cf.values_mut()[slot] -= self.d_values[k];
         }
-        // (D's read triangle, from the caller's values.)
-        self.ldlt.factor(&self.c).map_err(|e| match e {
+        self.cf.factor().map_err(|e| match e {
             KktError::Singular { unknown } => KktError::Singular {
                 unknown: unknown.map(|k| self.n_primal + self.c_fwd[k]),
             },
@@ -391,10 +449,10 @@ impl Schur {
     }
 
     /// `S` diagonal: `C += b_r b_s / S_jj` over the pairs of each column `j`.
-    fn factor_diagonal(&mut self, values: &[f64]) -> Result<(), KktError> {
-        for (j, (&p, inv_j)) in self.diag_s.iter().zip(&mut self.inverse).enumerate() {
+    fn factor_diagonal(&mut self) -> Result<(), KktError> {
+        let c_values = self.cf.values_mut();
+        for (j, (&s, inv_j)) in self.s_values.iter().zip(&mut self.inverse).enumerate() {
             // One unknown: its only S entry is the diagonal.
-            let s = values[p];
             if s == 0.0 {
                 return Err(KktError::Singular { unknown: Some(j) });
             }
@@ -402,7 +460,7 @@ impl Schur {
             *inv_j = inv;
             let bv = &self.b_values[self.b_col_ptr[j]..self.b_col_ptr[j + 1]];
             for &(r, s, slot) in &self.pairs[self.pair_ptr[j]..self.pair_ptr[j + 1]] {
-                self.c.values[slot as usize] += bv[usize::from(r)] * inv * bv[usize::from(s)];
+                c_values[slot as usize] += bv[usize::from(r)] * inv * bv[usize::from(s)];
             }
         }
         Ok(())
@@ -410,6 +468,7 @@ impl Schur {
 
     /// General blocks: dense `S_K⁻¹`, `W = B_K S_K⁻¹`, `C += W B_Kᵀ`.
     fn factor_blocks(&mut self, values: &[f64]) -> Result<(), KktError> {
+        let c_values = self.cf.values_mut();
         for b in &self.blocks {
             let k = b.coords.len();
             let blk = &mut self.block[..k * k];
@@ -436,7 +495,7 @@ impl Schur {
             for &(r, s, slot) in &self.pairs[b.pairs.clone()] {
                 let (r, s) = (usize::from(r), usize::from(s));
                 let v: f64 = (0..k).map(|l| w[r * k + l] * bk[s * k + l]).sum();
-                self.c.values[slot as usize] += v;
+                c_values[slot as usize] += v;
             }
         }
         Ok(())
@@ -467,7 +526,8 @@ impl Schur {
         for j in 0..n {
             let (mut acc, xj) = (yp[j], xp[j]);
             for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
-                let r = self.c_fwd[self.b_cols[q].0];
+                let row = self.b_cols[q].0 as usize;
+                let r = if self.natural { row } else { self.c_fwd[row] };
                 acc += self.b_values[q] * xm[r];
                 ym[r] += self.b_values[q] * xj;
             }
@@ -478,36 +538,30 @@ impl Schur {
         }
     }
 
-    /// `‖A‖∞`, the largest absolute row sum of the last factored matrix.
-    pub(crate) fn norm_inf(&self, work: &mut [f64]) -> f64 {
+    /// `‖A‖∞`, the largest absolute row sum of the last factored matrix
+    /// (completes the row sums that [`factor`](Self::factor) began with `B`).
+    pub(crate) fn norm_inf(&mut self) -> f64 {
         let n = self.n_primal;
-        work.fill(0.0);
-        let (wp, wm) = work.split_at_mut(n);
+        let (wp, wm) = self.row_sums.split_at_mut(n);
         if self.diagonal {
             for (w, s) in wp.iter_mut().zip(&self.s_values) {
-                *w = s.abs();
+                *w += s.abs();
             }
-        }
-        for b in self.blocks.iter().filter(|_| !self.diagonal) {
-            let coords = &self.coords[b.coords.clone()];
-            for (&(_, i, _), &v) in self.s_entries[b.s_entries.clone()]
-                .iter()
-                .zip(&self.s_values[b.s_entries.clone()])
-            {
-                wp[coords[i]] += v.abs();
-            }
-        }
-        for j in 0..n {
-            for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
-                let v = self.b_values[q].abs();
-                wp[j] += v;
-                wm[self.c_fwd[self.b_cols[q].0]] += v;
+        } else {
+            for b in &self.blocks {
+                let coords = &self.coords[b.coords.clone()];
+                for (&(_, i, _), &v) in self.s_entries[b.s_entries.clone()]
+                    .iter()
+                    .zip(&self.s_values[b.s_entries.clone()])
+                {
+                    wp[coords[i]] += v.abs();
+                }
             }
         }
         for (&(_, r, _), &v) in self.d_all.iter().zip(&self.d_values) {
             wm[r] += v.abs();
         }
-        work.iter().fold(0.0, |m: f64, &x| m.max(x))
+        self.row_sums.iter().fold(0.0, |m: f64, &x| m.max(x))
     }
 
     /// Solves in place with the last factorization.
@@ -515,29 +569,39 @@ impl Schur {
         let n = self.n_primal;
         let (f, g) = rhs.split_at_mut(n);
         // y = −g in C's order, x = S⁻¹ f, then y += B x: C y = B S⁻¹ f − g.
-        for (r, &gr) in g.iter().enumerate() {
-            self.y[self.c_inv[r]] = -gr;
+        if self.natural {
+            for (y, &gr) in self.y.iter_mut().zip(g.iter()) {
+                *y = -gr;
+            }
+        } else {
+            for (r, &gr) in g.iter().enumerate() {
+                self.y[self.c_inv[r]] = -gr;
+            }
         }
         self.apply_inverse(f);
         for j in 0..n {
             let xj = self.x[j];
             for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
-                self.y[self.b_cols[q].0] += self.b_values[q] * xj;
+                self.y[self.b_cols[q].0 as usize] += self.b_values[q] * xj;
             }
         }
-        self.ldlt.solve_in_place(&mut self.y);
+        self.cf.solve_in_place(&mut self.y);
         // x = S⁻¹ (f − Bᵀ y).
         for (j, fj) in f.iter_mut().enumerate() {
             let mut s = *fj;
             for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
-                s -= self.b_values[q] * self.y[self.b_cols[q].0];
+                s -= self.b_values[q] * self.y[self.b_cols[q].0 as usize];
             }
             *fj = s;
         }
         self.apply_inverse(f);
         f.copy_from_slice(&self.x);
-        for (r, gr) in g.iter_mut().enumerate() {
-            *gr = self.y[self.c_inv[r]];
+        if self.natural {
+            g.copy_from_slice(&self.y);
+        } else {
+            for (r, gr) in g.iter_mut().enumerate() {
+                *gr = self.y[self.c_inv[r]];
+            }
         }
     }
 
@@ -557,6 +621,65 @@ impl Schur {
                 let row = &inv[i * k..(i + 1) * k];
                 self.x[ci] = row.iter().zip(coords).map(|(a, &cj)| a * f[cj]).sum();
             }
+        }
+    }
+}
+
+/// `C` and how it is factored.
+enum CFactor {
+    /// By its lower envelope, in the constraints' own order.
+    Envelope(EnvelopeLdlt),
+    /// faer's sparse LDLᵀ of the triangle it reads, after AMD.
+    Sparse { c: Csc, ldlt: SparseLdlt },
+}
+
+impl CFactor {
+    /// Whether entry `(r, s)` (in `C`'s order) is stored and read.
+    fn reads(&self, r: usize, s: usize) -> bool {
+        match self {
+            Self::Envelope(_) => r >= s,
+            Self::Sparse { ldlt, .. } => {
+                if ldlt.reads_upper() {
+                    r <= s
+                } else {
+                    r >= s
+                }
+            }
+        }
+    }
+
+    /// Position of a read entry `(r, s)` in [`values_mut`](Self::values_mut).
+    fn slot(&self, r: usize, s: usize) -> usize {
+        match self {
+            Self::Envelope(e) => e.slot(r, s),
+            Self::Sparse { c, .. } => {
+                let col = &c.row_idx[c.col_ptr[s]..c.col_ptr[s + 1]];
+                c.col_ptr[s] + col.binary_search(&r).unwrap_or(0)
+            }
+        }
+    }
+
+    fn values_mut(&mut self) -> &mut [f64] {
+        match self {
+            Self::Envelope(e) => e.values_mut(),
+            Self::Sparse { c, .. } => &mut c.values,
+        }
+    }
+
+    /// Factors; a zero pivot names its row of `C` (in `C`'s order).
+    fn factor(&mut self) -> Result<(), KktError> {
+        match self {
+            Self::Envelope(e) => e
+                .factor()
+                .map_err(|k| KktError::Singular { unknown: Some(k) }),
+            Self::Sparse { c, ldlt } => ldlt.factor(c),
+        }
+    }
+
+    fn solve_in_place(&mut self, y: &mut [f64]) {
+        match self {
+            Self::Envelope(e) => e.solve_in_place(y),
+            Self::Sparse { ldlt, .. } => ldlt.solve_in_place(y),
         }
     }
 }

@@ -43,7 +43,7 @@ use crate::{Csc, KktError};
 /// was computed from is taken for zero (≈ 2.2e-12; measured on chains of up to
 /// 10⁵ bodies: a repeated constraint leaves a pivot that is exactly zero or
 /// below 1e-16 of that scale, regular pivots are above 0.1 of it).
-const PIVOT_TOLERANCE: f64 = 1e4 * f64::EPSILON;
+pub(crate) const PIVOT_TOLERANCE: f64 = 1e4 * f64::EPSILON;
 
 /// Symbolic LDLᵀ analysis and reused numeric buffers.
 pub(crate) struct SparseLdlt {
@@ -115,12 +115,25 @@ impl SparseLdlt {
     /// order (no permutation: faer then factors the values in place, without
     /// the permuted copy of [`new`](Self::new)).
     pub(crate) fn preordered(a: &Csc) -> Result<Self, KktError> {
-        let n = a.n;
         check_symmetric_structure(a)?;
+        Self::preordered_side(a, Side::Upper)
+    }
+
+    /// As [`preordered`](Self::preordered) for a matrix that stores only its
+    /// upper (`upper`) or lower triangle; `None` when faer's choice of kernel
+    /// reads the other one (then store both).
+    pub(crate) fn preordered_triangle(a: &Csc, upper: bool) -> Result<Option<Self>, KktError> {
+        let side = if upper { Side::Upper } else { Side::Lower };
+        let this = Self::preordered_side(a, side)?;
+        Ok((this.side == side).then_some(this))
+    }
+
+    fn preordered_side(a: &Csc, stored: Side) -> Result<Self, KktError> {
+        let n = a.n;
         let sym = SymbolicSparseColMatRef::new_checked(n, n, &a.col_ptr, None, &a.row_idx);
         let symbolic = factorize_symbolic_cholesky(
             sym,
-            Side::Upper,
+            stored,
             SymmetricOrdering::Identity,
             CholeskySymbolicParams::default(),
         )

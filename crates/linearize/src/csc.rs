@@ -6,7 +6,10 @@ use mstar_kkt::Csc;
 /// Builds the structure of the union of `terms` (each a list of `(row, col)`
 /// entries, duplicates allowed) and returns it with, for each term, the slot of
 /// each of its entries in the value array.
-pub(crate) fn from_terms(n: usize, terms: &[&[(usize, usize)]]) -> (Csc, Vec<Vec<usize>>) {
+pub(crate) fn from_terms(
+    n: usize,
+    terms: &[&[(usize, usize)]],
+) -> Result<(Csc, Vec<Vec<Slot>>), usize> {
     let mut all: Vec<(usize, usize)> = terms
         .iter()
         .flat_map(|t| t.iter().map(|&(i, j)| (j, i)))
@@ -21,6 +24,9 @@ pub(crate) fn from_terms(n: usize, terms: &[&[(usize, usize)]]) -> (Csc, Vec<Vec
         col_ptr[j + 1] += col_ptr[j];
     }
     let row_idx: Vec<usize> = all.iter().map(|&(_, i)| i).collect();
+    if Slot::try_from(row_idx.len()).is_err() {
+        return Err(row_idx.len());
+    }
     let slots = terms
         .iter()
         .map(|t| {
@@ -28,13 +34,14 @@ pub(crate) fn from_terms(n: usize, terms: &[&[(usize, usize)]]) -> (Csc, Vec<Vec
                 .map(|&(i, j)| {
                     // The entry is in the union by construction.
                     let col = &row_idx[col_ptr[j]..col_ptr[j + 1]];
-                    col_ptr[j] + col.partition_point(|&r| r < i)
+                    // Below nnz, which fits (checked above).
+                    (col_ptr[j] + col.partition_point(|&r| r < i)) as Slot
                 })
                 .collect()
         })
         .collect();
     let nnz = row_idx.len();
-    (
+    Ok((
         Csc {
             n,
             col_ptr,
@@ -42,14 +49,17 @@ pub(crate) fn from_terms(n: usize, terms: &[&[(usize, usize)]]) -> (Csc, Vec<Vec
             values: vec![0.0; nnz],
         },
         slots,
-    )
+    ))
 }
+
+/// A position in a value array: 32 bits halve the memory the scatters read.
+pub(crate) type Slot = u32;
 
 /// Adds `coef * values[k]` into `out[slots[k]]` for every entry of a term.
 #[inline]
-pub(crate) fn scatter(out: &mut [f64], slots: &[usize], values: &[f64], coef: f64) {
+pub(crate) fn scatter(out: &mut [f64], slots: &[Slot], values: &[f64], coef: f64) {
     for (&s, &v) in slots.iter().zip(values) {
-        out[s] += coef * v;
+        out[s as usize] += coef * v;
     }
 }
 
@@ -61,7 +71,7 @@ mod tests {
     fn union_of_terms_with_slots() {
         let t1 = [(0, 0), (1, 0), (1, 1)];
         let t2 = [(1, 0), (0, 1), (0, 0)];
-        let (mut a, slots) = from_terms(2, &[&t1, &t2]);
+        let (mut a, slots) = from_terms(2, &[&t1, &t2]).expect("small");
         assert_eq!(a.col_ptr, vec![0, 2, 4]);
         assert_eq!(a.row_idx, vec![0, 1, 0, 1]);
         scatter(&mut a.values, &slots[0], &[1.0, 2.0, 3.0], 1.0);

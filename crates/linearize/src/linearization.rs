@@ -5,7 +5,7 @@ use mstar_model::{Pattern, System};
 
 use mstar_kkt::{Csc, max_abs};
 
-use crate::csc::{from_terms, scatter};
+use crate::csc::{Slot, from_terms, scatter};
 
 /// Errors in a system's declared structure.
 #[derive(Debug, thiserror::Error)]
@@ -34,6 +34,12 @@ pub enum LinearizeError {
         row: usize,
         /// Column of the entry.
         col: usize,
+    },
+    /// The KKT matrix has more entries than 32-bit positions address.
+    #[error("the KKT matrix has {nnz} entries, more than 2³² − 1")]
+    TooLarge {
+        /// Number of entries.
+        nnz: usize,
     },
 }
 
@@ -106,6 +112,8 @@ pub struct Linearization {
     n: usize,
     m: usize,
     augmented: bool,
+    /// Whether [`assemble`](Self::assemble) fills the `Bᵀ` block.
+    fill_transpose: bool,
     /// `B`'s `(row, column)` entries on 32 bits (empty if they do not fit).
     b_compact: Vec<(u32, u32)>,
     /// Whether `M`'s pattern is its diagonal in order (`M ü = m ⊙ ü`).
@@ -142,22 +150,22 @@ pub struct Linearization {
     slots: KktSlots,
     bb_pairs: Vec<(usize, usize)>,
     m_star: Csc,
-    m_star_mass: Vec<usize>,
-    m_star_bb: Vec<usize>,
+    m_star_mass: Vec<Slot>,
+    m_star_bb: Vec<Slot>,
     bb_values: Vec<f64>,
 }
 
 #[derive(Clone, Debug)]
 struct KktSlots {
-    mass: Vec<usize>,
-    hessian: Vec<usize>,
-    g_u: Vec<usize>,
-    g_v: Vec<usize>,
-    mass_du: Vec<usize>,
-    bb: Vec<usize>,
-    identity: Vec<usize>,
-    b: Vec<usize>,
-    bt: Vec<usize>,
+    mass: Vec<Slot>,
+    hessian: Vec<Slot>,
+    g_u: Vec<Slot>,
+    g_v: Vec<Slot>,
+    mass_du: Vec<Slot>,
+    bb: Vec<Slot>,
+    identity: Vec<Slot>,
+    b: Vec<Slot>,
+    bt: Vec<Slot>,
 }
 
 fn checked(
@@ -255,7 +263,8 @@ impl Linearization {
                 &bt_entries,
                 &identity[n..],
             ],
-        );
+        )
+        .map_err(|nnz| LinearizeError::TooLarge { nnz })?;
         let mut it = slots.into_iter();
         let mut next = || it.next().unwrap_or_default();
         let slots = KktSlots {
@@ -269,7 +278,8 @@ impl Linearization {
             b: next(),
             bt: next(),
         };
-        let (m_star, ms) = from_terms(n, &[&mass_pattern.entries, &bb_entries]);
+        let (m_star, ms) = from_terms(n, &[&mass_pattern.entries, &bb_entries])
+            .map_err(|nnz| LinearizeError::TooLarge { nnz })?;
         let mut ms = ms.into_iter();
         let m_star_mass = ms.next().unwrap_or_default();
         let m_star_bb = ms.next().unwrap_or_default();
@@ -289,6 +299,7 @@ impl Linearization {
             n,
             m,
             augmented,
+            fill_transpose: true,
             b_compact,
             mass_diagonal,
             mass: vec![0.0; mass_pattern.len()],
@@ -314,6 +325,19 @@ impl Linearization {
             m_star_mass,
             m_star_bb,
         })
+    }
+
+    /// Whether [`assemble`](Self::assemble) fills the `Bᵀ` block of the KKT
+    /// matrix (default: yes). A solver that reads only `S`, `B` and the
+    /// multiplier block (mstar-kkt's Schur backend) does not need it; the
+    /// block then stays zero and [`kkt`](Self::kkt) is not the whole matrix.
+    pub fn set_fill_transpose(&mut self, fill: bool) {
+        self.fill_transpose = fill;
+        if !fill {
+            for &k in &self.slots.bt {
+                self.kkt.values[k as usize] = 0.0;
+            }
+        }
     }
 
     /// Whether the KKT matrix carries the `BᵀB` term (see
@@ -462,11 +486,13 @@ impl Linearization {
         }
         if c.c_identity != 0.0 {
             for &k in &sl.identity {
-                vals[k] += c.c_identity;
+                vals[k as usize] += c.c_identity;
             }
         }
         scatter(vals, &sl.b, &self.b, 1.0);
-        scatter(vals, &sl.bt, &self.b, 1.0);
+        if self.fill_transpose {
+            scatter(vals, &sl.bt, &self.b, 1.0);
+        }
     }
 
     /// The KKT matrix (16) as last [`assemble`](Self::assemble)d; unknowns are

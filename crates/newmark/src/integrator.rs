@@ -936,6 +936,8 @@ fn linear_algebra<S: System + ?Sized>(
         if solver.backend() == Backend::Schur {
             plain.eval_residual(sys, t0, u0, v0, &vec![0.0; n], &vec![0.0; m]);
             if options.backend == Backend::Schur || plain.mass_diagonal_positive() {
+                // The Schur backend reads S, B and the multiplier block only.
+                plain.set_fill_transpose(false);
                 return Ok((plain, solver));
             }
         }
