@@ -630,7 +630,7 @@ enum CFactor {
     /// By its lower envelope, in the constraints' own order.
     Envelope(EnvelopeLdlt),
     /// faer's sparse LDLᵀ of the triangle it reads, after AMD.
-    Sparse { c: Csc, ldlt: SparseLdlt },
+    Sparse { c: Csc, ldlt: Box<SparseLdlt> },
 }
 
 impl CFactor {
