@@ -275,10 +275,13 @@ impl Schur {
                 .collect();
             let c_tri = csc_of(m, &mut triangle);
             let cf = match SparseLdlt::preordered_triangle(&c_tri, upper)? {
-                Some(ldlt) => CFactor::Sparse { c: c_tri, ldlt },
+                Some(ldlt) => CFactor::Sparse {
+                    c: c_tri,
+                    ldlt: Box::new(ldlt),
+                },
                 None => CFactor::Sparse {
                     c: c_amd,
-                    ldlt: amd,
+                    ldlt: Box::new(amd),
                 },
             };
             (c_fwd, c_inv, cf)
