@@ -114,6 +114,8 @@ pub struct Linearization {
     augmented: bool,
     /// Whether [`assemble`](Self::assemble) fills the `Bᵀ` block.
     fill_transpose: bool,
+    /// Whether `mass` holds a constant `M` already.
+    mass_ready: bool,
     /// `B`'s `(row, column)` entries on 32 bits (empty if they do not fit).
     b_compact: Vec<(u32, u32)>,
     /// Whether `M`'s pattern is its diagonal in order (`M ü = m ⊙ ü`).
@@ -300,6 +302,7 @@ impl Linearization {
             m,
             augmented,
             fill_transpose: true,
+            mass_ready: false,
             b_compact,
             mass_diagonal,
             mass: vec![0.0; mass_pattern.len()],
@@ -396,7 +399,11 @@ impl Linearization {
         a: &[f64],
         lambda: &[f64],
     ) {
-        sys.mass_into(t, u, &mut self.mass);
+        // A constant M (System::mass_is_constant) is evaluated once.
+        if !(self.mass_ready && sys.mass_is_constant()) {
+            sys.mass_into(t, u, &mut self.mass);
+            self.mass_ready = true;
+        }
         sys.phi_b_into(t, u, &mut self.phi, &mut self.b);
         sys.forces_into(t, u, v, &mut self.g);
         self.bt_lambda.fill(0.0);

@@ -144,6 +144,10 @@ impl System for PendulumChain {
         Pattern::from_entries(n, n, entries)
     }
 
+    fn mass_is_constant(&self) -> bool {
+        true
+    }
+
     fn mass_into(&self, _t: f64, _u: &[f64], mass: &mut [f64]) {
         for (k, link) in self.links.iter().enumerate() {
             mass[2 * k] = link.m;

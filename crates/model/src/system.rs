@@ -37,6 +37,12 @@ pub trait System: Send + Sync {
     /// Values of `M(u)` on [`mass_pattern`](System::mass_pattern).
     fn mass_into(&self, t: f64, u: &[f64], mass: &mut [f64]);
 
+    /// Whether `M` depends on neither `u` nor `t` (default: `false`). When it
+    /// does not, callers may evaluate it once; `∂(M ü)/∂u` must then be zero.
+    fn mass_is_constant(&self) -> bool {
+        false
+    }
+
     /// Generalized forces `g(u, u̇, t)`: external, internal and complementary
     /// inertia forces (eq. 3), size `n`.
     fn forces_into(&self, t: f64, u: &[f64], v: &[f64], g: &mut [f64]);

@@ -467,6 +467,8 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         };
         let mut force_refactor = false;
         let mut previous_step = f64::INFINITY;
+        // ‖u‖∞ of the iterate, kept up to date by the corrector's loop.
+        let mut u_max = max_abs(&self.trial.u);
         for k in 0..=self.config.max_iterations {
             let s = &self.trial;
             self.lin
@@ -483,13 +485,10 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             let floor = if self.config.exact_multiplier_update {
                 0.0
             } else {
-                4.0 * coefficients.c_bb
-                    * f64::EPSILON
-                    * max_abs(&s.u).max(1.0)
-                    * max_abs(&self.lin.b)
+                4.0 * coefficients.c_bb * f64::EPSILON * u_max.max(1.0) * max_abs(&self.lin.b)
             };
             let residual_tol = (self.config.tol * self.lin.force_scale()).max(floor);
-            let constraint_tol = self.config.tol * max_abs(&s.u).max(1.0);
+            let constraint_tol = self.config.tol * u_max.max(1.0);
             self.stats.iterations += usize::from(k > 0);
             // At least one correction: a predictor that happens to meet the
             // tolerances (small h, near rest) still needs its λ and ü updated.
@@ -530,11 +529,15 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             // Corrector (15).
             let (du, dl) = self.rhs.split_at(n);
             let s = &mut self.trial;
+            let mut step = 0.0f64;
+            u_max = 0.0;
             for i in 0..n {
                 s.u[i] += du[i];
                 s.v[i] += gamma_p * du[i];
                 s.a[i] += beta_p * du[i];
                 s.a_alpha[i] += a_p * du[i];
+                u_max = u_max.max(s.u[i].abs());
+                step = step.max(du[i].abs());
             }
             // With M* in S_T (eq. 17) the solve returns Δλ + c_bb Φ (see
             // `Config::exact_multiplier_update`), without the BᵀB term (Schur
@@ -554,7 +557,6 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             for ((l, &d), &phi) in s.lambda.iter_mut().zip(dl).zip(&self.lin.phi) {
                 *l += d / coefficients.scale + shift * phi;
             }
-            let step = max_abs(du);
             if step > max_rate * previous_step {
                 force_refactor = true;
             }

@@ -631,6 +631,10 @@ impl System for PlanarSystem {
         self.mass_pattern.clone()
     }
 
+    fn mass_is_constant(&self) -> bool {
+        true
+    }
+
     fn mass_into(&self, _t: f64, _u: &[f64], mass: &mut [f64]) {
         let mut k = 0;
         for b in &self.bodies {
@@ -645,10 +649,13 @@ impl System for PlanarSystem {
     }
 
     fn forces_into(&self, t: f64, u: &[f64], v: &[f64], g: &mut [f64]) {
-        g.fill(0.0);
+        // Every coordinate belongs to a body: gravity writes all of g.
         for b in &self.bodies {
             g[b.x] = b.mass * self.gravity[0];
             g[b.x + 1] = b.mass * self.gravity[1];
+            if b.inertia.is_some() {
+                g[b.x + 2] = 0.0;
+            }
         }
         for f in &self.forces {
             f.add_forces(t, u, v, g);
