@@ -1,7 +1,7 @@
 //! Time per step of an N-link bar chain (the benchmark: bars of 1 kg,
 //! 1 m on revolute joints, released horizontally; h = 1e-3, generalized-α
 //! ρ∞ = 0.8, Newton tolerance 1e-8 relative, the default Newton and KKT
-//! solver: full Newton on the Schur complement), and the phases of one Newton
+//! solver: modified Newton on the Schur complement; also with full Newton), and the phases of one Newton
 //! iteration: residual evaluation, Jacobians + KKT assembly, numeric
 //! factorization and solve for each sparse backend (Schur complement on the
 //! unaugmented matrix; LDLᵀ and LU of the augmented KKT matrix with `M*`, LU
@@ -24,7 +24,7 @@ use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use mstar::kkt::{Backend, KktOptions, KktSolver};
 use mstar::linearize::Linearization;
 use mstar::planar::{PlanarSystem, bar_chain};
-use mstar::{Config, Integrator, Scheme, System};
+use mstar::{Config, Integrator, Newton, Scheme, System};
 
 fn config() -> Config {
     Config {
@@ -57,8 +57,13 @@ fn peak_memory_mib() -> Option<f64> {
 /// An integrator warmed up by `warm` steps (the chain starts at rest; the
 /// benchmark measures it moving).
 fn warmed(sys: &PlanarSystem, warm: usize) -> Integrator<'_, PlanarSystem> {
+    warmed_with(sys, warm, config())
+}
+
+/// [`warmed`] with another configuration.
+fn warmed_with(sys: &PlanarSystem, warm: usize, config: Config) -> Integrator<'_, PlanarSystem> {
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
-    let mut integ = Integrator::new(sys, config(), 0.0, &u0, &v0).expect("start");
+    let mut integ = Integrator::new(sys, config, 0.0, &u0, &v0).expect("start");
     for _ in 0..warm {
         integ.step(f64::INFINITY).expect("step");
     }
@@ -82,6 +87,33 @@ fn two_threads() -> rayon::ThreadPool {
         .expect("a thread pool")
 }
 
+/// Times `iters` steps. Criterion asks for as many as it likes; the chain is
+/// restarted (untimed) whenever it reaches `T_END`, so every timed step lies
+/// in (0.02 s, `T_END`] of the 1 s run and not in the violent whips
+/// of a long chain much later.
+fn timed_steps<'a>(
+    integ: &mut Integrator<'a, PlanarSystem>,
+    sys: &'a PlanarSystem,
+    config: &Config,
+    iters: u64,
+) -> Duration {
+    let (mut total, mut done) = (Duration::ZERO, 0);
+    while done < iters {
+        if integ.time() >= T_END - 1e-9 {
+            *integ = warmed_with(sys, 20, config.clone());
+        }
+        let left = ((T_END - integ.time()) / H).round().max(1.0) as u64;
+        let k = left.min(iters - done);
+        let start = Instant::now();
+        for _ in 0..k {
+            integ.step(f64::INFINITY).expect("step");
+        }
+        total += start.elapsed();
+        done += k;
+    }
+    total
+}
+
 fn steps(c: &mut Criterion) {
     one_thread_globally();
     let mut counts = String::from("n,steps,iterations_per_step,factorizations_per_step,peak_mib\n");
@@ -92,34 +124,25 @@ fn steps(c: &mut Criterion) {
         group.measurement_time(Duration::from_secs(if n >= 10_000 { 20 } else { 5 }));
         let mut integ = warmed(&sys, 20);
         group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
-            // Criterion asks for as many steps as it likes; the chain is
-            // restarted (untimed) whenever it reaches T_END, so every timed
-            // step lies in (0.02 s, T_END] of the 1 s run and not in
-            // the violent whips of a long chain much later.
-            b.iter_custom(|iters| {
-                let (mut total, mut done) = (Duration::ZERO, 0);
-                while done < iters {
-                    if integ.time() >= T_END - 1e-9 {
-                        integ = warmed(&sys, 20);
-                    }
-                    let left = ((T_END - integ.time()) / H).round().max(1.0) as u64;
-                    let k = left.min(iters - done);
-                    let start = Instant::now();
-                    for _ in 0..k {
-                        integ.step(f64::INFINITY).expect("step");
-                    }
-                    total += start.elapsed();
-                    done += k;
-                }
-                total
-            });
+            b.iter_custom(|iters| timed_steps(&mut integ, &sys, &config(), iters));
+        });
+        // Full Newton: a fresh Jacobian at every step (one iteration).
+        let full = Config {
+            newton: Newton::Full,
+            ..config()
+        };
+        let mut integ = warmed_with(&sys, 20, full.clone());
+        group.bench_with_input(BenchmarkId::new("full-newton", n), &n, |b, _| {
+            b.iter_custom(|iters| timed_steps(&mut integ, &sys, &full, iters));
         });
         if n >= 10_000 {
             // The same steps with two threads for the parallel element loops.
             let pool = two_threads();
             let mut integ = warmed(&sys, 20);
             group.bench_with_input(BenchmarkId::new("2-threads", n), &n, |b, _| {
-                b.iter(|| pool.install(|| integ.step(f64::INFINITY).expect("step")));
+                b.iter_custom(|iters| {
+                    pool.install(|| timed_steps(&mut integ, &sys, &config(), iters))
+                });
             });
         }
         // Counts over 100 fresh steps after the same warm-up.

@@ -10,7 +10,7 @@
 //!   correction and the conditioning ([`stability`]).
 //! - `cargo xtask convergence`: fitted orders in u, u̇, ü, λ ([`convergence`]).
 //! - `cargo xtask energy`: energy error over 1000 s ([`energy`]).
-//! - `cargo xtask bench`: the chain benchmark as a table and a plot ([`bench`]).
+//! - `cargo xtask bench`: the chain benchmark as a table and a plot ([`bench`](mod@bench)).
 
 mod bench;
 mod common;

@@ -11,15 +11,21 @@
 //! ```
 //!
 //! solves `[[S, Bᵀ], [B, D]] [x; y] = [f; g]` with one dense inverse per block
-//! (a 3 × 3 one per planar body) and one sparse LDLᵀ of the `m × m` matrix `C`,
+//! (for planar bars `S` is diagonal) and one LDLᵀ of the `m × m` matrix `C`,
 //! whose pattern is that of `B Bᵀ`: block-tridiagonal for a chain, so its
-//! factorization costs O(m). `C` is symmetric positive definite when `S` is and
+//! factorization costs O(m). `C` is factored by its envelope
+//! (`crate::envelope`) in the constraints' own order when that is at most
+//! `FILL_SLACK` times the factor AMD gives, else by faer's sparse LDLᵀ after
+//! AMD on the triangle faer reads. `C` is symmetric positive definite when `S` is and
 //! `B` has full row rank; a block without an inverse, or a pivot of `C` at the
 //! rounding level (a redundant constraint), is an error naming the unknown.
 //!
 //! The blocks are the connected components of the pattern of `S` (entries
 //! `(i, j)` with `i, j < n_primal`); a component larger than
-//! [`MAX_BLOCK`] unknowns makes the analysis fail (use LDLᵀ then).
+//! [`MAX_BLOCK`] unknowns makes the analysis fail (use LDLᵀ then). The
+//! backend reads `S`, `B` and `D` only (the matrix is symmetric), keeps
+//! compact copies of them, and computes its own products and norm for the
+//! residual check of `KktSolver`.
 
 use crate::envelope::EnvelopeLdlt;
 use crate::sparse_ldlt::{SparseLdlt, kkt_ordering};

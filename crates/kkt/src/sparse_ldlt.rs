@@ -83,10 +83,19 @@ impl SparseLdlt {
         let perm = PermRef::new_checked(&fwd, &inv, n);
         let symbolic =
             factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Custom(perm), params)
-                .map_err(|e| match e {
-                    faer::sparse::FaerError::OutOfMemory => KktError::OutOfMemory,
-                    e => KktError::Backend(format!("{e:?}")),
-                })?;
+                .map_err(faer_error)?;
+        Self::with_symbolic(a, symbolic, fwd, Side::Lower)
+    }
+
+    /// The buffers around a symbolic factorization of `a` in the order `fwd`,
+    /// factoring the triangle `side`.
+    fn with_symbolic(
+        a: &Csc,
+        symbolic: SymbolicCholesky<usize>,
+        fwd: Vec<usize>,
+        side: Side,
+    ) -> Result<Self, KktError> {
+        let n = a.n;
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
@@ -106,7 +115,7 @@ impl SparseLdlt {
             diag_pos,
             scale: vec![0.0; n],
             mem,
-            side: Side::Lower,
+            side,
             regularization: None,
         })
     }
@@ -137,38 +146,14 @@ impl SparseLdlt {
             SymmetricOrdering::Identity,
             CholeskySymbolicParams::default(),
         )
-        .map_err(|e| match e {
-            faer::sparse::FaerError::OutOfMemory => KktError::OutOfMemory,
-            e => KktError::Backend(format!("{e:?}")),
-        })?;
+        .map_err(faer_error)?;
         // faer's simplicial kernel reads the upper triangle, its supernodal
         // one the lower: give it the one it reads, so it copies nothing.
         let side = match symbolic.raw() {
             SymbolicCholeskyRaw::Simplicial(_) => Side::Upper,
             SymbolicCholeskyRaw::Supernodal(_) => Side::Lower,
         };
-        let req = StackReq::any_of(&[
-            symbolic.factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
-            symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
-        ]);
-        let mem = MemBuffer::try_new(req).map_err(|_| KktError::OutOfMemory)?;
-        let diag_pos = (0..n)
-            .map(|j| {
-                let col = &a.row_idx[a.col_ptr[j]..a.col_ptr[j + 1]];
-                col.binary_search(&j)
-                    .map_or(usize::MAX, |k| a.col_ptr[j] + k)
-            })
-            .collect();
-        Ok(Self {
-            l_values: vec![0.0; symbolic.len_val()],
-            symbolic,
-            fwd: (0..n).collect(),
-            diag_pos,
-            scale: vec![0.0; n],
-            mem,
-            side,
-            regularization: None,
-        })
+        Self::with_symbolic(a, symbolic, (0..n).collect(), side)
     }
 
     /// Number of stored values of the factor.
@@ -326,6 +311,14 @@ impl SparseLdlt {
         let stack = MemStack::new(&mut self.mem);
         let x = MatMut::from_column_major_slice_mut(rhs, n, 1);
         ldlt.solve_in_place_with_conj(Conj::No, x, Par::Seq, stack);
+    }
+}
+
+/// A faer error as ours.
+fn faer_error(e: faer::sparse::FaerError) -> KktError {
+    match e {
+        faer::sparse::FaerError::OutOfMemory => KktError::OutOfMemory,
+        e => KktError::Backend(format!("{e:?}")),
     }
 }
 

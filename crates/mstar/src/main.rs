@@ -88,10 +88,8 @@ enum Init {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum NewtonArg {
-    /// Full with the Schur backend (large bodies-and-joints systems), modified
-    /// otherwise.
-    Auto,
-    /// Refactor at every iteration.
+    /// Refactor at every iteration (fastest on chains; see --help of the
+    /// library's Newton::Full for its robustness caveat).
     Full,
     /// Reuse the factorization while the iteration contracts fast.
     Modified,
@@ -141,7 +139,7 @@ struct IntegratorArgs {
     /// HHT α in [−1/3, 0] [default: −0.1].
     #[arg(long, allow_hyphen_values = true)]
     alpha: Option<f64>,
-    /// Newton variant [default: auto; paper: full].
+    /// Newton variant [default: modified; paper: full].
     #[arg(long, value_enum)]
     newton: Option<NewtonArg>,
     /// KKT solver [default: auto: dense up to 24 unknowns, else Schur when the
@@ -294,7 +292,6 @@ fn apply_integrator(args: &IntegratorArgs, c: &mut Config, paper_preset: bool) -
     }
     if let Some(n) = args.newton {
         c.newton = match n {
-            NewtonArg::Auto => Newton::Auto,
             NewtonArg::Full => Newton::Full,
             NewtonArg::Modified => Newton::MODIFIED,
         };
@@ -364,7 +361,6 @@ fn describe(run: &PendulumRun) -> String {
         Start::Consistent => "consistent start".into(),
     };
     let newton = match c.newton {
-        Newton::Auto => "Newton (auto)".to_string(),
         Newton::Full => "full Newton".to_string(),
         Newton::Modified { max_rate } => format!("modified Newton (rate ≤ {max_rate})"),
     };
@@ -485,7 +481,7 @@ fn chain(args: &ChainArgs) -> Result<()> {
         integ.backend(),
         match integ.newton() {
             Newton::Modified { max_rate } => format!("modified (rate ≤ {max_rate})"),
-            _ => "full (a fresh Jacobian at every iteration)".to_string(),
+            Newton::Full => "full (a fresh Jacobian at every iteration)".to_string(),
         }
     );
     let mut stream = args

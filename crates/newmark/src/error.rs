@@ -93,7 +93,7 @@ pub enum IntegrationError {
     /// Step control reached the smallest allowed step.
     #[error(
         "step size too small at t = {t} s: the step with h = {h:e} failed and h/2 would be below h_min = {h_min:e} \
-         (‖r‖∞ = {residual:.3e}, ‖Φ‖∞ = {constraint:.3e}); the model may be singular here, or lower h_min"
+         (‖r‖∞ = {residual:.3e}, ‖Φ‖∞ = {constraint:.3e}). If even tiny steps fail, the state reached at t was          already wrong: steps are only rejected when Newton fails (there is no local error estimate), so a fast          motion (a whip) can be under-resolved before it breaks Newton: rerun with a smaller --h. Otherwise the          model may be singular here (a lock-up of the constraints), or lower h_min"
     )]
     StepSizeTooSmall {
         /// Time at the start of the failed step.

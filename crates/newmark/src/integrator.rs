@@ -156,14 +156,6 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             });
         }
         let (lin, solver) = linear_algebra(sys, &config, t0, u0, v0)?;
-        let mut config = config;
-        if config.newton == Newton::Auto {
-            config.newton = if solver.backend() == Backend::Schur {
-                Newton::Full
-            } else {
-                Newton::MODIFIED
-            };
-        }
         let h = config.h;
         let mut this = Self {
             sys,
@@ -207,7 +199,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         Ok(this)
     }
 
-    /// The Newton variant in use ([`Newton::Auto`] resolved).
+    /// The Newton variant in use.
     #[must_use]
     pub fn newton(&self) -> Newton {
         self.config.newton
@@ -345,7 +337,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     }
 
     fn factorized_every_iteration(&self) -> bool {
-        matches!(self.config.newton, Newton::Full | Newton::Auto)
+        matches!(self.config.newton, Newton::Full)
     }
 
     fn failure_error(&self, failure: Failure, h: f64, h_min: f64) -> IntegrationError {
@@ -439,8 +431,15 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         if iterations > 4 {
             self.factored_h = None;
         }
-        // Regrow h after a run of easy steps.
-        if iterations <= (self.config.max_iterations / 4).max(3) {
+        // Regrow h after a run of easy steps. With a fresh Jacobian at every
+        // iteration a resolved step takes one correction (two at most); more
+        // means the predictor is far off, i.e. the motion is fast for this h,
+        // and regrowing would step straight back into it (a whip).
+        let easy = match self.config.newton {
+            Newton::Full => 2,
+            Newton::Modified { .. } => (self.config.max_iterations / 4).max(3),
+        };
+        if iterations <= easy {
             self.easy_steps += 1;
         } else {
             self.easy_steps = 0;
@@ -463,7 +462,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         let n = self.sys.n_coords();
         let max_rate = match self.config.newton {
             Newton::Modified { max_rate } => max_rate,
-            Newton::Full | Newton::Auto => f64::INFINITY,
+            Newton::Full => f64::INFINITY,
         };
         let mut force_refactor = false;
         let mut previous_step = f64::INFINITY;
@@ -505,7 +504,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                 });
             }
             let refactor = match self.config.newton {
-                Newton::Full | Newton::Auto => true,
+                Newton::Full => true,
                 Newton::Modified { .. } => force_refactor || self.factored_h != Some(h),
             };
             if refactor {

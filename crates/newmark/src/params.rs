@@ -179,22 +179,20 @@ pub enum Start {
 }
 
 /// Newton-Raphson variant.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Newton {
-    /// [`Full`](Self::Full) when the KKT solver is the Schur backend (then a
-    /// factorization costs about two residual evaluations, and one iteration
-    /// with a fresh Jacobian meets the tolerance: 1.00 iteration per step on
-    /// the benchmark chains against 3.1 with a reused one), otherwise
-    /// [`Modified`](Self::Modified) with `max_rate = 0.5` (dense, LDLᵀ and LU
-    /// factorizations cost many residual evaluations) (default).
-    #[default]
-    Auto,
-    /// Refactor the iteration matrix at every iteration.
+    /// Refactor the iteration matrix at every iteration. With the Schur
+    /// backend one iteration per step meets the tolerance and it is the
+    /// fastest variant on chains (docs/performance.md), but step control has
+    /// no local error estimate, and cheap converged steps let `h` regrow into
+    /// motion it does not resolve: random chains that whip can then blow up
+    /// (`crates/mstar/tests/random_chains.rs` finds such cases), which the
+    /// modified variant's more cautious iterations avoid.
     Full,
     /// Keep the factorization across iterations and steps while the observed
     /// contraction rate `‖Δu_k‖/‖Δu_{k−1}‖` stays below `max_rate`; refactor when it
     /// does not, when the step size changes, after a step that needed more than
-    /// 4 iterations, or after a failed attempt.
+    /// 4 iterations, or after a failed attempt (default, `max_rate = 0.5`).
     Modified {
         /// Largest accepted contraction rate before a refactorization (in (0, 1)).
         max_rate: f64,
@@ -204,6 +202,12 @@ pub enum Newton {
 impl Newton {
     /// The modified variant with its usual rate bound, 0.5.
     pub const MODIFIED: Self = Self::Modified { max_rate: 0.5 };
+}
+
+impl Default for Newton {
+    fn default() -> Self {
+        Self::MODIFIED
+    }
 }
 
 /// Configuration of an [`Integrator`](crate::Integrator). Each field states its
