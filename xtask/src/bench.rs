@@ -42,12 +42,21 @@ fn machine() -> String {
     format!("{cpu}, {cores} cores")
 }
 
-/// Runs the benchmark up to `max_n` bodies and reports it.
+/// Runs the benchmark up to `max_n` bodies (unless `report_only`) and reports
+/// it.
 ///
 /// # Errors
 /// If `cargo bench` fails or produces no estimates.
-pub fn run(max_n: usize) -> Result<()> {
+pub fn run(max_n: usize, report_only: bool) -> Result<()> {
     let out = study_dir("bench")?;
+    if !report_only {
+        run_criterion(max_n)?;
+    }
+    report(&out)
+}
+
+/// `cargo bench -p mstar-benches --bench chain` up to `max_n` bodies.
+fn run_criterion(max_n: usize) -> Result<()> {
     println!(
         "running the chain benchmark up to N = {max_n} (release build; the first build takes a few minutes)"
     );
@@ -59,6 +68,12 @@ pub fn run(max_n: usize) -> Result<()> {
     if !status.success() {
         bail!("cargo bench failed ({status})");
     }
+    Ok(())
+}
+
+/// Prints the tables and draws the figure from criterion's estimates and the
+/// benchmark's counts.
+fn report(out: &Path) -> Result<()> {
     let counts = std::fs::read_to_string(out.join("counts.csv"))
         .context("the benchmark wrote no counts.csv")?;
     let mut table = Table::new(
@@ -95,6 +110,7 @@ pub fn run(max_n: usize) -> Result<()> {
         ],
     );
     let (mut per_step, mut per_body) = (Vec::new(), Vec::new());
+    let (mut full_step, mut full_body) = (Vec::new(), Vec::new());
     for line in counts.lines().skip(1) {
         let f: Vec<&str> = line.split(',').collect();
         let Some(n) = f.first().and_then(|s| s.parse::<usize>().ok()) else {
@@ -109,6 +125,10 @@ pub fn run(max_n: usize) -> Result<()> {
         let iterations = f.get(2).and_then(|s| s.parse::<f64>().ok());
         per_step.push((n as f64, step));
         per_body.push((n as f64, step / n as f64));
+        if let Some(full) = median_us(&format!("chain_step/full-newton/{n}")) {
+            full_step.push((n as f64, full));
+            full_body.push((n as f64, full / n as f64));
+        }
         table.row(vec![
             n.to_string(),
             format!("{step:.1}"),
@@ -116,6 +136,8 @@ pub fn run(max_n: usize) -> Result<()> {
             f.get(2).copied().unwrap_or("-").to_string(),
             iterations.map_or("-".into(), |k| format!("{:.1}", step / k.max(1.0))),
             f.get(3).copied().unwrap_or("-").to_string(),
+            median_us(&format!("chain_step/full-newton/{n}"))
+                .map_or("-".into(), |v| format!("{v:.1}")),
             median_us(&format!("chain_step/2-threads/{n}"))
                 .map_or("-".into(), |v| format!("{v:.1}")),
             f.get(4).copied().unwrap_or("-").to_string(),
@@ -144,17 +166,36 @@ pub fn run(max_n: usize) -> Result<()> {
     let figure = vec![
         Panel::new("time per step", "N (bodies)", "µs per step")
             .scale(Scale::LogLog)
-            .series("mstar", per_step, Style::solid(crate::common::color(0)))
+            .series(
+                "modified Newton (default)",
+                per_step,
+                Style::solid(crate::common::color(0)),
+            )
+            .series(
+                "full Newton",
+                full_step,
+                Style::solid(crate::common::color(2)),
+            )
             .legend(Legend::UpperLeft),
         Panel::new(
             "time per body per step",
             "N (bodies)",
             "µs per body per step",
         )
-        .scale(Scale::LogLog)
-        .series("mstar", per_body, Style::solid(crate::common::color(1)))
+        .scale(Scale::LogX)
+        .y_range(0.0, 0.5)
+        .series(
+            "modified Newton (default)",
+            per_body,
+            Style::solid(crate::common::color(0)),
+        )
+        .series(
+            "full Newton",
+            full_body,
+            Style::solid(crate::common::color(2)),
+        )
         .legend(Legend::UpperLeft),
     ];
-    draw_figures("bench", &out, &[("chain.png".to_string(), figure)])?;
+    draw_figures("bench", out, &[("chain.png".to_string(), figure)])?;
     Ok(())
 }

@@ -57,6 +57,9 @@ enum Command {
         /// Largest chain (10, 100, 1000, 10000 or 100000).
         #[arg(long, default_value_t = 100_000)]
         max_n: usize,
+        /// Only print and plot the results of the last run (no benchmark).
+        #[arg(long)]
+        report_only: bool,
     },
 }
 
@@ -70,7 +73,7 @@ fn main() -> Result<()> {
         Command::Stability => stability::run(),
         Command::Convergence => convergence::run(),
         Command::Energy => energy::run(),
-        Command::Bench { max_n } => bench::run(max_n),
+        Command::Bench { max_n, report_only } => bench::run(max_n, report_only),
     }
 }
 

@@ -128,6 +128,8 @@ pub enum Scale {
     Linear,
     /// Linear x, logarithmic y.
     LogY,
+    /// Logarithmic x, linear y (a cost per body against N).
+    LogX,
     /// Both axes logarithmic (convergence studies).
     #[allow(
         dead_code,
@@ -395,6 +397,7 @@ fn draw_panel(area: &DrawingArea<BitMapBackend<'_>, Shift>, panel: &Panel) -> Re
     let (log_x, log_y) = match panel.scale {
         Scale::Linear => (false, false),
         Scale::LogY => (false, true),
+        Scale::LogX => (true, false),
         Scale::LogLog => (true, true),
     };
     let all = || panel.series.iter().flat_map(|s| s.points.iter().copied());
@@ -412,6 +415,7 @@ fn draw_panel(area: &DrawingArea<BitMapBackend<'_>, Shift>, panel: &Panel) -> Re
     match (log_x, log_y) {
         (false, false) => draw_in(area, panel, xr.0..xr.1, yr.0..yr.1, xr, yr),
         (false, true) => draw_in(area, panel, xr.0..xr.1, (yr.0..yr.1).log_scale(), xr, yr),
+        (true, false) => draw_in(area, panel, (xr.0..xr.1).log_scale(), yr.0..yr.1, xr, yr),
         _ => draw_in(
             area,
             panel,
