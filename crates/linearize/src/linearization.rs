@@ -122,7 +122,10 @@ pub struct Linearization {
     mass_diagonal: bool,
     mass_pattern: Pattern,
     b_pattern: Pattern,
-    /// Values of `M` on the system's mass pattern.
+    /// Values of `M` on the system's mass pattern. A constant `M`
+    /// ([`System::mass_is_constant`]) is evaluated by the first
+    /// [`eval_residual`](Self::eval_residual) only: pass the system the
+    /// linearization was built for, and do not overwrite these values.
     pub mass: Vec<f64>,
     /// Values of `B` on the system's B pattern.
     pub b: Vec<f64>,
