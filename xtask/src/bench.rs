@@ -163,38 +163,34 @@ fn report(out: &Path) -> Result<()> {
     table.write_csv(&out.join("bench.csv"))?;
     phases.print();
     phases.write_csv(&out.join("phases.csv"))?;
-    let figure = vec![
-        Panel::new("time per step", "N (bodies)", "µs per step")
-            .scale(Scale::LogLog)
+    // One curve per Newton variant in each panel.
+    let variants = |panel: Panel, modified: Vec<(f64, f64)>, full: Vec<(f64, f64)>| {
+        panel
             .series(
                 "modified Newton (default)",
-                per_step,
+                modified,
                 Style::solid(crate::common::color(0)),
             )
-            .series(
-                "full Newton",
-                full_step,
-                Style::solid(crate::common::color(2)),
+            .series("full Newton", full, Style::solid(crate::common::color(2)))
+            .legend(Legend::UpperLeft)
+    };
+    let figure = vec![
+        variants(
+            Panel::new("time per step", "N (bodies)", "µs per step").scale(Scale::LogLog),
+            per_step,
+            full_step,
+        ),
+        variants(
+            Panel::new(
+                "time per body per step",
+                "N (bodies)",
+                "µs per body per step",
             )
-            .legend(Legend::UpperLeft),
-        Panel::new(
-            "time per body per step",
-            "N (bodies)",
-            "µs per body per step",
-        )
-        .scale(Scale::LogX)
-        .y_range(0.0, 0.5)
-        .series(
-            "modified Newton (default)",
+            .scale(Scale::LogX)
+            .y_range(0.0, 0.5),
             per_body,
-            Style::solid(crate::common::color(0)),
-        )
-        .series(
-            "full Newton",
             full_body,
-            Style::solid(crate::common::color(2)),
-        )
-        .legend(Legend::UpperLeft),
+        ),
     ];
     draw_figures("bench", out, &[("chain.png".to_string(), figure)])?;
     Ok(())

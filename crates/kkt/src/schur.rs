@@ -510,6 +510,12 @@ impl Schur {
         Ok(())
     }
 
+    /// The entries of `S` of the last factorization as `(row, column, value)`
+    /// in global unknowns.
+    fn s_global(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
+        s_global(&self.blocks, &self.coords, &self.s_entries, &self.s_values)
+    }
+
     /// `y = A x` for the last factored matrix, from the compact copies of
     /// `S`, `B` and `D` (`A = [[S, Bᵀ], [B, D]]`).
     pub(crate) fn mul(&self, x: &[f64], y: &mut [f64]) {
@@ -522,14 +528,8 @@ impl Schur {
                 *yj = s * xj;
             }
         } else {
-            for b in &self.blocks {
-                let coords = &self.coords[b.coords.clone()];
-                for (&(_, i, j), &v) in self.s_entries[b.s_entries.clone()]
-                    .iter()
-                    .zip(&self.s_values[b.s_entries.clone()])
-                {
-                    yp[coords[i]] += v * xp[coords[j]];
-                }
+            for (i, j, v) in self.s_global() {
+                yp[i] += v * xp[j];
             }
         }
         for j in 0..n {
@@ -557,14 +557,8 @@ impl Schur {
                 *w += s.abs();
             }
         } else {
-            for b in &self.blocks {
-                let coords = &self.coords[b.coords.clone()];
-                for (&(_, i, _), &v) in self.s_entries[b.s_entries.clone()]
-                    .iter()
-                    .zip(&self.s_values[b.s_entries.clone()])
-                {
-                    wp[coords[i]] += v.abs();
-                }
+            for (i, _, v) in s_global(&self.blocks, &self.coords, &self.s_entries, &self.s_values) {
+                wp[i] += v.abs();
             }
         }
         for (&(_, r, _), &v) in self.d_all.iter().zip(&self.d_values) {
@@ -632,6 +626,23 @@ impl Schur {
             }
         }
     }
+}
+
+/// The entries of block-diagonal `S` as `(row, column, value)` in global
+/// unknowns (free function so that callers may hold other fields mutably).
+fn s_global<'a>(
+    blocks: &'a [Block],
+    coords: &'a [usize],
+    s_entries: &'a [(usize, usize, usize)],
+    s_values: &'a [f64],
+) -> impl Iterator<Item = (usize, usize, f64)> + 'a {
+    blocks.iter().flat_map(move |b| {
+        let local = &coords[b.coords.clone()];
+        s_entries[b.s_entries.clone()]
+            .iter()
+            .zip(&s_values[b.s_entries.clone()])
+            .map(move |(&(_, i, j), &v)| (local[i], local[j], v))
+    })
 }
 
 /// `C` and how it is factored.
