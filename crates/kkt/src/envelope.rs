@@ -16,31 +16,33 @@ use crate::sparse_ldlt::PIVOT_TOLERANCE;
 /// The envelope structure, the matrix values, then the factor in place.
 #[derive(Clone, Debug)]
 pub(crate) struct EnvelopeLdlt {
-    /// First stored column of each row.
-    first: Vec<usize>,
-    /// Start of each row in `values` (`n + 1` entries); the diagonal is last.
-    row_ptr: Vec<usize>,
+    /// Start of each row in `values` (`n + 1` entries). Row `i` holds columns
+    /// `first(i) ..= i`, the diagonal last. 32 bits: the solve streams these
+    /// from memory for a long chain.
+    row_ptr: Vec<u32>,
     /// The lower envelope of the matrix (after [`values_mut`] filling), then
     /// `L` below the diagonal and `D` on it.
     values: Vec<f64>,
+    /// `D` again, contiguous (one read per row in the solve, not a cache line).
+    d: Vec<f64>,
 }
 
 impl EnvelopeLdlt {
     /// The envelope of `n` rows whose first stored columns are `first`
-    /// (`first[i] ≤ i`).
-    pub(crate) fn new(first: Vec<usize>) -> Self {
+    /// (`first[i] ≤ i`); `None` if it has more than `u32::MAX` values.
+    pub(crate) fn new(first: &[usize]) -> Option<Self> {
         let mut row_ptr = Vec::with_capacity(first.len() + 1);
+        let mut len = 0usize;
         row_ptr.push(0);
         for (i, &f) in first.iter().enumerate() {
-            let start = row_ptr[i];
-            row_ptr.push(start + i + 1 - f.min(i));
+            len += i + 1 - f.min(i);
+            row_ptr.push(u32::try_from(len).ok()?);
         }
-        let len = row_ptr[first.len()];
-        Self {
-            first,
+        Some(Self {
             row_ptr,
             values: vec![0.0; len],
-        }
+            d: vec![0.0; first.len()],
+        })
     }
 
     /// The size of the envelope (stored values).
@@ -48,10 +50,17 @@ impl EnvelopeLdlt {
         self.values.len()
     }
 
-    /// Position of entry `(r, s)`, `first[r] ≤ s ≤ r`, in the values.
+    /// The positions of row `i` in `values` and its first stored column.
+    #[inline]
+    fn row(&self, i: usize) -> (std::ops::Range<usize>, usize) {
+        row_of(&self.row_ptr, i)
+    }
+
+    /// Position of entry `(r, s)`, `first(r) ≤ s ≤ r`, in the values.
     pub(crate) fn slot(&self, r: usize, s: usize) -> usize {
-        debug_assert!(self.first[r] <= s && s <= r);
-        self.row_ptr[r] + s - self.first[r]
+        let (range, first) = self.row(r);
+        debug_assert!(first <= s && s <= r);
+        range.start + s - first
     }
 
     /// The values to fill with the matrix's lower envelope before
@@ -63,15 +72,15 @@ impl EnvelopeLdlt {
     /// Factors in place: `L D Lᵀ`. `Err(i)` when the pivot of row `i` is zero
     /// at the rounding level (row `i` depends on the rows before it).
     pub(crate) fn factor(&mut self) -> Result<(), usize> {
-        let n = self.first.len();
+        let n = self.d.len();
         for i in 0..n {
-            let fi = self.first[i];
-            let (done, rest) = self.values.split_at_mut(self.row_ptr[i]);
-            let row = &mut rest[..i + 1 - fi];
+            let (range, fi) = self.row(i);
+            let (done, rest) = self.values.split_at_mut(range.start);
+            let row = &mut rest[..range.len()];
             // t_ij = c_ij − Σ_{k<j} t_ik l_jk  (t_ik = l_ik d_k), for j < i.
             for j in fi..i {
-                let fj = self.first[j];
-                let lj = &done[self.row_ptr[j]..self.row_ptr[j + 1]];
+                let (rj, fj) = row_of(&self.row_ptr, j);
+                let lj = &done[rj];
                 let k0 = fi.max(fj);
                 let mut t = row[j - fi];
                 for k in k0..j {
@@ -83,9 +92,8 @@ impl EnvelopeLdlt {
             let c_ii = row[i - fi];
             let (mut d, mut scale) = (c_ii, c_ii.abs());
             for j in fi..i {
-                let d_j = done[self.row_ptr[j + 1] - 1];
                 let t = row[j - fi];
-                let l = t / d_j;
+                let l = t / self.d[j];
                 row[j - fi] = l;
                 d -= t * l;
                 scale += (t * l).abs();
@@ -94,35 +102,44 @@ impl EnvelopeLdlt {
                 return Err(i);
             }
             row[i - fi] = d;
+            self.d[i] = d;
         }
         Ok(())
     }
 
     /// Solves `L D Lᵀ x = b` in place with the last factorization.
     pub(crate) fn solve_in_place(&self, x: &mut [f64]) {
-        let n = self.first.len();
+        let n = self.d.len();
         // L z = b.
         for i in 0..n {
-            let fi = self.first[i];
-            let row = &self.values[self.row_ptr[i]..self.row_ptr[i + 1] - 1];
+            let (range, fi) = self.row(i);
+            let row = &self.values[range.start..range.end - 1];
             let s: f64 = row.iter().zip(&x[fi..i]).map(|(l, z)| l * z).sum();
             x[i] -= s;
         }
-        // D.
-        for (i, xi) in x.iter_mut().enumerate() {
-            *xi /= self.values[self.row_ptr[i + 1] - 1];
+        // D w = z (a separate pass: a division in the sweep above would
+        // lengthen its chain of dependent operations).
+        for (xi, &d) in x.iter_mut().zip(&self.d) {
+            *xi /= d;
         }
-        // Lᵀ x = D⁻¹ z from the last row up: x_i is final once the rows below
+        // Lᵀ x = w from the last row up: x_i is final once the rows below
         // it have been subtracted.
         for i in (0..n).rev() {
-            let fi = self.first[i];
-            let row = &self.values[self.row_ptr[i]..self.row_ptr[i + 1] - 1];
+            let (range, fi) = self.row(i);
+            let row = &self.values[range.start..range.end - 1];
             let xi = x[i];
             for (xk, l) in x[fi..i].iter_mut().zip(row) {
                 *xk -= l * xi;
             }
         }
     }
+}
+
+/// Row `i`'s positions in the values and its first stored column.
+#[inline]
+fn row_of(row_ptr: &[u32], i: usize) -> (std::ops::Range<usize>, usize) {
+    let (start, end) = (row_ptr[i] as usize, row_ptr[i + 1] as usize);
+    (start..end, i + 1 - (end - start))
 }
 
 #[cfg(test)]
@@ -148,7 +165,7 @@ mod tests {
     fn solves_a_band_system() {
         let n = 40;
         let (first, a) = example(n);
-        let mut env = EnvelopeLdlt::new(first.clone());
+        let mut env = EnvelopeLdlt::new(&first).expect("small");
         for i in 0..n {
             for j in first[i]..=i {
                 let k = env.slot(i, j);
@@ -170,7 +187,7 @@ mod tests {
     fn a_dependent_row_is_named() {
         // Row 2 = row 1 in a semidefinite matrix: [[1,1,1],[1,1,1],[1,1,1]]
         // has its second pivot zero.
-        let mut env = EnvelopeLdlt::new(vec![0, 0, 0]);
+        let mut env = EnvelopeLdlt::new(&[0, 0, 0]).expect("small");
         for i in 0..3 {
             for j in 0..=i {
                 let k = env.slot(i, j);

@@ -29,7 +29,7 @@
 
 use crate::envelope::EnvelopeLdlt;
 use crate::sparse_ldlt::{SparseLdlt, kkt_ordering};
-use crate::{Csc, KktError};
+use crate::{Csc, KktError, max_abs};
 
 /// The largest diagonal block of `S` that the Schur backend inverts densely.
 pub const MAX_BLOCK: usize = 12;
@@ -112,10 +112,13 @@ pub(crate) struct Schur {
     /// Scratch of length `n_primal` and `m` (in `C`'s order).
     x: Vec<f64>,
     y: Vec<f64>,
-    /// The `B` entries of the KKT matrix by primal column: `(position of the
-    /// row in C's order, position in the KKT values)`.
-    b_col_ptr: Vec<usize>,
-    b_cols: Vec<(u32, u32)>,
+    /// The `B` entries of the KKT matrix by primal column (column `j`'s are
+    /// `b_col_ptr[j]..b_col_ptr[j + 1]`): the position of the row in C's
+    /// order, and the position in the KKT values. Apart and on 32 bits: the
+    /// solve reads the rows only, and at 10⁵ bodies it streams them from memory.
+    b_col_ptr: Vec<u32>,
+    b_rows: Vec<u32>,
+    b_pos: Vec<u32>,
     /// Whether `C`'s order is the constraints' own (`c_fwd` the identity).
     natural: bool,
     /// Absolute row sums of the last factored matrix (`n + m`).
@@ -260,13 +263,15 @@ impl Schur {
         let first: Vec<usize> = (0..m)
             .map(|i| c_orig.row_idx[c_orig.col_ptr[i]..c_orig.col_ptr[i + 1]][0].min(i))
             .collect();
-        let envelope = EnvelopeLdlt::new(first);
+        // (None: too large for its 32-bit row pointers.)
+        let envelope = EnvelopeLdlt::new(&first);
         let (c_fwd, c_inv) = kkt_ordering(&c_orig, m, Default::default())?;
         let mut permuted: Vec<(usize, usize)> =
             pattern.iter().map(|&(s, r)| (c_inv[s], c_inv[r])).collect();
         let c_amd = csc_of(m, &mut permuted);
         let amd = SparseLdlt::preordered(&c_amd)?;
-        let (c_fwd, c_inv, cf) = if envelope.len() as f64 <= FILL_SLACK * amd.factor_len() as f64 {
+        let narrow = envelope.filter(|e| e.len() as f64 <= FILL_SLACK * amd.factor_len() as f64);
+        let (c_fwd, c_inv, cf) = if let Some(envelope) = narrow {
             let identity: Vec<usize> = (0..m).collect();
             (identity.clone(), identity, CFactor::Envelope(envelope))
         } else {
@@ -321,23 +326,23 @@ impl Schur {
             .map(|(k, &(_, r, s))| (k, slot(c, c_inv[r], c_inv[s])))
             .collect();
         // B by primal column, rows in C's order, for the products in the solve.
-        let (mut b_col_ptr, mut b_cols) = (vec![0; n + 1], Vec::new());
+        let fits = |x: usize| {
+            u32::try_from(x).map_err(|_| {
+                KktError::Structure(
+                    "the Schur backend indexes the KKT entries with 32 bits".to_string(),
+                )
+            })
+        };
+        let (mut b_col_ptr, mut b_rows, mut b_pos) = (vec![0; n + 1], Vec::new(), Vec::new());
         for j in 0..n {
             for p in a.col_ptr[j]..a.col_ptr[j + 1] {
                 let i = a.row_idx[p];
                 if i >= n {
-                    let fits = |x: usize| {
-                        u32::try_from(x).map_err(|_| {
-                            KktError::Structure(
-                                "the Schur backend indexes the KKT entries with 32 bits"
-                                    .to_string(),
-                            )
-                        })
-                    };
-                    b_cols.push((fits(c_inv[i - n])?, fits(p)?));
+                    b_rows.push(fits(c_inv[i - n])?);
+                    b_pos.push(fits(p)?);
                 }
             }
-            b_col_ptr[j + 1] = b_cols.len();
+            b_col_ptr[j + 1] = fits(b_rows.len())?;
         }
         let diagonal = this.coords.iter().enumerate().all(|(i, &c)| i == c)
             && blocks.iter().all(|b| b.coords.len() == 1);
@@ -379,11 +384,12 @@ impl Schur {
             w: vec![0.0; max_rows * max_k],
             x: vec![0.0; n],
             y: vec![0.0; m],
-            b_values: vec![0.0; b_cols.len()],
+            b_values: vec![0.0; b_rows.len()],
             natural,
             row_sums: vec![0.0; a.n],
             b_col_ptr,
-            b_cols,
+            b_rows,
+            b_pos,
         })
     }
 
@@ -408,8 +414,8 @@ impl Schur {
         let (wp, wm) = self.row_sums.split_at_mut(n);
         for (j, w) in wp.iter_mut().enumerate() {
             let mut column = 0.0;
-            for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
-                let (row, p) = self.b_cols[q];
+            for q in range(&self.b_col_ptr, j) {
+                let (row, p) = (self.b_rows[q], self.b_pos[q]);
                 let v = values[p as usize];
                 self.b_values[q] = v;
                 finite += 0.0 * v;
@@ -467,7 +473,7 @@ impl Schur {
             }
             let inv = 1.0 / s;
             *inv_j = inv;
-            let bv = &self.b_values[self.b_col_ptr[j]..self.b_col_ptr[j + 1]];
+            let bv = &self.b_values[range(&self.b_col_ptr, j)];
             for &(r, s, slot) in &self.pairs[self.pair_ptr[j]..self.pair_ptr[j + 1]] {
                 c_values[slot as usize] += bv[usize::from(r)] * inv * bv[usize::from(s)];
             }
@@ -534,8 +540,8 @@ impl Schur {
         }
         for j in 0..n {
             let (mut acc, xj) = (yp[j], xp[j]);
-            for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
-                let row = self.b_cols[q].0 as usize;
+            for q in range(&self.b_col_ptr, j) {
+                let row = self.b_rows[q] as usize;
                 let r = if self.natural { row } else { self.c_fwd[row] };
                 acc += self.b_values[q] * xm[r];
                 ym[r] += self.b_values[q] * xj;
@@ -567,10 +573,44 @@ impl Schur {
         self.row_sums.iter().fold(0.0, |m: f64, &x| m.max(x))
     }
 
-    /// Solves in place with the last factorization.
-    pub(crate) fn solve_in_place(&mut self, rhs: &mut [f64]) {
+    /// Solves in place with the last factorization; returns `‖x‖∞` (as
+    /// [`max_abs`] would).
+    pub(crate) fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64 {
         let n = self.n_primal;
         let (f, g) = rhs.split_at_mut(n);
+        if self.diagonal && self.natural {
+            // The same steps as below in two sweeps over B and no scratch
+            // (each pass over B at 10⁵ bodies streams it from memory):
+            // g ← B S⁻¹ f − g, g ← C⁻¹ g, f ← S⁻¹ (f − Bᵀ g).
+            for gr in g.iter_mut() {
+                *gr = -*gr;
+            }
+            for (j, (&fj, &inv)) in f.iter().zip(&self.inverse).enumerate() {
+                let xj = inv * fj;
+                for q in range(&self.b_col_ptr, j) {
+                    g[self.b_rows[q] as usize] += self.b_values[q] * xj;
+                }
+            }
+            self.cf.solve_in_place(g);
+            // ‖f‖∞ on the way; `0 · x` carries a NaN or an infinity.
+            let (mut f_max, mut nan) = (0.0f64, 0.0f64);
+            for (j, (fj, &inv)) in f.iter_mut().zip(&self.inverse).enumerate() {
+                let mut s = *fj;
+                for q in range(&self.b_col_ptr, j) {
+                    s -= self.b_values[q] * g[self.b_rows[q] as usize];
+                }
+                let x = inv * s;
+                *fj = x;
+                f_max = if x.abs() > f_max { x.abs() } else { f_max };
+                nan += 0.0 * x;
+            }
+            return if nan.is_nan() {
+                // A NaN or an infinity: max_abs tells which (a rare path).
+                max_abs(rhs)
+            } else {
+                f_max.max(max_abs(g))
+            };
+        }
         // y = −g in C's order, x = S⁻¹ f, then y += B x: C y = B S⁻¹ f − g.
         if self.natural {
             for (y, &gr) in self.y.iter_mut().zip(g.iter()) {
@@ -584,16 +624,16 @@ impl Schur {
         self.apply_inverse(f);
         for j in 0..n {
             let xj = self.x[j];
-            for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
-                self.y[self.b_cols[q].0 as usize] += self.b_values[q] * xj;
+            for q in range(&self.b_col_ptr, j) {
+                self.y[self.b_rows[q] as usize] += self.b_values[q] * xj;
             }
         }
         self.cf.solve_in_place(&mut self.y);
         // x = S⁻¹ (f − Bᵀ y).
         for (j, fj) in f.iter_mut().enumerate() {
             let mut s = *fj;
-            for q in self.b_col_ptr[j]..self.b_col_ptr[j + 1] {
-                s -= self.b_values[q] * self.y[self.b_cols[q].0 as usize];
+            for q in range(&self.b_col_ptr, j) {
+                s -= self.b_values[q] * self.y[self.b_rows[q] as usize];
             }
             *fj = s;
         }
@@ -606,6 +646,7 @@ impl Schur {
                 *gr = self.y[self.c_inv[r]];
             }
         }
+        max_abs(rhs)
     }
 
     /// `self.x = S⁻¹ f` block by block.
@@ -626,6 +667,13 @@ impl Schur {
             }
         }
     }
+}
+
+/// The positions `ptr[j]..ptr[j + 1]` (column `j`'s `B` entries in `b_rows`,
+/// `b_pos`, `b_values`).
+#[inline]
+fn range(ptr: &[u32], j: usize) -> std::ops::Range<usize> {
+    ptr[j] as usize..ptr[j + 1] as usize
 }
 
 /// The entries of block-diagonal `S` as `(row, column, value)` in global

@@ -101,6 +101,50 @@ impl Coefficients {
     }
 }
 
+/// `B`'s entries by column, for `(Bᵀλ)_j = Σ_q b[pos_q] λ[row_q]` in one
+/// pass that also forms the residual. In each column the entries keep the
+/// order of `B`'s values, so the sums are those of a scatter over the values.
+#[derive(Clone, Debug)]
+struct BtGather {
+    /// Column `j`'s entries are `col_ptr[j]..col_ptr[j + 1]`.
+    col_ptr: Vec<u32>,
+    /// `(position in B's values, row)`.
+    entries: Vec<(u32, u32)>,
+}
+
+impl BtGather {
+    /// `None` when the indices do not fit in 32 bits.
+    fn new(b: &Pattern) -> Option<Self> {
+        let mut counts = vec![0usize; b.ncols + 1];
+        for &(_, j) in &b.entries {
+            counts[j + 1] += 1;
+        }
+        for j in 0..b.ncols {
+            counts[j + 1] += counts[j];
+        }
+        let col_ptr = counts
+            .into_iter()
+            .map(|c| u32::try_from(c).ok())
+            .collect::<Option<Vec<u32>>>()?;
+        let mut next: Vec<u32> = col_ptr[..b.ncols].to_vec();
+        let mut entries = vec![(0u32, 0u32); b.entries.len()];
+        for (p, &(i, j)) in b.entries.iter().enumerate() {
+            entries[next[j] as usize] = (u32::try_from(p).ok()?, u32::try_from(i).ok()?);
+            next[j] += 1;
+        }
+        Some(Self { col_ptr, entries })
+    }
+
+    /// `(Bᵀλ)_j`.
+    #[inline]
+    fn column(&self, j: usize, b: &[f64], lambda: &[f64]) -> f64 {
+        let range = self.col_ptr[j] as usize..self.col_ptr[j + 1] as usize;
+        self.entries[range]
+            .iter()
+            .fold(0.0, |s, &(p, i)| s + b[p as usize] * lambda[i as usize])
+    }
+}
+
 /// Residual, constraints, Jacobians and the KKT matrix of one [`System`], with
 /// every buffer allocated once in [`Linearization::new`].
 ///
@@ -116,8 +160,11 @@ pub struct Linearization {
     fill_transpose: bool,
     /// Whether `mass` holds a constant `M` already.
     mass_ready: bool,
-    /// `B`'s `(row, column)` entries on 32 bits (empty if they do not fit).
-    b_compact: Vec<(u32, u32)>,
+    /// Whether `g` holds constant forces already.
+    forces_ready: bool,
+    /// `B`'s entries by column on 32 bits, for `Bᵀλ` (`None` if they do not
+    /// fit).
+    bt_gather: Option<BtGather>,
     /// Whether `M`'s pattern is its diagonal in order (`M ü = m ⊙ ü`).
     mass_diagonal: bool,
     mass_pattern: Pattern,
@@ -137,11 +184,15 @@ pub struct Linearization {
     pub g_v: Vec<f64>,
     /// Values of `∂(M ü)/∂u`.
     pub mass_du: Vec<f64>,
-    /// Forces `g` (eq. 3).
+    /// Forces `g` (eq. 3). Constant forces ([`System::forces_are_constant`])
+    /// are evaluated by the first [`eval_residual`](Self::eval_residual) only,
+    /// like a constant `M`.
     pub g: Vec<f64>,
-    /// Constraint force `Bᵀλ` (eq. 1).
-    pub bt_lambda: Vec<f64>,
-    /// Inertia force `M ü`.
+    /// Constraint force `Bᵀλ` (eq. 1), stored only when `B`'s indices do not
+    /// fit in 32 bits (else formed in the residual's own pass).
+    bt_lambda: Vec<f64>,
+    /// Inertia force `M ü` for a non-diagonal `M`; empty for a diagonal one,
+    /// whose `M ü` is formed in the residual's own pass and not stored.
     pub m_a: Vec<f64>,
     /// Residual `r = g − Bᵀλ − M ü` (the paper's γ, eq. 3).
     pub r: Vec<f64>,
@@ -151,6 +202,8 @@ pub struct Linearization {
     force_scale: f64,
     /// `‖r‖∞` of the last residual evaluation (NaN if `r` has a NaN).
     r_max: f64,
+    /// `‖Φ‖∞` of the last residual evaluation.
+    phi_max: f64,
     kkt: Csc,
     slots: KktSlots,
     bb_pairs: Vec<(usize, usize)>,
@@ -288,12 +341,7 @@ impl Linearization {
         let mut ms = ms.into_iter();
         let m_star_mass = ms.next().unwrap_or_default();
         let m_star_bb = ms.next().unwrap_or_default();
-        let b_compact = b_pattern
-            .entries
-            .iter()
-            .map(|&(i, j)| Some((u32::try_from(i).ok()?, u32::try_from(j).ok()?)))
-            .collect::<Option<Vec<_>>>()
-            .unwrap_or_default();
+        let bt_gather = BtGather::new(&b_pattern);
         let mass_diagonal = mass_pattern.len() == n
             && mass_pattern
                 .entries
@@ -306,7 +354,13 @@ impl Linearization {
             augmented,
             fill_transpose: true,
             mass_ready: false,
-            b_compact,
+            forces_ready: false,
+            bt_lambda: if bt_gather.is_some() {
+                Vec::new()
+            } else {
+                vec![0.0; n]
+            },
+            bt_gather,
             mass_diagonal,
             mass: vec![0.0; mass_pattern.len()],
             b: vec![0.0; b_pattern.len()],
@@ -315,12 +369,16 @@ impl Linearization {
             g_v: vec![0.0; g_v_pattern.len()],
             mass_du: vec![0.0; mass_du_pattern.len()],
             g: vec![0.0; n],
-            bt_lambda: vec![0.0; n],
-            m_a: vec![0.0; n],
+            m_a: if mass_diagonal {
+                Vec::new()
+            } else {
+                vec![0.0; n]
+            },
             r: vec![0.0; n],
             phi: vec![0.0; m],
             force_scale: 0.0,
             r_max: 0.0,
+            phi_max: 0.0,
             bb_values: vec![0.0; bb_pairs.len()],
             mass_pattern,
             b_pattern,
@@ -408,39 +466,48 @@ impl Linearization {
             self.mass_ready = true;
         }
         sys.phi_b_into(t, u, &mut self.phi, &mut self.b);
-        sys.forces_into(t, u, v, &mut self.g);
-        self.bt_lambda.fill(0.0);
-        if self.b_compact.is_empty() && !self.b.is_empty() {
+        if !(self.forces_ready && sys.forces_are_constant()) {
+            sys.forces_into(t, u, v, &mut self.g);
+            self.forces_ready = true;
+        }
+        if self.bt_gather.is_none() {
+            self.bt_lambda.fill(0.0);
             self.b_pattern
                 .mul_transpose_add(&self.b, lambda, &mut self.bt_lambda);
-        } else {
-            // The same product on 32-bit indices: half the memory traffic.
-            for (&(i, j), &b) in self.b_compact.iter().zip(&self.b) {
-                self.bt_lambda[j as usize] += b * lambda[i as usize];
-            }
         }
         if !self.mass_diagonal {
             self.m_a.fill(0.0);
             self.mass_pattern.mul_add(&self.mass, a, &mut self.m_a);
         }
-        // r and, in the same pass, the force scale and ‖r‖∞ (and M ü for a
-        // diagonal M).
-        let (mut scale, mut r_max) = (0.0f64, 0.0f64);
-        for i in 0..self.n {
-            if self.mass_diagonal {
-                self.m_a[i] = self.mass[i] * a[i];
-            }
-            let (g, bl, ma) = (self.g[i], self.bt_lambda[i], self.m_a[i]);
-            let r = g - bl - ma;
-            self.r[i] = r;
-            scale = scale.max(g.abs()).max(bl.abs()).max(ma.abs());
-            r_max = r_max.max(r.abs());
-            if r.is_nan() {
-                r_max = f64::NAN;
-            }
+        // r and, in the same pass, the force scale and ‖r‖∞, with Bᵀλ (32-bit
+        // indices) and M ü (diagonal M) formed on the way, not stored: at 10⁵
+        // bodies every stored vector is a pass through memory.
+        let (mut scale, mut r_max, mut nan) = (0.0f64, 0.0f64, 0.0f64);
+        let bigger = |m: f64, x: f64| if x > m { x } else { m };
+        let (b, mass, m_a, bt_lambda) = (&self.b, &self.mass, &self.m_a, &self.bt_lambda);
+        let gather = self.bt_gather.as_ref();
+        let diagonal = self.mass_diagonal;
+        for (i, (r, &g)) in self.r.iter_mut().zip(&self.g).enumerate() {
+            let bl = match gather {
+                Some(gather) => gather.column(i, b, lambda),
+                None => bt_lambda[i],
+            };
+            let ma = if diagonal { mass[i] * a[i] } else { m_a[i] };
+            *r = g - bl - ma;
+            // Plain comparisons, one per running maximum: f64::max's NaN
+            // rules cost a blend each, in the loop's chain of dependences.
+            let local = bigger(bigger(g.abs(), bl.abs()), ma.abs());
+            scale = bigger(scale, local);
+            r_max = bigger(r_max, r.abs());
+            nan += 0.0 * *r;
+        }
+        // `0 · r` is NaN for a NaN or an infinite rᵢ; f64::max drops NaNs.
+        if nan.is_nan() && r_max.is_finite() {
+            r_max = f64::NAN;
         }
         self.force_scale = scale.max(max_abs(lambda));
         self.r_max = r_max;
+        self.phi_max = max_abs(&self.phi);
     }
 
     /// Evaluates the parts of `K_T` and `C_T` (eqs. 6-7): the constraint Hessian
@@ -512,17 +579,26 @@ impl Linearization {
         &self.kkt
     }
 
-    /// The right-hand side of (16), `[scale·r; −Φ]`.
+    /// The right-hand side of (16), `[scale·r; −Φ]`; returns its `‖·‖∞`
+    /// (for [`mstar_kkt::KktSolver::solve_in_place_with_norm`]).
     ///
     /// # Panics
     /// If `rhs` is not of length `n + m`.
-    pub fn kkt_rhs(&self, scale: f64, rhs: &mut [f64]) {
+    pub fn kkt_rhs(&self, scale: f64, rhs: &mut [f64]) -> f64 {
         assert_eq!(rhs.len(), self.n + self.m);
         for (x, &r) in rhs[..self.n].iter_mut().zip(&self.r) {
             *x = scale * r;
         }
         for (x, &p) in rhs[self.n..].iter_mut().zip(&self.phi) {
             *x = -p;
+        }
+        // Exactly max_abs(rhs): rounding is monotone, so the largest |scale·rᵢ|
+        // is |scale|·‖r‖∞ rounded.
+        let r_part = scale.abs() * self.r_max;
+        if r_part.is_nan() || self.phi_max.is_nan() {
+            f64::NAN
+        } else {
+            r_part.max(self.phi_max)
         }
     }
 
@@ -546,7 +622,7 @@ impl Linearization {
     /// `‖Φ‖∞`, the constraint norm of the last evaluation.
     #[must_use]
     pub fn constraint_norm(&self) -> f64 {
-        max_abs(&self.phi)
+        self.phi_max
     }
 
     /// The size of the forces and multipliers that balance in eq. (3):

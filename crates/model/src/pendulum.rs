@@ -155,6 +155,10 @@ impl System for PendulumChain {
         }
     }
 
+    fn forces_are_constant(&self) -> bool {
+        true
+    }
+
     fn forces_into(&self, _t: f64, _u: &[f64], _v: &[f64], g: &mut [f64]) {
         for (k, link) in self.links.iter().enumerate() {
             g[3 * k] = 0.0;

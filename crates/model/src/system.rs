@@ -43,6 +43,13 @@ pub trait System: Send + Sync {
         false
     }
 
+    /// Whether `g` depends on none of `u`, `u̇`, `t` (default: `false`). When
+    /// it does not, callers may evaluate it once; `∂g/∂u` and `∂g/∂u̇` must then
+    /// be zero.
+    fn forces_are_constant(&self) -> bool {
+        false
+    }
+
     /// Generalized forces `g(u, u̇, t)`: external, internal and complementary
     /// inertia forces (eq. 3), size `n`.
     fn forces_into(&self, t: f64, u: &[f64], v: &[f64], g: &mut [f64]);

@@ -521,9 +521,9 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                 force_refactor = false;
                 previous_step = f64::INFINITY;
             }
-            self.lin.kkt_rhs(coefficients.scale, &mut self.rhs);
+            let rhs_norm = self.lin.kkt_rhs(coefficients.scale, &mut self.rhs);
             self.solver
-                .solve_in_place(&mut self.rhs)
+                .solve_in_place_with_norm(&mut self.rhs, rhs_norm)
                 .map_err(Failure::Kkt)?;
             // Corrector (15).
             let (du, dl) = self.rhs.split_at(n);

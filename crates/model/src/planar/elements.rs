@@ -180,21 +180,11 @@ impl Constraint {
 
     /// Constraint values `Φ` and `∂Φ/∂q` (in the order of [`Constraint::grad`])
     /// with the attachment points computed once.
-    pub(crate) fn phi_grad(
-        &self,
-        t: f64,
-        u: &[f64],
-        trig: &[(f64, f64)],
-        phi: &mut [f64],
-        grad: &mut [f64],
-    ) {
+    pub(crate) fn phi_grad(&self, t: f64, u: &[f64], phi: &mut [f64], grad: &mut [f64]) {
         let pts = if let Joint::Driver { .. } = self.joint {
             [Pt::default(); 2]
         } else {
-            [
-                self.anchors[0].point_cached(u, trig),
-                self.anchors[1].point_cached(u, trig),
-            ]
+            [self.anchors[0].point(u), self.anchors[1].point(u)]
         };
         self.phi_at(t, u, &pts, phi);
         self.grad_at(u, &pts, grad);
@@ -512,6 +502,9 @@ impl Force {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RevoluteKernel {
     anchors: [Anchor; 2],
+    /// For each rigid side, the position of its body's `(sin θ, cos θ)` in
+    /// the table [`phi_b`](Self::phi_b) is given.
+    trig: [u32; 2],
     /// First global constraint row.
     row0: usize,
     /// Offsets of the element's entries in the B and Hessian value buffers.
@@ -525,9 +518,21 @@ impl RevoluteKernel {
         (self.row0, self.b_off, self.h_off)
     }
 
-    /// The kernel of `c`, if it is a revolute joint.
-    pub(crate) fn of(c: &Constraint, b_off: usize, h_off: usize) -> Option<Self> {
+    /// The kernel of `c`, if it is a revolute joint; `trig_slot(θ)` is the
+    /// position of `(sin θ, cos θ)` in the table of [`phi_b`](Self::phi_b)
+    /// for the angle coordinate `θ`.
+    pub(crate) fn of(
+        c: &Constraint,
+        b_off: usize,
+        h_off: usize,
+        trig_slot: impl Fn(usize) -> u32,
+    ) -> Option<Self> {
+        let slot = |a: &Anchor| match *a {
+            Anchor::Rigid { x, .. } => trig_slot(x + 2),
+            _ => 0,
+        };
         matches!(c.joint, Joint::Revolute).then_some(Self {
+            trig: [slot(&c.anchors[0]), slot(&c.anchors[1])],
             anchors: c.anchors,
             row0: c.row0,
             b_off,
@@ -547,8 +552,14 @@ impl RevoluteKernel {
         b: &mut [f64],
         base: (usize, usize),
     ) {
-        let pa = self.anchors[0].point_cached(u, trig);
-        let pb = self.anchors[1].point_cached(u, trig);
+        let point = |k: usize| {
+            let a = &self.anchors[k];
+            match a {
+                Anchor::Rigid { .. } => a.point_at(u, trig[self.trig[k] as usize]),
+                _ => a.point(u),
+            }
+        };
+        let (pa, pb) = (point(0), point(1));
         let row = self.row0 - base.0;
         phi[row] = pa.p[0] - pb.p[0];
         phi[row + 1] = pa.p[1] - pb.p[1];

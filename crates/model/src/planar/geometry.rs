@@ -56,16 +56,6 @@ impl Anchor {
         }
     }
 
-    /// [`Anchor::point`] with `trig[i] = (sin u_i, cos u_i)` precomputed for
-    /// every angle coordinate `i`.
-    #[inline]
-    pub(crate) fn point_cached(&self, u: &[f64], trig: &[(f64, f64)]) -> Pt {
-        match *self {
-            Self::Rigid { x, .. } => self.point_at(u, trig[x + 2]),
-            _ => self.point_at(u, (0.0, 1.0)),
-        }
-    }
-
     /// Global indices of `(x, y, θ)` of the anchor's body (`None` where absent).
     pub(crate) fn coords(&self) -> [Option<usize>; 3] {
         match *self {

@@ -23,7 +23,8 @@ use rayon::prelude::*;
 use crate::{Pattern, System};
 
 thread_local! {
-    /// Scratch for `(sin θ, cos θ)` per coordinate during one evaluation.
+    /// Scratch for `(sin θ, cos θ)` of each rigid body's angle (in the order of
+    /// `PlanarSystem::angles`) during one evaluation.
     static TRIG: std::cell::RefCell<Vec<(f64, f64)>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
@@ -539,19 +540,24 @@ impl PlanarSystem {
             gu.extend(global_pairs(&f.slots, &f.g_u));
             gv.extend(global_pairs(&f.slots, &f.g_v));
         }
-        let (mut revolutes, mut others) = (Vec::new(), Vec::new());
-        for (i, c) in constraints.iter().enumerate() {
-            match RevoluteKernel::of(c, b_offsets[i], h_offsets[i]) {
-                Some(k) => revolutes.push(k),
-                None => others.push(i),
-            }
-        }
-        let angles = builder
+        let angles: Vec<usize> = builder
             .bodies
             .iter()
             .filter(|b| b.inertia.is_some())
             .map(|b| b.x + 2)
             .collect();
+        // Position of each angle's (sin θ, cos θ) in the table of phi_b_into.
+        let mut trig_slot = vec![0u32; n];
+        for (k, &x) in angles.iter().enumerate() {
+            trig_slot[x] = u32::try_from(k).unwrap_or(u32::MAX);
+        }
+        let (mut revolutes, mut others) = (Vec::new(), Vec::new());
+        for (i, c) in constraints.iter().enumerate() {
+            match RevoluteKernel::of(c, b_offsets[i], h_offsets[i], |x| trig_slot[x]) {
+                Some(k) => revolutes.push(k),
+                None => others.push(i),
+            }
+        }
         Self {
             revolutes,
             others,
@@ -648,6 +654,11 @@ impl System for PlanarSystem {
         }
     }
 
+    fn forces_are_constant(&self) -> bool {
+        // Gravity alone.
+        self.forces.is_empty()
+    }
+
     fn forces_into(&self, t: f64, u: &[f64], v: &[f64], g: &mut [f64]) {
         // Every coordinate belongs to a body: gravity writes all of g.
         for b in &self.bodies {
@@ -699,11 +710,13 @@ impl System for PlanarSystem {
     }
 
     fn phi_b_into(&self, t: f64, u: &[f64], phi: &mut [f64], b: &mut [f64]) {
-        // Each body's (sin θ, cos θ) once, not once per joint it takes part in.
+        // Each body's (sin θ, cos θ) once, not once per joint it takes part
+        // in, in a table of the angles alone (no gaps: at 10⁵ bodies it is
+        // written and read through memory).
         TRIG.with_borrow_mut(|trig| {
-            trig.resize(self.n, (0.0, 1.0));
-            for &x in &self.angles {
-                trig[x] = u[x].sin_cos();
+            trig.resize(self.angles.len(), (0.0, 1.0));
+            for (t, &x) in trig.iter_mut().zip(&self.angles) {
+                *t = u[x].sin_cos();
             }
             let trig: &[(f64, f64)] = trig;
             let revolutes = |ks: &[RevoluteKernel], phi: &mut [f64], b: &mut [f64], base| {
@@ -728,7 +741,6 @@ impl System for PlanarSystem {
                 c.phi_grad(
                     t,
                     u,
-                    trig,
                     &mut phi[c.row0..c.row0 + c.rows],
                     &mut b[off..off + c.grad.len()],
                 );
