@@ -9,26 +9,20 @@ use mstar_model::planar::{At, PlanarBuilder, PlanarSystem, bar_chain};
 use mstar_model::{Link, PendulumChain, System};
 use proptest::prelude::*;
 
-/// `g − Bᵀλ − M ü` from the dense matrices.
-fn definition<S: System>(
-    sys: &S,
-    t: f64,
-    u: &[f64],
-    v: &[f64],
-    a: &[f64],
-    lambda: &[f64],
-) -> Vec<f64> {
+/// `g − Bᵀλ − M ü` at `t` from the dense matrices, for the state
+/// `s = [u, u̇, ü, λ]`.
+fn definition<S: System>(sys: &S, t: f64, s: &[f64]) -> Vec<f64> {
     let (n, m) = (sys.n_coords(), sys.n_constraints());
-    let mut mass = vec![0.0; sys.mass_pattern().len()];
-    sys.mass_into(t, u, &mut mass);
-    let mut b = vec![0.0; sys.b_pattern().len()];
-    sys.b_into(t, u, &mut b);
+    let (u, v, a, lambda) = (&s[..n], &s[n..2 * n], &s[2 * n..3 * n], &s[3 * n..]);
+    let dense = |pattern: mstar_model::Pattern, eval: &dyn Fn(&mut [f64])| {
+        let mut values = vec![0.0; pattern.len()];
+        eval(&mut values);
+        pattern.to_dense(&values)
+    };
+    let md = dense(sys.mass_pattern(), &|x| sys.mass_into(t, u, x));
+    let bd = dense(sys.b_pattern(), &|x| sys.b_into(t, u, x));
     let mut g = vec![0.0; n];
     sys.forces_into(t, u, v, &mut g);
-    let (md, bd) = (
-        sys.mass_pattern().to_dense(&mass),
-        sys.b_pattern().to_dense(&b),
-    );
     (0..n)
         .map(|i| {
             let bl: f64 = (0..m).map(|k| bd[k][i] * lambda[k]).sum();
@@ -67,7 +61,7 @@ fn check<S: System>(sys: &S, seed: &[f64], scale: f64) -> Result<(), TestCaseErr
     {
         let (u, v, a, lambda) = (&s[..n], &s[n..2 * n], &s[2 * n..3 * n], &s[3 * n..]);
         lin.eval_residual(sys, 0.2, u, v, a, lambda);
-        let want = definition(sys, 0.2, u, v, a, lambda);
+        let want = definition(sys, 0.2, s);
         for (i, (&r, &w)) in lin.r.iter().zip(&want).enumerate() {
             // Sums of a few terms of size ≤ 10·max(|λ|, |ü|) in another order.
             prop_assert!(
