@@ -508,3 +508,87 @@ proptest! {
         prop_assert!(relative_residual(&a, &schur, &b) <= 1e-12);
     }
 }
+
+/// `a` with the multiplier block's diagonal set to `d` (C = B S⁻¹ Bᵀ − D
+/// stays positive definite for d ≤ 0).
+fn with_multiplier_diagonal(a: &Csc, np: usize, d: f64) -> Csc {
+    let mut a = a.clone();
+    for j in np..a.n {
+        for k in a.col_ptr[j]..a.col_ptr[j + 1] {
+            if a.row_idx[k] == j {
+                a.values[k] = d;
+            }
+        }
+    }
+    a
+}
+
+#[test]
+fn the_residual_check_inside_the_schur_solve_is_the_residual() {
+    for (n_bodies, d) in [(1, 0.0), (10, 0.0), (1000, 0.0), (10, -0.3), (1000, -0.3)] {
+        let np = 3 * n_bodies;
+        let a = with_multiplier_diagonal(&chain_with(n_bodies, 8, None, false), np, d);
+        let b = vector(a.n, 5);
+        let mut s = KktSolver::new(&a, &options(Backend::Schur, n_bodies)).expect("structure");
+        s.factor(&a.values).expect("regular");
+        let crate::Inner::Schur(schur) = &mut s.inner else {
+            panic!("Schur backend")
+        };
+        assert!(
+            schur.is_banded() && schur.checks_in_solve(),
+            "a chain in order"
+        );
+        let mut x = b.clone();
+        let (x_norm, fused) = schur.solve_checked(&mut x);
+        let mut ax = vec![0.0; a.n];
+        a.mul(&x, &mut ax);
+        let explicit = ax
+            .iter()
+            .zip(&b)
+            .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
+        let scale = s.a_norm * x_norm + b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        // Both are rounding-level residuals of the same solution; they may
+        // differ only by rounding in how they are summed.
+        assert!(fused <= 1e-14 * scale, "N = {n_bodies}, d = {d}: {fused:e}");
+        assert!(
+            (fused - explicit).abs() <= 1e-14 * scale,
+            "N = {n_bodies}, d = {d}: {fused:e} vs {explicit:e}"
+        );
+        // The one-pass factorization's ‖A‖∞ is the largest absolute row sum.
+        let mut row_sums = vec![0.0f64; a.n];
+        for j in 0..a.n {
+            for k in a.col_ptr[j]..a.col_ptr[j + 1] {
+                row_sums[a.row_idx[k]] += a.values[k].abs();
+            }
+        }
+        let norm = row_sums.iter().fold(0.0f64, |m, &v| m.max(v));
+        assert!(
+            (s.a_norm - norm).abs() <= 1e-14 * norm,
+            "{} vs {norm}",
+            s.a_norm
+        );
+    }
+}
+
+#[test]
+fn a_spoiled_factorization_fails_the_check_inside_the_schur_solve() {
+    let n_bodies = 50;
+    let a = chain_with(n_bodies, 4, None, false);
+    let b = vector(a.n, 6);
+    let mut s = KktSolver::new(&a, &options(Backend::Schur, n_bodies)).expect("structure");
+    s.factor(&a.values).expect("regular");
+    if let crate::Inner::Schur(schur) = &mut s.inner {
+        schur.spoil(7, 1.5);
+    }
+    let mut x = b.clone();
+    let result = s.solve_in_place(&mut x);
+    assert!(
+        matches!(result, Err(KktError::Inaccurate { relative_residual }) if relative_residual > 1e-6),
+        "{result:?}"
+    );
+    // A fresh factorization passes again.
+    s.factor(&a.values).expect("regular");
+    let mut x = b.clone();
+    s.solve_in_place(&mut x).expect("accurate");
+    assert!(relative_residual(&a, &x, &b) <= 1e-12);
+}

@@ -63,6 +63,14 @@ impl EnvelopeLdlt {
         range.start + s - first
     }
 
+    /// Adds `v` to entry `(r, s)`, `first(r) ≤ s ≤ r`, before
+    /// [`factor`](Self::factor).
+    #[inline]
+    pub(crate) fn add(&mut self, r: usize, s: usize, v: f64) {
+        let k = self.slot(r, s);
+        self.values[k] += v;
+    }
+
     /// The values to fill with the matrix's lower envelope before
     /// [`factor`](Self::factor).
     pub(crate) fn values_mut(&mut self) -> &mut [f64] {

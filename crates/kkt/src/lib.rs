@@ -469,9 +469,14 @@ impl KktSolver {
             return Err(KktError::NonFinite);
         }
         let refine = matches!(&self.inner, Inner::SparseLdlt(l) if l.is_regularized());
-        if !self.verified || refine {
+        // The Schur backend of a chain forms the check's residual inside its
+        // solve (no copy of rhs, no product with the matrix afterwards).
+        let check_in_solve =
+            !self.verified && matches!(&self.inner, Inner::Schur(s) if s.checks_in_solve());
+        if (!self.verified && !check_in_solve) || refine {
             self.rhs.copy_from_slice(rhs);
         }
+        let mut residual_in_solve = None;
         let xn = match &mut self.inner {
             Inner::Dense(lu) => {
                 lu.solve_in_place(rhs);
@@ -488,6 +493,11 @@ impl KktSolver {
                 }
                 max_abs(rhs)
             }
+            Inner::Schur(schur) if check_in_solve => {
+                let (xn, residual) = schur.solve_checked(rhs);
+                residual_in_solve = Some(residual);
+                xn
+            }
             Inner::Schur(schur) => schur.solve_in_place(rhs),
         };
         if !xn.is_finite() {
@@ -497,15 +507,19 @@ impl KktSolver {
         // then holds for every further right-hand side, so it runs on the first
         // solve after each `factor` (modified Newton reuses factors often).
         if !self.verified {
-            match &self.inner {
-                Inner::Schur(schur) => schur.mul(rhs, &mut self.ax),
-                _ => self.a.mul(rhs, &mut self.ax),
-            }
-            let res = self
-                .ax
-                .iter()
-                .zip(&self.rhs)
-                .fold(0.0f64, |m, (ax, b)| m.max((ax - b).abs()));
+            let res = match residual_in_solve {
+                Some(res) => res,
+                None => {
+                    match &self.inner {
+                        Inner::Schur(schur) => schur.mul(rhs, &mut self.ax),
+                        _ => self.a.mul(rhs, &mut self.ax),
+                    }
+                    self.ax
+                        .iter()
+                        .zip(&self.rhs)
+                        .fold(0.0f64, |m, (ax, b)| m.max((ax - b).abs()))
+                }
+            };
             let denom = self.a_norm * xn + bn;
             let relative_residual = if denom > 0.0 { res / denom } else { 0.0 };
             if relative_residual > self.tol {

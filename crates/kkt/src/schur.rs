@@ -125,6 +125,11 @@ pub(crate) struct Schur {
     row_sums: Vec<f64>,
     /// The values of the last factored KKT matrix's `B` entries, by column.
     b_values: Vec<f64>,
+    /// `S` diagonal and `C` factored by its envelope in the constraints' own
+    /// order (a chain): [`factor`](Schur::factor) takes its one-pass path.
+    banded: bool,
+    /// `‖A‖∞` of the last factorization when its one-pass path formed it.
+    norm: Option<f64>,
 }
 
 impl Schur {
@@ -361,7 +366,17 @@ impl Schur {
         };
         let n_s_entries = this.s_entries.len();
         let natural = c_fwd.iter().enumerate().all(|(k, &r)| k == r);
+        let banded = diagonal && natural && matches!(cf, CFactor::Envelope(_));
+        // The one-pass factorization computes C's slots from the envelope:
+        // no table of pairs (8 bytes a pair, about 20 pairs a bar).
+        let (pairs, pair_ptr) = if banded {
+            (Vec::new(), Vec::new())
+        } else {
+            (pairs, pair_ptr)
+        };
         Ok(Self {
+            banded,
+            norm: None,
             n_primal: n,
             diagonal,
             diag_s,
@@ -399,6 +414,19 @@ impl Schur {
         matches!(self.cf, CFactor::Envelope(_))
     }
 
+    /// Whether the last factorization took the one-pass path.
+    #[cfg(test)]
+    pub(crate) fn is_banded(&self) -> bool {
+        self.banded
+    }
+
+    /// Spoils the last factorization (scales the inverse of `S_jj`), so that
+    /// tests can see the residual check fail.
+    #[cfg(test)]
+    pub(crate) fn spoil(&mut self, j: usize, factor: f64) {
+        self.inverse[j] *= factor;
+    }
+
     /// Inverts every block of `S`, forms `C = B S⁻¹ Bᵀ − D` and factors it.
     ///
     /// # Errors
@@ -406,6 +434,10 @@ impl Schur {
     /// block, or the multiplier whose pivot in `C` vanishes.
     pub(crate) fn factor(&mut self, values: &[f64]) -> Result<(), KktError> {
         self.cf.values_mut().fill(0.0);
+        self.norm = None;
+        if self.banded {
+            return self.factor_banded(values);
+        }
         // Gather S, B and D (all the matrix: its Bᵀ mirrors B), checking them.
         // With B, its part of the absolute row sums (for `norm_inf`).
         let mut finite = 0.0;
@@ -460,6 +492,72 @@ impl Schur {
                 unknown: unknown.map(|k| self.n_primal + self.c_fwd[k]),
             },
             e => e,
+        })
+    }
+
+    /// [`factor`](Self::factor) for a diagonal `S` and `C` in its envelope
+    /// in the constraints' own order (a chain), in one pass over the columns:
+    /// `S_jj` and column `j` of `B` gathered and checked, `C += b_r b_s / S_jj`
+    /// into slots computed from the envelope's row pointers, and the absolute
+    /// row sums of the whole matrix for `‖A‖∞` (kept in [`Self::norm`]). The
+    /// values, the errors and their order are those of the general path.
+    fn factor_banded(&mut self, values: &[f64]) -> Result<(), KktError> {
+        let n = self.n_primal;
+        let CFactor::Envelope(env) = &mut self.cf else {
+            return Err(KktError::Structure(
+                "the one-pass Schur factorization needs the envelope".to_string(),
+            ));
+        };
+        let wm = &mut self.row_sums[n..];
+        wm.fill(0.0);
+        let (mut finite, mut wp_max) = (0.0f64, 0.0f64);
+        let mut zero_pivot = None;
+        for j in 0..n {
+            let s = values[self.diag_s[j]];
+            self.s_values[j] = s;
+            finite += 0.0 * s;
+            if s == 0.0 && zero_pivot.is_none() {
+                zero_pivot = Some(j);
+            }
+            let inv = 1.0 / s;
+            self.inverse[j] = inv;
+            let col = range(&self.b_col_ptr, j);
+            let mut column = 0.0;
+            for q in col.clone() {
+                let v = values[self.b_pos[q] as usize];
+                self.b_values[q] = v;
+                finite += 0.0 * v;
+                column += v.abs();
+                wm[self.b_rows[q] as usize] += v.abs();
+            }
+            let w = column + s.abs();
+            wp_max = if w > wp_max { w } else { wp_max };
+            // The lower triangle of b bᵀ / S_jj (rows ascending in a column).
+            let (rows, bv) = (&self.b_rows[col.clone()], &self.b_values[col]);
+            for (a, (&r, &br)) in rows.iter().zip(bv).enumerate() {
+                for (&s_row, &bs) in rows[..=a].iter().zip(bv) {
+                    env.add(r as usize, s_row as usize, br * inv * bs);
+                }
+            }
+        }
+        for (v, &(p, r, _)) in self.d_values.iter_mut().zip(&self.d_all) {
+            *v = values[p];
+            finite += 0.0 * *v;
+            wm[r] += v.abs();
+        }
+        if f64::is_nan(finite) {
+            return Err(KktError::NonFinite);
+        }
+        if let Some(j) = zero_pivot {
+            return Err(KktError::Singular { unknown: Some(j) });
+        }
+        let norm = wm.iter().fold(wp_max, |m: f64, &x| m.max(x));
+        for &(k, slot) in &self.d_entries {
+            env.values_mut()[slot] -= self.d_values[k];
+        }
+        self.norm = Some(norm);
+        env.factor().map_err(|k| KktError::Singular {
+            unknown: Some(self.n_primal + k),
         })
     }
 
@@ -556,6 +654,9 @@ impl Schur {
     /// `‖A‖∞`, the largest absolute row sum of the last factored matrix
     /// (completes the row sums that [`factor`](Self::factor) began with `B`).
     pub(crate) fn norm_inf(&mut self) -> f64 {
+        if let Some(norm) = self.norm {
+            return norm;
+        }
         let n = self.n_primal;
         let (wp, wm) = self.row_sums.split_at_mut(n);
         if self.diagonal {
@@ -576,41 +677,102 @@ impl Schur {
     /// Solves in place with the last factorization; returns `‖x‖∞` (as
     /// [`max_abs`] would).
     pub(crate) fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64 {
+        if self.diagonal && self.natural {
+            return self.solve_diagonal(rhs, false).0;
+        }
+        self.solve_general(rhs)
+    }
+
+    /// Whether [`solve_checked`](Self::solve_checked) forms the residual on
+    /// the way (`S` diagonal, `C` in the constraints' own order).
+    pub(crate) fn checks_in_solve(&self) -> bool {
+        self.diagonal && self.natural
+    }
+
+    /// [`solve_in_place`](Self::solve_in_place) that also returns
+    /// `‖A x − b‖∞`, formed in the solve's own sweeps instead of a product
+    /// with the matrix afterwards (the check of the first solve after each
+    /// factorization); for [`checks_in_solve`](Self::checks_in_solve) only.
+    /// Returns `(‖x‖∞, ‖A x − b‖∞)`.
+    pub(crate) fn solve_checked(&mut self, rhs: &mut [f64]) -> (f64, f64) {
+        debug_assert!(self.checks_in_solve());
+        let (x_norm, residual) = self.solve_diagonal(rhs, true);
+        (x_norm, residual)
+    }
+
+    /// The solve for a diagonal `S` and `C` in the constraints' own order:
+    /// the steps of the general path in two sweeps over `B` and no scratch
+    /// (each pass over `B` at 10⁵ bodies streams it from memory):
+    /// `g ← B S⁻¹ f − g`, `g ← C⁻¹ g`, `f ← S⁻¹ (f − Bᵀ g)`. With `check`, the
+    /// second sweep also forms the residual `A x − b`: for a primal row `j`,
+    /// `S_jj x_j − s_j` (`s_j = f_j − (Bᵀ y)_j`, formed anyway), for a
+    /// constraint row `(B x + D y − g)_r`, accumulated from the `x_j` as they
+    /// come (the given `g` is kept in the scratch `y` for it). Returns
+    /// `(‖x‖∞, ‖A x − b‖∞)` (the residual 0 without `check`).
+    fn solve_diagonal(&mut self, rhs: &mut [f64], check: bool) -> (f64, f64) {
         let n = self.n_primal;
         let (f, g) = rhs.split_at_mut(n);
-        if self.diagonal && self.natural {
-            // The same steps as below in two sweeps over B and no scratch
-            // (each pass over B at 10⁵ bodies streams it from memory):
-            // g ← B S⁻¹ f − g, g ← C⁻¹ g, f ← S⁻¹ (f − Bᵀ g).
-            for gr in g.iter_mut() {
-                *gr = -*gr;
-            }
-            for (j, (&fj, &inv)) in f.iter().zip(&self.inverse).enumerate() {
-                let xj = inv * fj;
-                for q in range(&self.b_col_ptr, j) {
-                    g[self.b_rows[q] as usize] += self.b_values[q] * xj;
-                }
-            }
-            self.cf.solve_in_place(g);
-            // ‖f‖∞ on the way; `0 · x` carries a NaN or an infinity.
-            let (mut f_max, mut nan) = (0.0f64, 0.0f64);
-            for (j, (fj, &inv)) in f.iter_mut().zip(&self.inverse).enumerate() {
-                let mut s = *fj;
-                for q in range(&self.b_col_ptr, j) {
-                    s -= self.b_values[q] * g[self.b_rows[q] as usize];
-                }
-                let x = inv * s;
-                *fj = x;
-                f_max = if x.abs() > f_max { x.abs() } else { f_max };
-                nan += 0.0 * x;
-            }
-            return if nan.is_nan() {
-                // A NaN or an infinity: max_abs tells which (a rare path).
-                max_abs(rhs)
-            } else {
-                f_max.max(max_abs(g))
-            };
+        let res = &mut self.y;
+        if check {
+            res.copy_from_slice(g);
         }
+        for gr in g.iter_mut() {
+            *gr = -*gr;
+        }
+        for (j, (&fj, &inv)) in f.iter().zip(&self.inverse).enumerate() {
+            let xj = inv * fj;
+            for q in range(&self.b_col_ptr, j) {
+                g[self.b_rows[q] as usize] += self.b_values[q] * xj;
+            }
+        }
+        self.cf.solve_in_place(g);
+        if check {
+            // The constraint rows' residual starts at D y − g.
+            for r in res.iter_mut() {
+                *r = -*r;
+            }
+            for (&(_, r, c), &v) in self.d_all.iter().zip(&self.d_values) {
+                res[r] += v * g[c];
+            }
+        }
+        // ‖f‖∞ on the way; `0 · x` carries a NaN or an infinity.
+        let (mut f_max, mut nan, mut primal_res) = (0.0f64, 0.0f64, 0.0f64);
+        for (j, (fj, &inv)) in f.iter_mut().zip(&self.inverse).enumerate() {
+            let mut s = *fj;
+            let col = range(&self.b_col_ptr, j);
+            for q in col.clone() {
+                s -= self.b_values[q] * g[self.b_rows[q] as usize];
+            }
+            let x = inv * s;
+            *fj = x;
+            f_max = if x.abs() > f_max { x.abs() } else { f_max };
+            nan += 0.0 * x;
+            if check {
+                let r = (self.s_values[j] * x - s).abs();
+                primal_res = if r > primal_res { r } else { primal_res };
+                for q in col {
+                    res[self.b_rows[q] as usize] += self.b_values[q] * x;
+                }
+            }
+        }
+        let residual = if check {
+            primal_res.max(max_abs(res))
+        } else {
+            0.0
+        };
+        let x_norm = if nan.is_nan() {
+            // A NaN or an infinity: max_abs tells which (a rare path).
+            max_abs(rhs)
+        } else {
+            f_max.max(max_abs(g))
+        };
+        (x_norm, residual)
+    }
+
+    /// The solve for block-diagonal `S` or `C` in another order.
+    fn solve_general(&mut self, rhs: &mut [f64]) -> f64 {
+        let n = self.n_primal;
+        let (f, g) = rhs.split_at_mut(n);
         // y = −g in C's order, x = S⁻¹ f, then y += B x: C y = B S⁻¹ f − g.
         if self.natural {
             for (y, &gr) in self.y.iter_mut().zip(g.iter()) {
