@@ -35,6 +35,7 @@ Usage:
 """
 
 import argparse
+import os
 import sys
 import time
 
@@ -73,6 +74,8 @@ if args.fast:
     sys.exudynFast = True  # read by exudyn/__init__.py at import time
 
 import exudyn as exu                       # noqa: E402  (import after the switch above)
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from quiet_machine import end_time_for, wait_for_quiet_machine  # noqa: E402  (benches/)
 from exudyn.itemInterface import (         # noqa: E402
     LoadMassProportional, MarkerBodyMass, MarkerBodyPosition, NodeRigidBody2D,
     ObjectGround, ObjectJointRevolute2D, ObjectRigidBody2D,
@@ -223,28 +226,6 @@ def solve_once(n, end_time, phases=False):
     return out
 
 
-def wait_for_quiet_machine():
-    """Sleep while the 1-minute load average is above --max-load."""
-    waited = 0.0
-    while True:
-        with open('/proc/loadavg') as f:
-            load1 = float(f.read().split()[0])
-        if load1 <= args.max_load:
-            return load1
-        if waited >= args.max_wait:
-            print("  (load %.2f still above %.2f after %.0f s; running anyway)"
-                  % (load1, args.max_load, waited), flush=True)
-            return load1
-        print("  (load %.2f > %.2f, waiting 20 s)" % (load1, args.max_load), flush=True)
-        time.sleep(20)
-        waited += 20
-
-
-def end_time_for(n):
-    """1 s (1000 steps) for small chains, 0.1 s (100 steps) for N >= 1000."""
-    return 1.0 if n < 1000 else 0.1
-
-
 def main():
     print("exudyn %s, module %s; h = %g, rho_inf = %g, Newton rel. tol = %g, modified Newton"
           % (exu.__version__, exu._compiledModuleName, args.h, args.rho, args.tol), flush=True)
@@ -264,7 +245,7 @@ def main():
         t_end = end_time_for(n)
         best = None
         for rep in range(args.repeats):
-            load = wait_for_quiet_machine()
+            load = wait_for_quiet_machine(args.max_load, args.max_wait)
             r = solve_once(n, t_end)
             print("  N = %6d run %d: %.4f s for %d steps (load %.2f)"
                   % (n, rep + 1, r['wall'], r['steps'], load), flush=True)
@@ -296,7 +277,7 @@ def main():
         print("Exudyn internal timers, us per step (one extra run per size, timers on):")
         print("%8s %10s " % ("N", "wall") + " ".join("%15s" % p for p in PHASES))
         for n, _ in rows:
-            wait_for_quiet_machine()
+            wait_for_quiet_machine(args.max_load, args.max_wait)
             r = solve_once(n, end_time_for(n), phases=True)
             per = lambda sec: sec / r['steps'] * 1e6
             print("%8d %10.1f " % (n, per(r['wall']))

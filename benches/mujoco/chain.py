@@ -30,9 +30,14 @@ Usage:
 """
 
 import argparse
+import os
+import sys
 import time
 
 import mujoco
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from quiet_machine import end_time_for, wait_for_quiet_machine  # noqa: E402  (benches/)
 
 parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
 parser.add_argument("--sizes", type=int, nargs="+", default=[10, 100, 1000],
@@ -103,24 +108,6 @@ def solve_once(n, integrator, end_time):
     return {"wall": wall, "steps": steps, "t": data.time, "tip": tip(data, n)}
 
 
-def wait_for_quiet_machine():
-    """Sleep while the 1-minute load average is above --max-load."""
-    waited = 0.0
-    while True:
-        with open("/proc/loadavg") as f:
-            load1 = float(f.read().split()[0])
-        if load1 <= args.max_load or waited >= args.max_wait:
-            return load1
-        print("  (load %.2f > %.2f, waiting 20 s)" % (load1, args.max_load), flush=True)
-        time.sleep(20)
-        waited += 20
-
-
-def end_time_for(n):
-    """1 s (1000 steps) for small chains, 0.1 s (100 steps) for N >= 1000."""
-    return 1.0 if n < 1000 else 0.1
-
-
 def main():
     print("mujoco %s; h = %g; one thread" % (mujoco.__version__, args.h), flush=True)
     for integrator in (INTEGRATORS if args.tip else args.integrators):
@@ -134,7 +121,7 @@ def main():
         for n in args.sizes:
             best = None
             for rep in range(args.repeats):
-                load = wait_for_quiet_machine()
+                load = wait_for_quiet_machine(args.max_load, args.max_wait)
                 r = solve_once(n, integrator, end_time_for(n))
                 print("  %s N = %5d run %d: %.4f s for %d steps (load %.2f)"
                       % (integrator, n, rep + 1, r["wall"], r["steps"], load), flush=True)

@@ -29,7 +29,7 @@
 //!   inverted densely and `C = B S⁻¹ Bᵀ` (pattern of `B Bᵀ`, block-tridiagonal
 //!   for a chain) is factored by its envelope in the constraints' own order
 //!   when that is narrow, else by faer's sparse LDLᵀ after AMD. On the
-//!   10⁴-bar chain it factors 6.8× and solves 2.1× faster than LDLᵀ of the
+//!   10⁴-bar chain it factors 7.5× and solves 2.4× faster than LDLᵀ of the
 //!   whole KKT matrix (`cargo xtask bench`, docs/performance.md).
 //! - [`Backend::Auto`] (default): dense up to [`KktOptions::dense_threshold`]
 //!   unknowns; above it, when [`KktOptions::n_primal`] is given, Schur if `S`'s

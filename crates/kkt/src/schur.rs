@@ -26,6 +26,11 @@
 //! backend reads `S`, `B` and `D` only (the matrix is symmetric), keeps
 //! compact copies of them, and computes its own products and norm for the
 //! residual check of `KktSolver`.
+//!
+//! A chain (`S` diagonal, `C` by its envelope in the constraints' own order)
+//! takes leaner paths: the factorization is one pass over the columns whose
+//! slots in `C` come from the envelope's row pointers (no table of pairs), and
+//! the residual check is formed inside the solve ([`Schur::solve_checked`]).
 
 use crate::envelope::EnvelopeLdlt;
 use crate::sparse_ldlt::{SparseLdlt, kkt_ordering};
@@ -78,7 +83,8 @@ pub(crate) struct Schur {
     /// `(KKT value position, local row, local column)` of every block's `B`.
     b_entries: Vec<(usize, usize, usize)>,
     /// `(local row r, local row s, position of C[r, s] in c.values)` for the
-    /// pairs in the triangle the factorization reads.
+    /// pairs in the triangle the factorization reads (empty when `banded`:
+    /// the envelope gives the positions).
     pairs: Vec<(u16, u16, u32)>,
     /// Index in `d_all` of each entry of `D` in the read triangle, and its
     /// slot in `C`.
