@@ -117,6 +117,14 @@ impl EnvelopeLdlt {
 
     /// Solves `L D Lᵀ x = b` in place with the last factorization.
     pub(crate) fn solve_in_place(&self, x: &mut [f64]) {
+        self.solve(x, false);
+    }
+
+    /// Solves `L D Lᵀ x = b` in place and stores `−x` (when `negate`; the
+    /// caller then saves a pass negating `b`: the solve is linear and its
+    /// rounding symmetric, so `−x` is bit for bit the solution for `−b`).
+    /// Returns `‖x‖∞`, NaN if `x` has a NaN or an infinity.
+    pub(crate) fn solve(&self, x: &mut [f64], negate: bool) -> f64 {
         let n = self.d.len();
         // L z = b.
         for i in 0..n {
@@ -131,7 +139,10 @@ impl EnvelopeLdlt {
             *xi /= d;
         }
         // Lᵀ x = w from the last row up: x_i is final once the rows below
-        // it have been subtracted.
+        // it have been subtracted; ‖x‖∞ on the way (`0 · x` carries a NaN or
+        // an infinity).
+        let sign = if negate { -1.0 } else { 1.0 };
+        let (mut max, mut nan) = (0.0f64, 0.0f64);
         for i in (0..n).rev() {
             let (range, fi) = self.row(i);
             let row = &self.values[range.start..range.end - 1];
@@ -139,7 +150,11 @@ impl EnvelopeLdlt {
             for (xk, l) in x[fi..i].iter_mut().zip(row) {
                 *xk -= l * xi;
             }
+            x[i] = sign * xi;
+            max = if xi.abs() > max { xi.abs() } else { max };
+            nan += 0.0 * xi;
         }
+        if nan.is_nan() { f64::NAN } else { max }
     }
 }
 

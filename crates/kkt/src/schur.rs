@@ -720,23 +720,35 @@ impl Schur {
         let (f, g) = rhs.split_at_mut(n);
         let res = &mut self.y;
         if check {
-            res.copy_from_slice(g);
+            // The constraint rows' residual starts at D y − g.
+            for (r, &gr) in res.iter_mut().zip(g.iter()) {
+                *r = -gr;
+            }
         }
-        for gr in g.iter_mut() {
-            *gr = -*gr;
+        // The envelope solve stores −C⁻¹ w: then w = g − B S⁻¹ f needs no
+        // pass negating g first, and −C⁻¹ w = C⁻¹ (B S⁻¹ f − g) = y bit for
+        // bit (negation is exact and rounding symmetric).
+        let envelope = matches!(self.cf, CFactor::Envelope(_));
+        if !envelope {
+            for gr in g.iter_mut() {
+                *gr = -*gr;
+            }
         }
+        let sign = if envelope { -1.0 } else { 1.0 };
         for (j, (&fj, &inv)) in f.iter().zip(&self.inverse).enumerate() {
-            let xj = inv * fj;
+            let xj = sign * (inv * fj);
             for q in range(&self.b_col_ptr, j) {
                 g[self.b_rows[q] as usize] += self.b_values[q] * xj;
             }
         }
-        self.cf.solve_in_place(g);
-        if check {
-            // The constraint rows' residual starts at D y − g.
-            for r in res.iter_mut() {
-                *r = -*r;
+        let g_norm = match &mut self.cf {
+            CFactor::Envelope(e) => e.solve(g, true),
+            cf => {
+                cf.solve_in_place(g);
+                max_abs(g)
             }
+        };
+        if check {
             for (&(_, r, c), &v) in self.d_all.iter().zip(&self.d_values) {
                 res[r] += v * g[c];
             }
@@ -770,7 +782,7 @@ impl Schur {
             // A NaN or an infinity: max_abs tells which (a rare path).
             max_abs(rhs)
         } else {
-            f_max.max(max_abs(g))
+            f_max.max(g_norm)
         };
         (x_norm, residual)
     }

@@ -498,6 +498,66 @@ impl Linearization {
         a: &[f64],
         lambda: &[f64],
     ) {
+        let mut r = std::mem::take(&mut self.r);
+        self.residual_into(sys, t, u, v, a, lambda, 1.0, &mut r);
+        self.r = r;
+        self.phi_max = max_abs(&self.phi);
+    }
+
+    /// [`eval_residual`](Self::eval_residual) and [`kkt_rhs`](Self::kkt_rhs)
+    /// in one: writes the right-hand side `[scale·r; −Φ]` of (16) into `rhs`
+    /// as the residual is formed, without storing `r` (the field
+    /// [`r`](Self::r) keeps its last value), and returns `‖rhs‖∞` (see
+    /// [`kkt_rhs_norm`](Self::kkt_rhs_norm)). At 10⁵ bodies it saves a pass
+    /// writing `r` and one reading it back. The norms are those of
+    /// `eval_residual`.
+    ///
+    /// # Panics
+    /// If `rhs` is not of length `n + m`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn eval_kkt_rhs<S: System + ?Sized>(
+        &mut self,
+        sys: &S,
+        t: f64,
+        u: &[f64],
+        v: &[f64],
+        a: &[f64],
+        lambda: &[f64],
+        scale: f64,
+        rhs: &mut [f64],
+    ) -> f64 {
+        assert_eq!(rhs.len(), self.n + self.m);
+        let (primal, dual) = rhs.split_at_mut(self.n);
+        self.residual_into(sys, t, u, v, a, lambda, scale, primal);
+        // −Φ and ‖Φ‖∞ in one pass; `0 · Φᵢ` carries a NaN or an infinity.
+        let (mut phi_max, mut nan) = (0.0f64, 0.0f64);
+        for (x, &p) in dual.iter_mut().zip(&self.phi) {
+            *x = -p;
+            phi_max = if p.abs() > phi_max { p.abs() } else { phi_max };
+            nan += 0.0 * p;
+        }
+        self.phi_max = if nan.is_nan() {
+            max_abs(&self.phi)
+        } else {
+            phi_max
+        };
+        self.kkt_rhs_norm(scale)
+    }
+
+    /// `M`, `B`, `g`, `Φ` at the state, then `out = scale·r` with the force
+    /// scale and `‖r‖∞` (not `‖Φ‖∞`).
+    #[allow(clippy::too_many_arguments)]
+    fn residual_into<S: System + ?Sized>(
+        &mut self,
+        sys: &S,
+        t: f64,
+        u: &[f64],
+        v: &[f64],
+        a: &[f64],
+        lambda: &[f64],
+        scale_out: f64,
+        out: &mut [f64],
+    ) {
         // A constant M (System::mass_is_constant) is evaluated once.
         if !(self.mass_ready && sys.mass_is_constant()) {
             sys.mass_into(t, u, &mut self.mass);
@@ -525,19 +585,20 @@ impl Linearization {
         let (b, mass, m_a, bt_lambda) = (&self.b, &self.mass, &self.m_a, &self.bt_lambda);
         let gather = self.bt_gather.as_ref();
         let diagonal = self.mass_diagonal;
-        for (i, (r, &g)) in self.r.iter_mut().zip(&self.g).enumerate() {
+        for (i, (out, &g)) in out.iter_mut().zip(&self.g).enumerate() {
             let bl = match gather {
                 Some(gather) => gather.column(i, b, lambda),
                 None => bt_lambda[i],
             };
             let ma = if diagonal { mass[i] * a[i] } else { m_a[i] };
-            *r = g - bl - ma;
+            let r = g - bl - ma;
+            *out = scale_out * r;
             // Plain comparisons, one per running maximum: f64::max's NaN
             // rules cost a blend each, in the loop's chain of dependences.
             let local = bigger(bigger(g.abs(), bl.abs()), ma.abs());
             scale = bigger(scale, local);
             r_max = bigger(r_max, r.abs());
-            nan += 0.0 * *r;
+            nan += 0.0 * r;
         }
         // `0 · r` is NaN for a NaN or an infinite rᵢ; f64::max drops NaNs.
         if nan.is_nan() && r_max.is_finite() {
@@ -545,7 +606,6 @@ impl Linearization {
         }
         self.force_scale = scale.max(max_abs(lambda));
         self.r_max = r_max;
-        self.phi_max = max_abs(&self.phi);
     }
 
     /// Evaluates the parts of `K_T` and `C_T` (eqs. 6-7): the constraint Hessian
@@ -648,8 +708,14 @@ impl Linearization {
         for (x, &p) in rhs[self.n..].iter_mut().zip(&self.phi) {
             *x = -p;
         }
-        // Exactly max_abs(rhs): rounding is monotone, so the largest |scale·rᵢ|
-        // is |scale|·‖r‖∞ rounded.
+        self.kkt_rhs_norm(scale)
+    }
+
+    /// `‖[scale·r; −Φ]‖∞` from the norms of the last evaluation, exactly
+    /// `max_abs` of the right-hand side: rounding is monotone, so the largest
+    /// `|scale·rᵢ|` is `|scale|·‖r‖∞` rounded. NaN if `r` or `Φ` has a NaN.
+    #[must_use]
+    pub fn kkt_rhs_norm(&self, scale: f64) -> f64 {
         let r_part = scale.abs() * self.r_max;
         if r_part.is_nan() || self.phi_max.is_nan() {
             f64::NAN

@@ -470,8 +470,17 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         let mut u_max = max_abs(&self.trial.u);
         for k in 0..=self.config.max_iterations {
             let s = &self.trial;
-            self.lin
-                .eval_residual(self.sys, t1, &s.u, &s.v, &s.a, &s.lambda);
+            // r is formed straight into the right-hand side of (16).
+            let rhs_norm = self.lin.eval_kkt_rhs(
+                self.sys,
+                t1,
+                &s.u,
+                &s.v,
+                &s.a,
+                &s.lambda,
+                coefficients.scale,
+                &mut self.rhs,
+            );
             let residual = self.lin.residual_norm();
             let constraint = self.lin.constraint_norm();
             if !residual.is_finite() || !constraint.is_finite() {
@@ -521,7 +530,6 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                 force_refactor = false;
                 previous_step = f64::INFINITY;
             }
-            let rhs_norm = self.lin.kkt_rhs(coefficients.scale, &mut self.rhs);
             self.solver
                 .solve_in_place_with_norm(&mut self.rhs, rhs_norm)
                 .map_err(Failure::Kkt)?;
