@@ -702,8 +702,7 @@ impl Schur {
     /// Returns `(‖x‖∞, ‖A x − b‖∞)`.
     pub(crate) fn solve_checked(&mut self, rhs: &mut [f64]) -> (f64, f64) {
         debug_assert!(self.checks_in_solve());
-        let (x_norm, residual) = self.solve_diagonal(rhs, true);
-        (x_norm, residual)
+        self.solve_diagonal(rhs, true)
     }
 
     /// The solve for a diagonal `S` and `C` in the constraints' own order:
@@ -712,8 +711,8 @@ impl Schur {
     /// `g ← B S⁻¹ f − g`, `g ← C⁻¹ g`, `f ← S⁻¹ (f − Bᵀ g)`. With `check`, the
     /// second sweep also forms the residual `A x − b`: for a primal row `j`,
     /// `S_jj x_j − s_j` (`s_j = f_j − (Bᵀ y)_j`, formed anyway), for a
-    /// constraint row `(B x + D y − g)_r`, accumulated from the `x_j` as they
-    /// come (the given `g` is kept in the scratch `y` for it). Returns
+    /// constraint row `(B x + D y − g)_r`, accumulated in the scratch `y`
+    /// from `−g` and the `x_j` as they come. Returns
     /// `(‖x‖∞, ‖A x − b‖∞)` (the residual 0 without `check`).
     fn solve_diagonal(&mut self, rhs: &mut [f64], check: bool) -> (f64, f64) {
         let n = self.n_primal;

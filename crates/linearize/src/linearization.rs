@@ -194,7 +194,10 @@ pub struct Linearization {
     /// Inertia force `M ü` for a non-diagonal `M`; empty for a diagonal one,
     /// whose `M ü` is formed in the residual's own pass and not stored.
     pub m_a: Vec<f64>,
-    /// Residual `r = g − Bᵀλ − M ü` (the paper's γ, eq. 3).
+    /// Residual `r = g − Bᵀλ − M ü` (the paper's γ, eq. 3), as the last
+    /// [`eval_residual`](Self::eval_residual) formed it
+    /// ([`eval_kkt_rhs`](Self::eval_kkt_rhs) writes `r` into the KKT
+    /// right-hand side instead).
     pub r: Vec<f64>,
     /// Constraints `Φ` (eq. 4).
     pub phi: Vec<f64>,
@@ -647,9 +650,10 @@ impl Linearization {
         let vals = &mut self.kkt.values;
         // Without BᵀB and the Bᵀ block (Schur backend) the matrix is the S
         // terms and B: zero the S slots and assign B, each slot of which has
-        // one entry, instead of zeroing everything and adding B (at 10⁵
-        // bodies, a pass through memory fewer per factorization). The Bᵀ
-        // block stays zero (`set_fill_transpose(false)`).
+        // one entry, instead of zeroing everything and adding B (fewer
+        // instructions; at 10⁵ bodies the same cache lines are written, the
+        // S entries sharing them with B). The Bᵀ block stays zero
+        // (`set_fill_transpose(false)`).
         let assign_b = !self.fill_transpose && !self.augmented && self.b_slots_unique;
         if assign_b {
             for &k in &self.s_slots {

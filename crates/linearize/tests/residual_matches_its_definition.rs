@@ -2,7 +2,8 @@
 //! pass, with `Bᵀλ` gathered by column, `M ü` not stored for a diagonal `M`,
 //! and constant `M` and `g` evaluated once. Compared here, at random states and
 //! twice in a row, with the definition built from the system's own dense `M`,
-//! `B` and `g`; and `kkt_rhs` must return exactly `‖[scale·r; −Φ]‖∞`.
+//! `B` and `g`; and `kkt_rhs` must return exactly `‖[scale·r; −Φ]‖∞`, and
+//! `eval_kkt_rhs` the same right-hand side and norms bit for bit.
 
 use mstar_linearize::{Linearization, max_abs};
 use mstar_model::planar::{At, PlanarBuilder, PlanarSystem, bar_chain};
@@ -54,6 +55,8 @@ fn sprung() -> PlanarSystem {
 fn check<S: System>(sys: &S, seed: &[f64], scale: f64) -> Result<(), TestCaseError> {
     let (n, m) = (sys.n_coords(), sys.n_constraints());
     let mut lin = Linearization::new(sys).expect("structure");
+    // The same evaluations through eval_kkt_rhs (r formed into the rhs).
+    let mut fused = Linearization::new(sys).expect("structure");
     // Two different states in a row: a cached constant M or g must not go stale.
     for (pass, s) in [&seed[..3 * n + m], &seed[3 * n + m..2 * (3 * n + m)]]
         .into_iter()
@@ -74,6 +77,13 @@ fn check<S: System>(sys: &S, seed: &[f64], scale: f64) -> Result<(), TestCaseErr
         let mut rhs = vec![0.0; n + m];
         let norm = lin.kkt_rhs(scale, &mut rhs);
         prop_assert_eq!(norm, max_abs(&rhs));
+        let mut fused_rhs = vec![f64::NAN; n + m];
+        let fused_norm = fused.eval_kkt_rhs(sys, 0.2, u, v, a, lambda, scale, &mut fused_rhs);
+        prop_assert_eq!(&fused_rhs, &rhs, "pass {}: eval_kkt_rhs", pass);
+        prop_assert_eq!(fused_norm, norm);
+        prop_assert_eq!(fused.residual_norm(), lin.residual_norm());
+        prop_assert_eq!(fused.constraint_norm(), lin.constraint_norm());
+        prop_assert_eq!(fused.force_scale(), lin.force_scale());
     }
     Ok(())
 }
@@ -107,5 +117,9 @@ fn a_nan_in_the_residual_is_not_lost() {
         assert!(lin.residual_norm().is_nan(), "NaN in λ[{at}]");
         let mut rhs = vec![0.0; n + m];
         assert!(lin.kkt_rhs(0.5, &mut rhs).is_nan(), "NaN in λ[{at}]");
+        let mut fused = Linearization::new(&sys).expect("structure");
+        let zeros = vec![0.0; n];
+        let norm = fused.eval_kkt_rhs(&sys, 0.0, &u, &zeros, &zeros, &lambda, 0.5, &mut rhs);
+        assert!(norm.is_nan(), "eval_kkt_rhs, NaN in λ[{at}]");
     }
 }
