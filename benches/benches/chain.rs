@@ -1,11 +1,11 @@
-//! Time per step of an N-link bar chain (the benchmark: bars of 1 kg,
+//! Time per step of an N-link bar chain (the benchmark chain: bars of 1 kg,
 //! 1 m on revolute joints, released horizontally; h = 1e-3, generalized-α
 //! ρ∞ = 0.8, Newton tolerance 1e-8 relative, the default Newton and KKT
 //! solver: modified Newton on the Schur complement; also with full Newton), and the phases of one Newton
 //! iteration: residual evaluation, Jacobians + KKT assembly, numeric
-//! factorization and solve for each sparse backend (Schur complement on the
-//! unaugmented matrix; LDLᵀ and LU of the augmented KKT matrix with `M*`, LU
-//! up to N = 10⁴).
+//! factorization and solve for each registered sparse backend, each on the
+//! structure it asks for (Schur complement on the unaugmented matrix; LDLᵀ
+//! and LU of the augmented KKT matrix with `M*`, LU up to N = 10⁴).
 //!
 //! Besides criterion's estimates it writes `target/studies/bench/counts.csv`
 //! (Newton iterations and factorizations per step, peak memory) for
@@ -20,11 +20,12 @@ use std::time::{Duration, Instant};
 const H: f64 = 1e-3;
 const T_END: f64 = 1.0;
 
-use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, BenchmarkId, Criterion, criterion_group, criterion_main};
 use mstar::kkt::{Backend, KktOptions, KktSolver};
-use mstar::linearize::Linearization;
+use mstar::linearize::{Coefficients, Linearization};
 use mstar::planar::{PlanarSystem, bar_chain};
-use mstar::{Config, Integrator, Newton, Scheme, System};
+use mstar::{Config, Integrator, Newton, Sample, Scheme};
 
 fn config() -> Config {
     Config {
@@ -179,71 +180,94 @@ fn phases(c: &mut Criterion) {
         let s = integ.sample();
         let params = config().scheme.params().expect("valid");
         let coefficients = params.coefficients(1e-3, true);
-        // The default path: S_T without BᵀB, block-diagonal (Schur), and, as
-        // the integrator assembles it for that backend, without the Bᵀ block
-        // (which the Schur backend does not read).
-        let mut lin = Linearization::with_augmentation(&sys, false).expect("valid model");
-        lin.set_fill_transpose(false);
+        // The default path, in the structure of the backend the integrator
+        // chose (Schur: S_T without BᵀB, no Bᵀ block).
+        let structure = integ.backend().structure().expect("a resolved backend");
+        let mut lin = Linearization::with_structure(&sys, structure).expect("valid model");
         lin.eval_residual(&sys, s.t, &s.u, &s.v, &s.a, &s.lambda);
-        group.bench_with_input(BenchmarkId::new("residual", n), &n, |b, _| {
-            b.iter(|| lin.eval_residual(&sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda));
-        });
-        group.bench_with_input(BenchmarkId::new("residual-2-threads", n), &n, |b, _| {
-            b.iter(|| {
-                pool.install(|| {
-                    lin.eval_residual(&sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda)
-                });
-            });
-        });
-        group.bench_with_input(BenchmarkId::new("jacobians+assembly", n), &n, |b, _| {
-            b.iter(|| {
-                lin.eval_jacobians(&sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda);
-                lin.assemble(&coefficients);
-            });
-        });
-        group.bench_with_input(
-            BenchmarkId::new("jacobians+assembly-2-threads", n),
-            &n,
-            |b, _| {
-                b.iter(|| {
-                    pool.install(|| {
-                        lin.eval_jacobians(&sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda);
-                        lin.assemble(&coefficients);
-                    });
-                });
-            },
-        );
-        let mut augmented = Linearization::new(&sys).expect("valid model");
-        augmented.eval_residual(&sys, s.t, &s.u, &s.v, &s.a, &s.lambda);
-        augmented.eval_jacobians(&sys, s.t, &s.u, &s.v, &s.a, &s.lambda);
-        augmented.assemble(&coefficients);
-        let mut backends = vec![
-            ("schur", Backend::Schur, &lin),
-            ("ldlt", Backend::SparseLdlt, &augmented),
-        ];
-        if n <= 10_000 {
-            backends.push(("lu", Backend::SparseLu, &augmented));
-        }
-        for (name, backend, l) in backends {
-            let options = KktOptions {
-                backend,
-                n_primal: Some(sys.n_coords()),
-                ..KktOptions::default()
-            };
-            let mut solver = KktSolver::new(l.kkt(), &options).expect("pattern");
-            group.bench_with_input(BenchmarkId::new(format!("factor-{name}"), n), &n, |b, _| {
-                b.iter(|| solver.factor(black_box(&l.kkt().values)).expect("regular"));
-            });
-            let mut rhs = vec![0.0; l.kkt().n];
-            group.bench_with_input(BenchmarkId::new(format!("solve-{name}"), n), &n, |b, _| {
-                b.iter(|| {
-                    l.kkt_rhs(coefficients.scale, &mut rhs);
-                    solver.solve_in_place(black_box(&mut rhs)).expect("regular");
-                });
-            });
+        let inputs = (&sys, &s, &coefficients, &pool);
+        evaluation_phases(&mut group, n, &mut lin, inputs);
+        for r in mstar::kkt::backends() {
+            // Dense LU is for tiny systems; LU is timed up to 10⁴ bodies.
+            let name = r.backend.name();
+            if name == "dense" || (name == "lu" && n > 10_000) {
+                continue;
+            }
+            let mut l = Linearization::with_structure(&sys, r.structure).expect("valid model");
+            l.eval_residual(&sys, s.t, &s.u, &s.v, &s.a, &s.lambda);
+            l.eval_jacobians(&sys, s.t, &s.u, &s.v, &s.a, &s.lambda);
+            l.assemble(&coefficients);
+            solver_phases(&mut group, n, r.backend, &l, coefficients.scale);
         }
     }
     group.finish();
+}
+
+/// What the evaluation phases read: the model, a state, the coefficients
+/// and a pool of two threads.
+type Inputs<'a> = (
+    &'a PlanarSystem,
+    &'a Sample,
+    &'a Coefficients,
+    &'a rayon::ThreadPool,
+);
+
+/// The residual, and the Jacobians with the assembly, on one and two threads.
+fn evaluation_phases(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    n: usize,
+    lin: &mut Linearization,
+    (sys, s, coefficients, pool): Inputs<'_>,
+) {
+    group.bench_with_input(BenchmarkId::new("residual", n), &n, |b, _| {
+        b.iter(|| lin.eval_residual(sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda));
+    });
+    group.bench_with_input(BenchmarkId::new("residual-2-threads", n), &n, |b, _| {
+        b.iter(|| {
+            pool.install(|| lin.eval_residual(sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda));
+        });
+    });
+    let jacobians = |lin: &mut Linearization| {
+        lin.eval_jacobians(sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda);
+        lin.assemble(coefficients);
+    };
+    group.bench_with_input(BenchmarkId::new("jacobians+assembly", n), &n, |b, _| {
+        b.iter(|| jacobians(lin));
+    });
+    group.bench_with_input(
+        BenchmarkId::new("jacobians+assembly-2-threads", n),
+        &n,
+        |b, _| {
+            b.iter(|| pool.install(|| jacobians(lin)));
+        },
+    );
+}
+
+/// One backend's numeric factorization and solve of the assembled matrix.
+fn solver_phases(
+    group: &mut BenchmarkGroup<'_, WallTime>,
+    n: usize,
+    backend: Backend,
+    l: &Linearization,
+    scale: f64,
+) {
+    let options = KktOptions {
+        backend,
+        n_primal: Some(l.n_coords()),
+        ..KktOptions::default()
+    };
+    let mut solver = KktSolver::new(l.kkt(), &options).expect("pattern");
+    let name = backend.name();
+    group.bench_with_input(BenchmarkId::new(format!("factor-{name}"), n), &n, |b, _| {
+        b.iter(|| solver.factor(black_box(&l.kkt().values)).expect("regular"));
+    });
+    let mut rhs = vec![0.0; l.kkt().n];
+    group.bench_with_input(BenchmarkId::new(format!("solve-{name}"), n), &n, |b, _| {
+        b.iter(|| {
+            l.kkt_rhs(scale, &mut rhs);
+            solver.solve_in_place(black_box(&mut rhs)).expect("regular");
+        });
+    });
 }
 
 criterion_group!(benches, steps, phases);

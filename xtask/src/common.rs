@@ -6,7 +6,9 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context as _, Result};
-use mstar::{ChainOracle, Config, IntegrationError, Integrator, PendulumChain, RunStats, Sample};
+use mstar::{
+    ChainOracle, Config, IntegrationError, Integrator, PendulumChain, RunStats, Sample, SampleRef,
+};
 
 use crate::plot::{self, Panel};
 
@@ -133,12 +135,12 @@ pub fn integrate(
     let mut last: Option<Sample> = None;
     let mut count = 0_usize;
     let result = Integrator::new(sys, config, 0.0, &u0, &v0).and_then(|mut integ| {
-        integ.run(t_end, &mut |s: &Sample| {
+        integ.run(t_end, &mut |s: &SampleRef<'_>| {
             if count.is_multiple_of(keep) {
-                kept.push(s.clone());
+                kept.push(s.to_sample());
                 last = None;
             } else {
-                last = Some(s.clone());
+                last = Some(s.to_sample());
             }
             count += 1;
         })

@@ -1,7 +1,8 @@
 //! The backends on KKT matrices of planar chains (see [`crate::testing`]).
 
+use crate::schur::Schur;
 use crate::testing::{chain, chain_with, relative_difference, relative_residual, vector};
-use crate::{Backend, Csc, KktError, KktOptions, KktSolver};
+use crate::{Backend, Csc, KktBackend, KktError, KktOptions, KktSolver};
 use proptest::prelude::*;
 
 fn options(backend: Backend, n_bodies: usize) -> KktOptions {
@@ -28,8 +29,8 @@ fn backends_agree_on_chains() {
         let mut b = vec![0.0; a.n];
         a.mul(&vector(a.n, 3), &mut b);
         let ldlt =
-            solve(Backend::SparseLdlt, n_bodies, &a, &b).expect("LDLᵀ solves a regular chain");
-        let lu = solve(Backend::SparseLu, n_bodies, &a, &b).expect("LU solves a regular chain");
+            solve(Backend::SPARSE_LDLT, n_bodies, &a, &b).expect("LDLᵀ solves a regular chain");
+        let lu = solve(Backend::SPARSE_LU, n_bodies, &a, &b).expect("LU solves a regular chain");
         let (r_ldlt, r_lu) = (
             relative_residual(&a, &ldlt, &b),
             relative_residual(&a, &lu, &b),
@@ -45,7 +46,7 @@ fn backends_agree_on_chains() {
         assert!(diff <= 1e-10, "N = {n_bodies}: {diff:e}");
         if n_bodies <= 10 {
             let dense =
-                solve(Backend::Dense, n_bodies, &a, &b).expect("dense LU solves a regular chain");
+                solve(Backend::DENSE, n_bodies, &a, &b).expect("dense LU solves a regular chain");
             let diff = relative_difference(&ldlt, &dense);
             eprintln!("N = {n_bodies}: ‖x_LDLᵀ − x_dense‖/‖x‖ {diff:.1e}");
             assert!(diff <= 1e-10, "N = {n_bodies}: {diff:e}");
@@ -54,7 +55,7 @@ fn backends_agree_on_chains() {
 }
 
 #[test]
-fn auto_picks_ldlt_when_the_primal_count_is_given() {
+fn auto_picks_schur_then_ldlt_when_the_primal_count_is_given() {
     let a = chain(10, 1, None);
     let auto = |n_primal| KktOptions {
         n_primal,
@@ -62,14 +63,14 @@ fn auto_picks_ldlt_when_the_primal_count_is_given() {
     };
     let pick = |o: KktOptions| KktSolver::new(&a, &o).expect("regular structure").backend();
     // S + BᵀB couples every body: not block-diagonal.
-    assert_eq!(pick(auto(Some(30))), Backend::SparseLdlt);
+    assert_eq!(pick(auto(Some(30))), Backend::SPARSE_LDLT);
     let plain = chain_with(10, 1, None, false);
     let s = KktSolver::new(&plain, &auto(Some(30))).expect("regular structure");
-    assert_eq!(s.backend(), Backend::Schur);
-    assert_eq!(pick(auto(None)), Backend::SparseLu);
+    assert_eq!(s.backend(), Backend::SCHUR);
+    assert_eq!(pick(auto(None)), Backend::SPARSE_LU);
     let small = chain(1, 1, None);
     let s = KktSolver::new(&small, &auto(Some(3))).expect("regular structure");
-    assert_eq!(s.backend(), Backend::Dense);
+    assert_eq!(s.backend(), Backend::DENSE);
 }
 
 #[test]
@@ -77,7 +78,7 @@ fn refactorization_reuses_the_analysis() {
     let n_bodies = 100;
     let a0 = chain(n_bodies, 0, None);
     let mut s =
-        KktSolver::new(&a0, &options(Backend::SparseLdlt, n_bodies)).expect("regular structure");
+        KktSolver::new(&a0, &options(Backend::SPARSE_LDLT, n_bodies)).expect("regular structure");
     for seed in 1..6 {
         let a = chain(n_bodies, seed, None);
         assert_eq!(
@@ -89,7 +90,7 @@ fn refactorization_reuses_the_analysis() {
         s.factor(&a.values).expect("regular values");
         let mut x = b.clone();
         s.solve_in_place(&mut x).expect("accurate");
-        let fresh = solve(Backend::SparseLu, n_bodies, &a, &b).expect("LU");
+        let fresh = solve(Backend::SPARSE_LU, n_bodies, &a, &b).expect("LU");
         assert!(relative_difference(&x, &fresh) <= 1e-10, "seed {seed}");
         // A second right-hand side with the same factors.
         let mut y = vector(a.n, seed + 100);
@@ -119,13 +120,13 @@ fn a_redundant_constraint_is_an_error_for_every_backend() {
         for f in [1.0, 1.0 / 3.0] {
             for consistent in [true, false] {
                 let (a, b) = redundant(n_bodies, r, f, consistent);
-                let mut backends = vec![Backend::SparseLdlt, Backend::SparseLu];
+                let mut backends = vec![Backend::SPARSE_LDLT, Backend::SPARSE_LU];
                 if n_bodies <= 10 {
-                    backends.push(Backend::Dense);
+                    backends.push(Backend::DENSE);
                 }
                 for backend in backends {
                     let result = solve(backend, n_bodies, &a, &b);
-                    if backend == Backend::SparseLu && f != 1.0 && consistent {
+                    if backend == Backend::SPARSE_LU && f != 1.0 && consistent {
                         // Known gap: faer's LU finds a tiny nonzero pivot and
                         // may return a moderate solution, one of many, of the
                         // singular but consistent system; its factors are not
@@ -142,7 +143,7 @@ fn a_redundant_constraint_is_an_error_for_every_backend() {
                         ),
                         "{case}"
                     );
-                    if backend == Backend::SparseLdlt {
+                    if backend == Backend::SPARSE_LDLT {
                         // The later of the two copies in elimination order.
                         let pair = [3 * n_bodies + r, a.n - 1];
                         assert!(
@@ -160,7 +161,7 @@ fn a_redundant_constraint_is_an_error_for_every_backend() {
 fn factor_recovers_after_a_singular_matrix() {
     let n_bodies = 10;
     let (a, _) = redundant(n_bodies, 4, 1.0, true);
-    let mut s = KktSolver::new(&a, &options(Backend::SparseLdlt, n_bodies)).expect("structure");
+    let mut s = KktSolver::new(&a, &options(Backend::SPARSE_LDLT, n_bodies)).expect("structure");
     assert!(matches!(
         s.factor(&a.values),
         Err(KktError::Singular { .. })
@@ -193,7 +194,7 @@ fn factor_recovers_after_a_singular_matrix() {
 fn ldlt_rejects_what_it_cannot_factor() {
     let a = chain(10, 1, None);
     let with = |n_primal| KktOptions {
-        backend: Backend::SparseLdlt,
+        backend: Backend::SPARSE_LDLT,
         n_primal,
         ..KktOptions::default()
     };
@@ -234,7 +235,7 @@ fn ldlt_rejects_what_it_cannot_factor() {
     );
     // The LU backends ignore n_primal, except for its bound.
     let lu = KktOptions {
-        backend: Backend::SparseLu,
+        backend: Backend::SPARSE_LU,
         ..with(Some(30))
     };
     assert!(KktSolver::new(&unsym, &lu).is_ok());
@@ -268,7 +269,7 @@ fn ldlt_solves_a_system_without_constraints() {
     }
     let b = vector(np, 9);
     let opts = KktOptions {
-        backend: Backend::SparseLdlt,
+        backend: Backend::SPARSE_LDLT,
         n_primal: Some(np),
         ..KktOptions::default()
     };
@@ -287,10 +288,10 @@ fn empty_system() {
         ..Csc::default()
     };
     for backend in [
-        Backend::SparseLdlt,
-        Backend::SparseLu,
-        Backend::Dense,
-        Backend::Schur,
+        Backend::SPARSE_LDLT,
+        Backend::SPARSE_LU,
+        Backend::DENSE,
+        Backend::SCHUR,
     ] {
         let opts = KktOptions {
             backend,
@@ -307,7 +308,7 @@ fn empty_system() {
 fn regularized_ldlt_solves_regular_chains_and_rejects_redundant_ones() {
     let regularized = |n_bodies: usize| KktOptions {
         ldlt_regularization: Some(1e-10),
-        ..options(Backend::SparseLdlt, n_bodies)
+        ..options(Backend::SPARSE_LDLT, n_bodies)
     };
     let solve_reg = |n_bodies: usize, a: &Csc, b: &[f64]| {
         let mut s = KktSolver::new(a, &regularized(n_bodies))?;
@@ -319,7 +320,7 @@ fn regularized_ldlt_solves_regular_chains_and_rejects_redundant_ones() {
         let a = chain(n_bodies, 7, None);
         let mut b = vec![0.0; a.n];
         a.mul(&vector(a.n, 3), &mut b);
-        let plain = solve(Backend::SparseLdlt, n_bodies, &a, &b).expect("regular chain");
+        let plain = solve(Backend::SPARSE_LDLT, n_bodies, &a, &b).expect("regular chain");
         let reg = solve_reg(n_bodies, &a, &b).expect("regular chain");
         let diff = relative_difference(&plain, &reg);
         assert!(diff <= 1e-12, "N = {n_bodies}: {diff:e}");
@@ -340,7 +341,7 @@ fn regularized_ldlt_solves_regular_chains_and_rejects_redundant_ones() {
     }
     let bad = KktOptions {
         ldlt_regularization: Some(0.0),
-        ..options(Backend::SparseLdlt, 10)
+        ..options(Backend::SPARSE_LDLT, 10)
     };
     assert!(matches!(
         KktSolver::new(&chain(10, 1, None), &bad),
@@ -354,9 +355,9 @@ fn schur_matches_ldlt_and_lu_on_chains() {
         let a = chain_with(n_bodies, 7, None, false);
         let mut b = vec![0.0; a.n];
         a.mul(&vector(a.n, 3), &mut b);
-        let schur = solve(Backend::Schur, n_bodies, &a, &b).expect("Schur solves a regular chain");
-        let ldlt = solve(Backend::SparseLdlt, n_bodies, &a, &b).expect("LDLᵀ");
-        let lu = solve(Backend::SparseLu, n_bodies, &a, &b).expect("LU");
+        let schur = solve(Backend::SCHUR, n_bodies, &a, &b).expect("Schur solves a regular chain");
+        let ldlt = solve(Backend::SPARSE_LDLT, n_bodies, &a, &b).expect("LDLᵀ");
+        let lu = solve(Backend::SPARSE_LU, n_bodies, &a, &b).expect("LU");
         let r = relative_residual(&a, &schur, &b);
         let (d_ldlt, d_lu) = (
             relative_difference(&schur, &ldlt),
@@ -377,7 +378,7 @@ fn schur_names_a_redundant_constraint_or_a_singular_block() {
             if consistent {
                 a.mul(&vector(a.n, 5), &mut b);
             }
-            let result = solve(Backend::Schur, n_bodies, &a, &b);
+            let result = solve(Backend::SCHUR, n_bodies, &a, &b);
             let pair = [3 * n_bodies + r, a.n - 1];
             assert!(
                 matches!(result, Err(KktError::Singular { unknown: Some(k) }) if pair.contains(&k)),
@@ -395,7 +396,7 @@ fn schur_names_a_redundant_constraint_or_a_singular_block() {
             }
         }
     }
-    let result = solve(Backend::Schur, 10, &a, &vector(a.n, 1));
+    let result = solve(Backend::SCHUR, 10, &a, &vector(a.n, 1));
     assert!(
         matches!(result, Err(KktError::Singular { unknown: Some(k) }) if (12..15).contains(&k)),
         "{result:?}"
@@ -443,12 +444,13 @@ fn schur_solves_constraints_in_any_order() {
         let a = scrambled_multipliers(&chain_with(n_bodies, 5, None, false), 3 * n_bodies);
         let mut b = vec![0.0; a.n];
         a.mul(&vector(a.n, 2), &mut b);
-        let schur = solve(Backend::Schur, n_bodies, &a, &b).expect("regular chain");
-        let lu = solve(Backend::SparseLu, n_bodies, &a, &b).expect("regular chain");
+        let schur = solve(Backend::SCHUR, n_bodies, &a, &b).expect("regular chain");
+        let lu = solve(Backend::SPARSE_LU, n_bodies, &a, &b).expect("regular chain");
         assert!(relative_difference(&schur, &lu) <= 1e-10, "N = {n_bodies}");
         let envelope = |a: &Csc| {
-            let s = KktSolver::new(a, &options(Backend::Schur, n_bodies)).expect("structure");
-            matches!(&s.inner, crate::Inner::Schur(sc) if sc.uses_envelope())
+            Schur::new(a, 3 * n_bodies)
+                .expect("structure")
+                .uses_envelope()
         };
         assert!(!envelope(&a), "N = {n_bodies}: scrambled, AMD");
         assert!(
@@ -465,7 +467,7 @@ fn schur_rejects_non_finite_values_anywhere_it_reads() {
     for k in [0, a.col_ptr[5] + 1, a.nnz() - 1] {
         let mut bad = a.clone();
         bad.values[k] = f64::NAN;
-        let mut s = KktSolver::new(&a, &options(Backend::Schur, 10)).expect("structure");
+        let mut s = KktSolver::new(&a, &options(Backend::SCHUR, 10)).expect("structure");
         assert_eq!(s.factor(&bad.values), Err(KktError::NonFinite), "entry {k}");
         s.factor(&a.values).expect("recovers");
     }
@@ -474,10 +476,10 @@ fn schur_rejects_non_finite_values_anywhere_it_reads() {
 #[test]
 fn schur_needs_a_block_diagonal_primal_block() {
     let a = chain(10, 1, None);
-    let result = KktSolver::new(&a, &options(Backend::Schur, 10));
+    let result = KktSolver::new(&a, &options(Backend::SCHUR, 10));
     assert!(matches!(result, Err(KktError::Structure(_))), "{result:?}");
     let missing = KktOptions {
-        backend: Backend::Schur,
+        backend: Backend::SCHUR,
         ..KktOptions::default()
     };
     assert!(matches!(
@@ -492,8 +494,8 @@ proptest! {
     fn ldlt_matches_dense_lu_on_random_chains(n_bodies in 1usize..12, seed in any::<u64>(), rhs_seed in any::<u64>()) {
         let a = chain(n_bodies, seed, None);
         let b = vector(a.n, rhs_seed);
-        let ldlt = solve(Backend::SparseLdlt, n_bodies, &a, &b).expect("regular chain");
-        let dense = solve(Backend::Dense, n_bodies, &a, &b).expect("regular chain");
+        let ldlt = solve(Backend::SPARSE_LDLT, n_bodies, &a, &b).expect("regular chain");
+        let dense = solve(Backend::DENSE, n_bodies, &a, &b).expect("regular chain");
         prop_assert!(relative_difference(&ldlt, &dense) <= 1e-10);
         prop_assert!(relative_residual(&a, &ldlt, &b) <= 1e-12);
     }
@@ -502,8 +504,8 @@ proptest! {
     fn schur_matches_dense_lu_on_random_chains(n_bodies in 1usize..12, seed in any::<u64>(), rhs_seed in any::<u64>()) {
         let a = chain_with(n_bodies, seed, None, false);
         let b = vector(a.n, rhs_seed);
-        let schur = solve(Backend::Schur, n_bodies, &a, &b).expect("regular chain");
-        let dense = solve(Backend::Dense, n_bodies, &a, &b).expect("regular chain");
+        let schur = solve(Backend::SCHUR, n_bodies, &a, &b).expect("regular chain");
+        let dense = solve(Backend::DENSE, n_bodies, &a, &b).expect("regular chain");
         prop_assert!(relative_difference(&schur, &dense) <= 1e-10);
         prop_assert!(relative_residual(&a, &schur, &b) <= 1e-12);
     }
@@ -529,11 +531,8 @@ fn the_residual_check_inside_the_schur_solve_is_the_residual() {
         let np = 3 * n_bodies;
         let a = with_multiplier_diagonal(&chain_with(n_bodies, 8, None, false), np, d);
         let b = vector(a.n, 5);
-        let mut s = KktSolver::new(&a, &options(Backend::Schur, n_bodies)).expect("structure");
-        s.factor(&a.values).expect("regular");
-        let crate::Inner::Schur(schur) = &mut s.inner else {
-            panic!("Schur backend")
-        };
+        let mut schur = Schur::new(&a, np).expect("structure");
+        let a_norm = schur.factor(&a.values).expect("regular");
         assert!(
             schur.is_banded() && schur.checks_in_solve(),
             "a chain in order"
@@ -546,7 +545,7 @@ fn the_residual_check_inside_the_schur_solve_is_the_residual() {
             .iter()
             .zip(&b)
             .fold(0.0f64, |m, (p, q)| m.max((p - q).abs()));
-        let scale = s.a_norm * x_norm + b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let scale = a_norm * x_norm + b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         // Both are rounding-level residuals of the same solution; they may
         // differ only by rounding in how they are summed.
         assert!(fused <= 1e-14 * scale, "N = {n_bodies}, d = {d}: {fused:e}");
@@ -563,9 +562,9 @@ fn the_residual_check_inside_the_schur_solve_is_the_residual() {
         }
         let norm = row_sums.iter().fold(0.0f64, |m, &v| m.max(v));
         assert!(
-            (s.a_norm - norm).abs() <= 1e-14 * norm,
+            (a_norm - norm).abs() <= 1e-14 * norm,
             "{} vs {norm}",
-            s.a_norm
+            a_norm
         );
     }
 }
@@ -575,18 +574,39 @@ fn a_spoiled_factorization_fails_the_check_inside_the_schur_solve() {
     let n_bodies = 50;
     let a = chain_with(n_bodies, 4, None, false);
     let b = vector(a.n, 6);
-    let mut s = KktSolver::new(&a, &options(Backend::Schur, n_bodies)).expect("structure");
-    s.factor(&a.values).expect("regular");
-    if let crate::Inner::Schur(schur) = &mut s.inner {
-        schur.spoil(7, 1.5);
+    /// The Schur backend with every factorization spoiled afterwards.
+    struct Spoiled(Schur, bool);
+    impl KktBackend for Spoiled {
+        fn factor(&mut self, values: &[f64]) -> Result<f64, KktError> {
+            let norm = self.0.factor(values)?;
+            if self.1 {
+                self.0.spoil(7, 1.5);
+            }
+            Ok(norm)
+        }
+        fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64 {
+            self.0.solve_in_place(rhs)
+        }
+        fn mul(&self, x: &[f64], y: &mut [f64]) {
+            self.0.mul(x, y);
+        }
+        fn solve_with_residual(&mut self, rhs: &mut [f64]) -> Option<(f64, f64)> {
+            self.0.solve_with_residual(rhs)
+        }
     }
+    let schur = Spoiled(Schur::new(&a, 3 * n_bodies).expect("structure"), true);
+    let opts = options(Backend::SCHUR, n_bodies);
+    let mut s = KktSolver::with_backend(Box::new(schur), Backend::SCHUR, a.n, &opts);
+    s.factor(&a.values).expect("regular");
     let mut x = b.clone();
     let result = s.solve_in_place(&mut x);
     assert!(
         matches!(result, Err(KktError::Inaccurate { relative_residual }) if relative_residual > 1e-6),
         "{result:?}"
     );
-    // A fresh factorization passes again.
+    // Unspoiled, the same solver passes.
+    let schur = Spoiled(Schur::new(&a, 3 * n_bodies).expect("structure"), false);
+    let mut s = KktSolver::with_backend(Box::new(schur), Backend::SCHUR, a.n, &opts);
     s.factor(&a.values).expect("regular");
     let mut x = b.clone();
     s.solve_in_place(&mut x).expect("accurate");

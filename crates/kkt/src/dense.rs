@@ -1,14 +1,23 @@
 //! Dense LU with partial pivoting for tiny KKT systems, in place, no allocation
 //! after construction.
 
-use crate::KktError;
+use crate::backend::{Backend, KktBackend, Registration, Structure};
+use crate::stored::Stored;
+use crate::{Csc, KktError, KktOptions, max_abs};
+
+/// The `dense` backend.
+pub(crate) const REGISTRATION: Registration = Registration {
+    backend: Backend::DENSE,
+    summary: "dense LU with partial pivoting (tiny systems)",
+    structure: Structure::AUGMENTED,
+    analyse: |a, _: &KktOptions| Ok(Box::new(DenseLu::new(a))),
+};
 
 /// Dense LU factors of a small square matrix given in CSC form.
 #[derive(Clone, Debug)]
 pub(crate) struct DenseLu {
     n: usize,
-    col_ptr: Vec<usize>,
-    row_idx: Vec<usize>,
+    stored: Stored,
     /// Row-major `n × n`: the matrix, then its LU factors.
     a: Vec<f64>,
     /// `perm[k]` = original row in position `k`.
@@ -17,11 +26,11 @@ pub(crate) struct DenseLu {
 }
 
 impl DenseLu {
-    pub(crate) fn new(n: usize, col_ptr: &[usize], row_idx: &[usize]) -> Self {
+    fn new(a: &Csc) -> Self {
+        let n = a.n;
         Self {
             n,
-            col_ptr: col_ptr.to_vec(),
-            row_idx: row_idx.to_vec(),
+            stored: Stored::new(a),
             a: vec![0.0; n * n],
             perm: (0..n).collect(),
             work: vec![0.0; n],
@@ -31,17 +40,15 @@ impl DenseLu {
     /// Factors `P A = L U`. A pivot smaller than `n · ε` times the largest entry
     /// of its column of `A` means that column (unknown) `k` is numerically
     /// dependent on the previous ones.
-    pub(crate) fn factor(&mut self, values: &[f64]) -> Result<(), KktError> {
+    fn factor_dense(&mut self) -> Result<(), KktError> {
         let n = self.n;
         let a = &mut self.a;
         a.fill(0.0);
+        let m = self.stored.matrix();
         for j in 0..n {
-            for k in self.col_ptr[j]..self.col_ptr[j + 1] {
-                a[self.row_idx[k] * n + j] += values[k];
+            for k in m.col_ptr[j]..m.col_ptr[j + 1] {
+                a[m.row_idx[k] * n + j] += m.values[k];
             }
-        }
-        if a.iter().any(|x| !x.is_finite()) {
-            return Err(KktError::NonFinite);
         }
         // Column norms of A: a pivot is judged against its own column, so that a
         // badly scaled but regular KKT matrix (unscaled, small h) is not taken
@@ -84,7 +91,7 @@ impl DenseLu {
         Ok(())
     }
 
-    pub(crate) fn solve_in_place(&mut self, rhs: &mut [f64]) {
+    fn solve_dense(&mut self, rhs: &mut [f64]) {
         let n = self.n;
         let a = &self.a;
         for (k, &p) in self.perm.iter().enumerate() {
@@ -106,5 +113,22 @@ impl DenseLu {
             x[i] = s / a[i * n + i];
         }
         rhs.copy_from_slice(x);
+    }
+}
+
+impl KktBackend for DenseLu {
+    fn factor(&mut self, values: &[f64]) -> Result<f64, KktError> {
+        let norm = self.stored.load(values)?;
+        self.factor_dense()?;
+        Ok(norm)
+    }
+
+    fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64 {
+        self.solve_dense(rhs);
+        max_abs(rhs)
+    }
+
+    fn mul(&self, x: &[f64], y: &mut [f64]) {
+        self.stored.mul(x, y);
     }
 }

@@ -11,6 +11,7 @@
 //! `PIVOT_TOLERANCE` times the terms it is computed from,
 //! `|c_ii| + Σ_j l_ij² |d_j|`, is taken for zero.
 
+use crate::MaxAbs;
 use crate::sparse_ldlt::PIVOT_TOLERANCE;
 
 /// The envelope structure, the matrix values, then the factor in place.
@@ -61,6 +62,15 @@ impl EnvelopeLdlt {
         let (range, first) = self.row(r);
         debug_assert!(first <= s && s <= r);
         range.start + s - first
+    }
+
+    /// Position of entry `(r, s)` in the values, `None` outside the envelope.
+    pub(crate) fn checked_slot(&self, r: usize, s: usize) -> Option<usize> {
+        if r >= self.d.len() {
+            return None;
+        }
+        let (range, first) = self.row(r);
+        (first <= s && s <= r).then(|| range.start + s - first)
     }
 
     /// Adds `v` to entry `(r, s)`, `first(r) ≤ s ≤ r`, before
@@ -139,10 +149,9 @@ impl EnvelopeLdlt {
             *xi /= d;
         }
         // Lᵀ x = w from the last row up: x_i is final once the rows below
-        // it have been subtracted; ‖x‖∞ on the way (`0 · x` carries a NaN or
-        // an infinity).
+        // it have been subtracted; ‖x‖∞ on the way.
         let sign = if negate { -1.0 } else { 1.0 };
-        let (mut max, mut nan) = (0.0f64, 0.0f64);
+        let mut max = MaxAbs::new();
         for i in (0..n).rev() {
             let (range, fi) = self.row(i);
             let row = &self.values[range.start..range.end - 1];
@@ -151,10 +160,13 @@ impl EnvelopeLdlt {
                 *xk -= l * xi;
             }
             x[i] = sign * xi;
-            max = if xi.abs() > max { xi.abs() } else { max };
-            nan += 0.0 * xi;
+            max.push(xi);
         }
-        if nan.is_nan() { f64::NAN } else { max }
+        if max.is_finite() {
+            max.value()
+        } else {
+            f64::NAN
+        }
     }
 }
 

@@ -37,7 +37,64 @@ use faer::sparse::linalg::cholesky::{
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
-use crate::{Csc, KktError};
+use crate::backend::{Backend, KktBackend, Registration, Structure};
+use crate::stored::Stored;
+use crate::{Csc, KktError, KktOptions, max_abs};
+
+/// The `ldlt` backend.
+pub(crate) const REGISTRATION: Registration = Registration {
+    backend: Backend::SPARSE_LDLT,
+    summary: "faer's sparse LDLᵀ without pivoting in a KKT ordering (S positive definite)",
+    structure: Structure::AUGMENTED,
+    analyse: |a, options| Ok(Box::new(LdltBackend::new(a, options)?)),
+};
+
+/// The `ldlt` backend: [`SparseLdlt`] of the whole KKT matrix, with a copy of
+/// it for the solver's checks.
+struct LdltBackend {
+    stored: Stored,
+    ldlt: SparseLdlt,
+}
+
+impl LdltBackend {
+    fn new(a: &Csc, options: &KktOptions) -> Result<Self, KktError> {
+        let np = options.require_n_primal(Backend::SPARSE_LDLT)?;
+        let mut ldlt = SparseLdlt::new(a, np)?;
+        if let Some(delta) = options.ldlt_regularization {
+            if !(delta > 0.0 && delta < 1.0) {
+                return Err(KktError::Structure(format!(
+                    "the LDLᵀ regularization δ must be in (0, 1), got {delta}"
+                )));
+            }
+            ldlt.set_regularization(np, delta);
+        }
+        Ok(Self {
+            stored: Stored::new(a),
+            ldlt,
+        })
+    }
+}
+
+impl KktBackend for LdltBackend {
+    fn factor(&mut self, values: &[f64]) -> Result<f64, KktError> {
+        let norm = self.stored.load(values)?;
+        self.ldlt.factor(self.stored.matrix())?;
+        Ok(norm)
+    }
+
+    fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64 {
+        self.ldlt.solve_in_place(rhs);
+        max_abs(rhs)
+    }
+
+    fn mul(&self, x: &[f64], y: &mut [f64]) {
+        self.stored.mul(x, y);
+    }
+
+    fn is_regularized(&self) -> bool {
+        self.ldlt.is_regularized()
+    }
+}
 
 /// A pivot whose magnitude is at most this times the magnitude of the terms it
 /// was computed from is taken for zero (≈ 2.2e-12; measured on chains of up to
@@ -203,7 +260,7 @@ impl SparseLdlt {
         // below.
         let regularization = match &self.regularization {
             Some((signs, delta)) => {
-                let size = a.values.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+                let size = max_abs(&a.values);
                 LdltRegularization {
                     dynamic_regularization_signs: Some(signs),
                     dynamic_regularization_delta: delta * size,

@@ -7,16 +7,27 @@ use faer::sparse::linalg::lu::{LuRef, NumericLu, SymbolicLu, factorize_symbolic_
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par};
 
-use crate::{Csc, KktError};
+use crate::backend::{Backend, KktBackend, Registration, Structure};
+use crate::stored::Stored;
+use crate::{Csc, KktError, KktOptions, max_abs};
+
+/// The `lu` backend.
+pub(crate) const REGISTRATION: Registration = Registration {
+    backend: Backend::SPARSE_LU,
+    summary: "faer's sparse LU with partial pivoting, COLAMD order (any square matrix)",
+    structure: Structure::AUGMENTED,
+    analyse: |a, _: &KktOptions| Ok(Box::new(SparseLu::new(a)?)),
+};
 
 pub(crate) struct SparseLu {
+    stored: Stored,
     symbolic: SymbolicLu<usize>,
     numeric: NumericLu<usize, f64>,
     mem: MemBuffer,
 }
 
 impl SparseLu {
-    pub(crate) fn new(a: &Csc) -> Result<Self, KktError> {
+    fn new(a: &Csc) -> Result<Self, KktError> {
         let sym = SymbolicSparseColMatRef::new_checked(a.n, a.n, &a.col_ptr, None, &a.row_idx);
         let symbolic = factorize_symbolic_lu(sym, Default::default())
             .map_err(|e| KktError::Backend(format!("{e:?}")))?;
@@ -26,13 +37,15 @@ impl SparseLu {
         ]);
         let mem = MemBuffer::try_new(req).map_err(|_| KktError::OutOfMemory)?;
         Ok(Self {
+            stored: Stored::new(a),
             symbolic,
             numeric: NumericLu::new(),
             mem,
         })
     }
 
-    pub(crate) fn factor(&mut self, a: &Csc) -> Result<(), KktError> {
+    fn factor_numeric(&mut self) -> Result<(), KktError> {
+        let a = self.stored.matrix();
         let sym = SymbolicSparseColMatRef::new_checked(a.n, a.n, &a.col_ptr, None, &a.row_idx);
         let mat = SparseColMatRef::new(sym, &a.values);
         let stack = MemStack::new(&mut self.mem);
@@ -51,11 +64,28 @@ impl SparseLu {
         }
     }
 
-    pub(crate) fn solve_in_place(&mut self, rhs: &mut [f64]) {
+    fn solve(&mut self, rhs: &mut [f64]) {
         let n = rhs.len();
         let lu = LuRef::new_unchecked(&self.symbolic, &self.numeric);
         let stack = MemStack::new(&mut self.mem);
         let x = MatMut::from_column_major_slice_mut(rhs, n, 1);
         lu.solve_in_place_with_conj(Conj::No, x, Par::Seq, stack);
+    }
+}
+
+impl KktBackend for SparseLu {
+    fn factor(&mut self, values: &[f64]) -> Result<f64, KktError> {
+        let norm = self.stored.load(values)?;
+        self.factor_numeric()?;
+        Ok(norm)
+    }
+
+    fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64 {
+        self.solve(rhs);
+        max_abs(rhs)
+    }
+
+    fn mul(&self, x: &[f64], y: &mut [f64]) {
+        self.stored.mul(x, y);
     }
 }

@@ -1,9 +1,12 @@
 //! Finite-difference checks of every derivative a [`System`] provides.
 
-use mstar_model::System;
+use mstar_kkt::MaxAbs;
+use mstar_model::{Pattern, System};
 
 /// Largest relative errors of a system's analytic derivatives against central
-/// finite differences, each `max|analytic − fd| / max(1, max|fd|)`.
+/// finite differences, each `max|analytic − fd| / max(1, max|fd|)`; NaN (or
+/// infinite) when either side has a NaN or an infinity, so that a check
+/// `e.max() < tol` fails on it.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DerivativeErrors {
     /// `B = ∂Φ/∂u` against differences of `Φ`.
@@ -23,17 +26,26 @@ pub struct DerivativeErrors {
 }
 
 impl DerivativeErrors {
-    /// The largest of all errors.
+    /// The largest of all errors: NaN or infinite when one of them is.
     #[must_use]
     pub fn max(&self) -> f64 {
-        self.b
-            .max(self.k_t)
-            .max(self.c_t)
-            .max(self.phi_t)
-            .max(self.accel_rhs)
-            .max(self.fused)
+        let mut m = MaxAbs::new();
+        for e in [
+            self.b,
+            self.k_t,
+            self.c_t,
+            self.phi_t,
+            self.accel_rhs,
+            self.fused,
+        ] {
+            m.push(e);
+        }
+        m.value()
     }
 }
+
+/// A dense row-major matrix.
+type Dense = Vec<Vec<f64>>;
 
 /// The residual `r = g − Bᵀλ − M ü` (eq. 3), freshly allocated.
 fn residual<S: System + ?Sized>(
@@ -45,20 +57,37 @@ fn residual<S: System + ?Sized>(
     lambda: &[f64],
 ) -> Vec<f64> {
     let (mp, bp) = (sys.mass_pattern(), sys.b_pattern());
-    let mut mass = vec![0.0; mp.len()];
-    let mut b = vec![0.0; bp.len()];
     let mut r = vec![0.0; sys.n_coords()];
-    sys.mass_into(t, u, &mut mass);
-    sys.b_into(t, u, &mut b);
     sys.forces_into(t, u, v, &mut r);
     let mut bt_lambda = vec![0.0; r.len()];
-    bp.mul_transpose_add(&b, lambda, &mut bt_lambda);
+    bp.mul_transpose_add(
+        &values(sys.b_pattern(), |b| sys.b_into(t, u, b)),
+        lambda,
+        &mut bt_lambda,
+    );
     let mut m_a = vec![0.0; r.len()];
-    mp.mul_add(&mass, a, &mut m_a);
+    mp.mul_add(
+        &values(sys.mass_pattern(), |m| sys.mass_into(t, u, m)),
+        a,
+        &mut m_a,
+    );
     for i in 0..r.len() {
         r[i] -= bt_lambda[i] + m_a[i];
     }
     r
+}
+
+/// The values that `fill` writes on `pattern`.
+fn values(pattern: Pattern, fill: impl FnOnce(&mut [f64])) -> Vec<f64> {
+    let mut v = vec![0.0; pattern.len()];
+    fill(&mut v);
+    v
+}
+
+/// The dense matrix that `fill` writes on `pattern`.
+fn dense(pattern: Pattern, fill: impl FnOnce(&mut [f64])) -> Dense {
+    let v = values(pattern.clone(), fill);
+    pattern.to_dense(&v)
 }
 
 fn phi<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Vec<f64> {
@@ -68,7 +97,7 @@ fn phi<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Vec<f64> {
 }
 
 /// Central-difference Jacobian of `f` at `x` (row-major, `f.len() × x.len()`).
-fn fd_jacobian(x: &[f64], f: impl Fn(&[f64]) -> Vec<f64>) -> Vec<Vec<f64>> {
+fn fd_jacobian(x: &[f64], f: impl Fn(&[f64]) -> Vec<f64>) -> Dense {
     let rows = f(x).len();
     let mut jac = vec![vec![0.0; x.len()]; rows];
     let mut xp = x.to_vec();
@@ -86,17 +115,23 @@ fn fd_jacobian(x: &[f64], f: impl Fn(&[f64]) -> Vec<f64>) -> Vec<Vec<f64>> {
     jac
 }
 
+/// `max|analytic − fd| / max(1, max|fd|)`, NaN-aware.
 fn rel_err(analytic: &[Vec<f64>], fd: &[Vec<f64>]) -> f64 {
-    let scale = fd.iter().flatten().fold(1.0f64, |acc, &x| acc.max(x.abs()));
-    analytic
-        .iter()
-        .flatten()
-        .zip(fd.iter().flatten())
-        .fold(0.0f64, |acc, (&x, &y)| acc.max((x - y).abs()))
-        / scale
+    let (mut scale, mut err) = (MaxAbs::new(), MaxAbs::new());
+    scale.push(1.0);
+    for (a, d) in analytic.iter().flatten().zip(fd.iter().flatten()) {
+        scale.push(*d);
+        err.push(a - d);
+    }
+    err.value() / scale.value()
 }
 
-fn negated(a: Vec<Vec<f64>>) -> Vec<Vec<f64>> {
+/// A column vector as a dense matrix.
+fn column(x: &[f64]) -> Dense {
+    x.iter().map(|&v| vec![v]).collect()
+}
+
+fn negated(a: Dense) -> Dense {
     a.into_iter()
         .map(|row| row.into_iter().map(|x| -x).collect())
         .collect()
@@ -113,53 +148,55 @@ pub fn check_derivatives<S: System + ?Sized>(
     a: &[f64],
     lambda: &[f64],
 ) -> DerivativeErrors {
-    let n = sys.n_coords();
-    let m = sys.n_constraints();
-    let dense = |p: mstar_model::Pattern, vals: &[f64]| p.to_dense(vals);
+    DerivativeErrors {
+        b: rel_err(
+            &dense(sys.b_pattern(), |b| sys.b_into(t, u, b)),
+            &fd_jacobian(u, |x| phi(sys, t, x)),
+        ),
+        k_t: k_t_error(sys, t, u, v, a, lambda),
+        c_t: rel_err(
+            &negated(dense(sys.forces_dv_pattern(), |g_v| {
+                sys.forces_dv_into(t, u, v, g_v);
+            })),
+            &negated(fd_jacobian(v, |x| residual(sys, t, u, x, a, lambda))),
+        ),
+        phi_t: phi_t_error(sys, t, u),
+        accel_rhs: accel_rhs_error(sys, t, u, v),
+        fused: fused_error(sys, t, u),
+    }
+}
 
-    // B
-    let mut b = vec![0.0; sys.b_pattern().len()];
-    sys.b_into(t, u, &mut b);
-    let b_err = rel_err(
-        &dense(sys.b_pattern(), &b),
-        &fd_jacobian(u, |x| phi(sys, t, x)),
-    );
-
-    // K_T = H(λ) − ∂g/∂u + ∂(Mü)/∂u
-    let mut h = vec![0.0; sys.hessian_pattern().len()];
-    sys.hessian_into(t, u, lambda, &mut h);
-    let mut g_u = vec![0.0; sys.forces_du_pattern().len()];
-    sys.forces_du_into(t, u, v, &mut g_u);
-    let mut m_du = vec![0.0; sys.mass_du_pattern().len()];
-    sys.mass_du_into(t, u, a, &mut m_du);
-    let mut k_t = dense(sys.hessian_pattern(), &h);
-    let g_u = dense(sys.forces_du_pattern(), &g_u);
-    let m_du = dense(sys.mass_du_pattern(), &m_du);
-    for i in 0..n {
-        for j in 0..n {
-            k_t[i][j] += m_du[i][j] - g_u[i][j];
+/// `K_T = H(λ) − ∂g/∂u + ∂(Mü)/∂u` against `−∂r/∂u`.
+fn k_t_error<S: System + ?Sized>(
+    sys: &S,
+    t: f64,
+    u: &[f64],
+    v: &[f64],
+    a: &[f64],
+    lambda: &[f64],
+) -> f64 {
+    let mut k_t = dense(sys.hessian_pattern(), |h| sys.hessian_into(t, u, lambda, h));
+    let g_u = dense(sys.forces_du_pattern(), |g| sys.forces_du_into(t, u, v, g));
+    let m_du = dense(sys.mass_du_pattern(), |m| sys.mass_du_into(t, u, a, m));
+    for (i, row) in k_t.iter_mut().enumerate() {
+        for (j, k) in row.iter_mut().enumerate() {
+            *k += m_du[i][j] - g_u[i][j];
         }
     }
-    let k_fd = negated(fd_jacobian(u, |x| residual(sys, t, x, v, a, lambda)));
-    let k_err = rel_err(&k_t, &k_fd);
+    let fd = negated(fd_jacobian(u, |x| residual(sys, t, x, v, a, lambda)));
+    rel_err(&k_t, &fd)
+}
 
-    // C_T = −∂g/∂u̇
-    let mut g_v = vec![0.0; sys.forces_dv_pattern().len()];
-    sys.forces_dv_into(t, u, v, &mut g_v);
-    let c_t = negated(dense(sys.forces_dv_pattern(), &g_v));
-    let c_fd = negated(fd_jacobian(v, |x| residual(sys, t, u, x, a, lambda)));
-    let c_err = rel_err(&c_t, &c_fd);
-
-    // Φ_t
-    let mut phi_t = vec![0.0; m];
+/// `Φ_t` against differences of `Φ` in time.
+fn phi_t_error<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> f64 {
+    let mut phi_t = vec![0.0; sys.n_constraints()];
     sys.phi_t_into(t, u, &mut phi_t);
-    let phi_t_fd = fd_jacobian(&[t], |s| phi(sys, s[0], u));
-    let phi_t_err = rel_err(
-        &phi_t.iter().map(|&x| vec![x]).collect::<Vec<_>>(),
-        &phi_t_fd,
-    );
+    rel_err(&column(&phi_t), &fd_jacobian(&[t], |s| phi(sys, s[0], u)))
+}
 
-    // c = −d²/ds² Φ(u + s v, t + s)
+/// `c` against `−d²/ds² Φ(u + s v, t + s)`.
+fn accel_rhs_error<S: System + ?Sized>(sys: &S, t: f64, u: &[f64], v: &[f64]) -> f64 {
+    let m = sys.n_constraints();
     let mut c = vec![0.0; m];
     sys.accel_rhs_into(t, u, v, &mut c);
     let d = 1e-4;
@@ -168,29 +205,22 @@ pub fn check_derivatives<S: System + ?Sized>(
         phi(sys, t + s, &x)
     };
     let (p_plus, p0, p_minus) = (at(d), at(0.0), at(-d));
-    let c_fd: Vec<Vec<f64>> = (0..m)
-        .map(|i| vec![-(p_plus[i] - 2.0 * p0[i] + p_minus[i]) / (d * d)])
+    let c_fd: Vec<f64> = (0..m)
+        .map(|i| -(p_plus[i] - 2.0 * p0[i] + p_minus[i]) / (d * d))
         .collect();
-    let accel_err = rel_err(&c.iter().map(|&x| vec![x]).collect::<Vec<_>>(), &c_fd);
+    rel_err(&column(&c), &column(&c_fd))
+}
 
-    // The fused evaluation against the separate ones.
-    let (mut phi_f, mut b_f) = (vec![0.0; m], vec![0.0; b.len()]);
-    sys.phi_b_into(t, u, &mut phi_f, &mut b_f);
-    let fused = phi_f
-        .iter()
-        .zip(&phi(sys, t, u))
-        .chain(b_f.iter().zip(&b))
-        .fold(0.0f64, |e, (x, y)| {
-            let d = (x - y).abs() / y.abs().max(1.0);
-            if d.is_nan() { f64::INFINITY } else { e.max(d) }
-        });
-
-    DerivativeErrors {
-        fused,
-        b: b_err,
-        k_t: k_err,
-        c_t: c_err,
-        phi_t: phi_t_err,
-        accel_rhs: accel_err,
+/// The fused `Φ` and `B` against the separate ones, relative to
+/// `max(1, |value|)`.
+fn fused_error<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> f64 {
+    let b = values(sys.b_pattern(), |b| sys.b_into(t, u, b));
+    let (mut phi_f, mut b_f) = (vec![0.0; sys.n_constraints()], vec![0.0; b.len()]);
+    let mut work = vec![0.0; sys.workspace_len()];
+    sys.phi_b_into(t, u, &mut phi_f, &mut b_f, &mut work);
+    let mut err = MaxAbs::new();
+    for (x, y) in phi_f.iter().zip(&phi(sys, t, u)).chain(b_f.iter().zip(&b)) {
+        err.push((x - y) / y.abs().max(1.0));
     }
+    err.value()
 }

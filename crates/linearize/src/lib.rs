@@ -32,9 +32,9 @@
 
 mod check;
 mod csc;
+mod layout;
 mod linearization;
 
 pub use check::{DerivativeErrors, check_derivatives};
 pub use linearization::{Coefficients, Linearization, LinearizeError};
-pub use mstar_kkt::Csc;
-pub use mstar_kkt::max_abs;
+pub use mstar_kkt::{Csc, MaxAbs, Structure, max_abs};

@@ -3,9 +3,10 @@
 
 use mstar_model::{Pattern, System};
 
-use mstar_kkt::{Csc, max_abs};
+use mstar_kkt::{Csc, MaxAbs, Structure, max_abs};
 
-use crate::csc::{Slot, from_terms, scatter};
+use crate::csc::scatter;
+use crate::layout::{Layout, Patterns};
 
 /// Errors in a system's declared structure.
 #[derive(Debug, thiserror::Error)]
@@ -148,16 +149,18 @@ impl BtGather {
 /// Residual, constraints, Jacobians and the KKT matrix of one [`System`], with
 /// every buffer allocated once in [`Linearization::new`].
 ///
-/// Call [`eval_residual`](Self::eval_residual) at every Newton iteration,
+/// Call [`eval_residual`](Self::eval_residual) (or
+/// [`eval_kkt_rhs`](Self::eval_kkt_rhs)) at every Newton iteration,
 /// [`eval_jacobians`](Self::eval_jacobians) and [`assemble`](Self::assemble)
-/// only when the iteration matrix is to be refreshed.
+/// only when the iteration matrix is to be refreshed. The evaluated
+/// quantities are read through accessors ([`mass`](Self::mass), [`b`](Self::b),
+/// [`g`](Self::g), [`phi`](Self::phi), [`r`](Self::r), …): a constant `M` or
+/// constant forces are evaluated once and kept.
 #[derive(Clone, Debug)]
 pub struct Linearization {
     n: usize,
     m: usize,
-    augmented: bool,
-    /// Whether [`assemble`](Self::assemble) fills the `Bᵀ` block.
-    fill_transpose: bool,
+    structure: Structure,
     /// Whether `mass` holds a constant `M` already.
     mass_ready: bool,
     /// Whether `g` holds constant forces already.
@@ -169,229 +172,80 @@ pub struct Linearization {
     mass_diagonal: bool,
     mass_pattern: Pattern,
     b_pattern: Pattern,
-    /// Values of `M` on the system's mass pattern. A constant `M`
-    /// ([`System::mass_is_constant`]) is evaluated by the first
-    /// [`eval_residual`](Self::eval_residual) only: pass the system the
-    /// linearization was built for, and do not overwrite these values.
-    pub mass: Vec<f64>,
-    /// Values of `B` on the system's B pattern.
-    pub b: Vec<f64>,
-    /// Values of `Σ λᵢ ∂²Φᵢ/∂u²` on the system's Hessian pattern.
-    pub hessian: Vec<f64>,
-    /// Values of `∂g/∂u`.
-    pub g_u: Vec<f64>,
-    /// Values of `∂g/∂u̇`.
-    pub g_v: Vec<f64>,
-    /// Values of `∂(M ü)/∂u`.
-    pub mass_du: Vec<f64>,
-    /// Forces `g` (eq. 3). Constant forces ([`System::forces_are_constant`])
-    /// are evaluated by the first [`eval_residual`](Self::eval_residual) only,
-    /// like a constant `M`.
-    pub g: Vec<f64>,
+    /// Values of `M`, `B`, `Σ λᵢ ∂²Φᵢ/∂u²`, `∂g/∂u`, `∂g/∂u̇`, `∂(M ü)/∂u` on
+    /// the system's patterns.
+    mass: Vec<f64>,
+    b: Vec<f64>,
+    hessian: Vec<f64>,
+    g_u: Vec<f64>,
+    g_v: Vec<f64>,
+    mass_du: Vec<f64>,
+    /// Forces `g` (eq. 3).
+    g: Vec<f64>,
     /// Constraint force `Bᵀλ` (eq. 1), stored only when `B`'s indices do not
     /// fit in 32 bits (else formed in the residual's own pass).
     bt_lambda: Vec<f64>,
     /// Inertia force `M ü` for a non-diagonal `M`; empty for a diagonal one,
     /// whose `M ü` is formed in the residual's own pass and not stored.
-    pub m_a: Vec<f64>,
+    m_a: Vec<f64>,
     /// Residual `r = g − Bᵀλ − M ü` (the paper's γ, eq. 3), as the last
-    /// [`eval_residual`](Self::eval_residual) formed it
-    /// ([`eval_kkt_rhs`](Self::eval_kkt_rhs) writes `r` into the KKT
-    /// right-hand side instead).
-    pub r: Vec<f64>,
+    /// [`eval_residual`](Self::eval_residual) formed it.
+    r: Vec<f64>,
     /// Constraints `Φ` (eq. 4).
-    pub phi: Vec<f64>,
+    phi: Vec<f64>,
+    /// The system's scratch for [`System::phi_b_into`].
+    work: Vec<f64>,
     /// `max(‖g‖∞, ‖Bᵀλ‖∞, ‖M ü‖∞, ‖λ‖∞)` of the last residual evaluation.
     force_scale: f64,
     /// `‖r‖∞` of the last residual evaluation (NaN if `r` has a NaN).
     r_max: f64,
     /// `‖Φ‖∞` of the last residual evaluation.
     phi_max: f64,
-    kkt: Csc,
-    slots: KktSlots,
-    /// The slots of every term of `S_T` (sorted, once each), and whether
-    /// every slot of the `B` block has exactly one entry of `B`: then
-    /// [`assemble`](Self::assemble) of the structure without `BᵀB` and `Bᵀ`
-    /// zeroes these slots and assigns `B` instead of zeroing the matrix.
-    s_slots: Vec<Slot>,
-    b_slots_unique: bool,
-    bb_pairs: Vec<(usize, usize)>,
-    m_star: Csc,
-    m_star_mass: Vec<Slot>,
-    m_star_bb: Vec<Slot>,
+    /// The KKT structure and slot maps.
+    layout: Layout,
     bb_values: Vec<f64>,
 }
 
-#[derive(Clone, Debug)]
-struct KktSlots {
-    mass: Vec<Slot>,
-    hessian: Vec<Slot>,
-    g_u: Vec<Slot>,
-    g_v: Vec<Slot>,
-    mass_du: Vec<Slot>,
-    bb: Vec<Slot>,
-    identity: Vec<Slot>,
-    b: Vec<Slot>,
-    bt: Vec<Slot>,
-}
-
-fn checked(
-    p: Pattern,
-    matrix: &'static str,
-    rows: usize,
-    cols: usize,
-) -> Result<Pattern, LinearizeError> {
-    if p.nrows != rows || p.ncols != cols {
-        return Err(LinearizeError::PatternShape {
-            matrix,
-            got_rows: p.nrows,
-            got_cols: p.ncols,
-            want_rows: rows,
-            want_cols: cols,
-        });
-    }
-    if let Some((row, col)) = p.out_of_bounds() {
-        return Err(LinearizeError::PatternEntry { matrix, row, col });
-    }
-    Ok(p)
-}
-
 impl Linearization {
-    /// Reads the system's patterns, checks them, and builds the KKT structure
-    /// `[S_T Bᵀ; B 0]` (eq. 16) once: the union of the patterns of `M`, `BᵀB`,
-    /// the constraint Hessian, `∂g/∂u`, `∂g/∂u̇`, `∂(Mü)/∂u`, the diagonal, `B`
-    /// and `Bᵀ`.
+    /// Reads the system's patterns, checks them, and builds the whole KKT
+    /// structure `[S_T Bᵀ; B 0]` (eq. 16) with `S_T` augmented by `BᵀB`
+    /// ([`Structure::AUGMENTED`]) once: the union of the patterns of `M`,
+    /// `BᵀB`, the constraint Hessian, `∂g/∂u`, `∂g/∂u̇`, `∂(Mü)/∂u`, the
+    /// diagonal, `B` and `Bᵀ`.
     ///
     /// # Errors
     /// [`LinearizeError`] when a declared pattern has the wrong shape or an
     /// entry out of bounds.
     pub fn new<S: System + ?Sized>(sys: &S) -> Result<Self, LinearizeError> {
-        Self::with_augmentation(sys, true)
+        Self::with_structure(sys, Structure::AUGMENTED)
     }
 
-    /// As [`new`](Self::new), with (`augmented`) or without the `BᵀB` term
-    /// in the KKT structure. Without it, [`assemble`](Self::assemble) ignores
-    /// [`Coefficients::c_bb`] and `S_T = c_u K_T + c_v C_T + c_a M`: for bodies
-    /// that interact only through constraints `S_T` is then block-diagonal,
-    /// which the Schur backend of mstar-kkt exploits. Both matrices give the
-    /// same `Δu`; the augmented one returns the multiplier part `Δλ + c_bb Φ`
-    /// (with `scale`), the plain one `Δλ`: from the constraint rows `B Δu = −Φ`,
-    /// `c_bb BᵀB Δu = −c_bb Bᵀ Φ` moves into the multipliers. Without it the
-    /// multiplier block has no entries at all (it is zero): the structure is
-    /// meant for mstar-kkt's Schur backend.
+    /// As [`new`](Self::new), in the structure a KKT backend reads
+    /// ([`mstar_kkt::Backend::structure`]). Without the augmentation,
+    /// [`assemble`](Self::assemble) ignores [`Coefficients::c_bb`] and
+    /// `S_T = c_u K_T + c_v C_T + c_a M`: for bodies that interact only
+    /// through constraints `S_T` is then block-diagonal. Both matrices give
+    /// the same `Δu`; the augmented one returns the multiplier part
+    /// `Δλ + c_bb Φ` (with `scale`), the plain one `Δλ`: from the constraint
+    /// rows `B Δu = −Φ`, `c_bb BᵀB Δu = −c_bb Bᵀ Φ` moves into the
+    /// multipliers. Without the `Bᵀ` block, [`kkt`](Self::kkt) holds `S`, `B`
+    /// and no multiplier block (a symmetric matrix by its lower part).
     ///
     /// # Errors
     /// As [`new`](Self::new).
-    pub fn with_augmentation<S: System + ?Sized>(
+    pub fn with_structure<S: System + ?Sized>(
         sys: &S,
-        augmented: bool,
+        structure: Structure,
     ) -> Result<Self, LinearizeError> {
-        let n = sys.n_coords();
-        let m = sys.n_constraints();
-        let mass_pattern = checked(sys.mass_pattern(), "mass", n, n)?;
-        let b_pattern = checked(sys.b_pattern(), "B", m, n)?;
-        let hessian_pattern = checked(sys.hessian_pattern(), "constraint Hessian", n, n)?;
-        let g_u_pattern = checked(sys.forces_du_pattern(), "∂g/∂u", n, n)?;
-        let g_v_pattern = checked(sys.forces_dv_pattern(), "∂g/∂u̇", n, n)?;
-        let mass_du_pattern = checked(sys.mass_du_pattern(), "∂(Mü)/∂u", n, n)?;
-
-        // BᵀB: for every constraint row, all pairs of its entries.
-        let mut rows: Vec<Vec<usize>> = vec![Vec::new(); m];
-        for (k, &(i, _)) in b_pattern.entries.iter().enumerate() {
-            rows[i].push(k);
-        }
-        let mut bb_pairs = Vec::new();
-        for row in &rows {
-            for &p in row {
-                for &q in row {
-                    bb_pairs.push((p, q));
-                }
-            }
-        }
-        let bb_entries: Vec<(usize, usize)> = bb_pairs
-            .iter()
-            .map(|&(p, q)| (b_pattern.entries[p].1, b_pattern.entries[q].1))
-            .collect();
-        let identity: Vec<(usize, usize)> = (0..n + m).map(|i| (i, i)).collect();
-        let b_entries: Vec<(usize, usize)> =
-            b_pattern.entries.iter().map(|&(i, j)| (n + i, j)).collect();
-        let bt_entries: Vec<(usize, usize)> =
-            b_pattern.entries.iter().map(|&(i, j)| (j, n + i)).collect();
-        let no_entries = Vec::new();
-        let (kkt, slots) = from_terms(
-            n + m,
-            &[
-                &mass_pattern.entries,
-                &hessian_pattern.entries,
-                &g_u_pattern.entries,
-                &g_v_pattern.entries,
-                &mass_du_pattern.entries,
-                if augmented { &bb_entries } else { &no_entries },
-                &identity[..n],
-                &b_entries,
-                &bt_entries,
-                // The multiplier block is zero. LDLᵀ of the augmented matrix
-                // wants its diagonal in the pattern; the Schur backend forms
-                // the diagonal of C itself and would only read these zeros
-                // (at 10⁵ bodies, a pass through memory per factorization).
-                if augmented {
-                    &identity[n..]
-                } else {
-                    &no_entries
-                },
-            ],
-        )
-        .map_err(|nnz| LinearizeError::TooLarge { nnz })?;
-        let mut it = slots.into_iter();
-        let mut next = || it.next().unwrap_or_default();
-        let mut slots = KktSlots {
-            mass: next(),
-            hessian: next(),
-            g_u: next(),
-            g_v: next(),
-            mass_du: next(),
-            bb: next(),
-            identity: next(),
-            b: next(),
-            bt: next(),
-        };
-        let mut s_slots: Vec<Slot> = [
-            &slots.mass,
-            &slots.hessian,
-            &slots.g_u,
-            &slots.g_v,
-            &slots.mass_du,
-            &slots.bb,
-            &slots.identity,
-        ]
-        .into_iter()
-        .flatten()
-        .copied()
-        .collect();
-        s_slots.sort_unstable();
-        s_slots.dedup();
-        let mut b_sorted = slots.b.clone();
-        b_sorted.sort_unstable();
-        b_sorted.dedup();
-        let b_slots_unique = b_sorted.len() == slots.b.len();
-        slots.b.shrink_to_fit();
-        let (m_star, ms) = from_terms(n, &[&mass_pattern.entries, &bb_entries])
-            .map_err(|nnz| LinearizeError::TooLarge { nnz })?;
-        let mut ms = ms.into_iter();
-        let m_star_mass = ms.next().unwrap_or_default();
-        let m_star_bb = ms.next().unwrap_or_default();
-        let bt_gather = BtGather::new(&b_pattern);
-        let mass_diagonal = mass_pattern.len() == n
-            && mass_pattern
-                .entries
-                .iter()
-                .enumerate()
-                .all(|(k, &(i, j))| i == k && j == k);
+        let p = Patterns::read(sys)?;
+        let layout = Layout::new(&p, structure)?;
+        let bt_gather = BtGather::new(&p.b);
+        let (n, m) = (p.n, p.m);
+        let mass_diagonal = p.mass_is_diagonal();
         Ok(Self {
             n,
             m,
-            augmented,
-            fill_transpose: true,
+            structure,
             mass_ready: false,
             forces_ready: false,
             bt_lambda: if bt_gather.is_some() {
@@ -401,12 +255,12 @@ impl Linearization {
             },
             bt_gather,
             mass_diagonal,
-            mass: vec![0.0; mass_pattern.len()],
-            b: vec![0.0; b_pattern.len()],
-            hessian: vec![0.0; hessian_pattern.len()],
-            g_u: vec![0.0; g_u_pattern.len()],
-            g_v: vec![0.0; g_v_pattern.len()],
-            mass_du: vec![0.0; mass_du_pattern.len()],
+            mass: vec![0.0; p.mass.len()],
+            b: vec![0.0; p.b.len()],
+            hessian: vec![0.0; p.hessian.len()],
+            g_u: vec![0.0; p.g_u.len()],
+            g_v: vec![0.0; p.g_v.len()],
+            mass_du: vec![0.0; p.mass_du.len()],
             g: vec![0.0; n],
             m_a: if mass_diagonal {
                 Vec::new()
@@ -415,41 +269,68 @@ impl Linearization {
             },
             r: vec![0.0; n],
             phi: vec![0.0; m],
+            work: vec![0.0; sys.workspace_len()],
             force_scale: 0.0,
             r_max: 0.0,
             phi_max: 0.0,
-            bb_values: vec![0.0; bb_pairs.len()],
-            mass_pattern,
-            b_pattern,
-            kkt,
-            slots,
-            s_slots,
-            b_slots_unique,
-            bb_pairs,
-            m_star,
-            m_star_mass,
-            m_star_bb,
+            bb_values: vec![0.0; layout.bb_pairs.len()],
+            mass_pattern: p.mass,
+            b_pattern: p.b,
+            layout,
         })
     }
 
-    /// Whether [`assemble`](Self::assemble) fills the `Bᵀ` block of the KKT
-    /// matrix (default: yes). A solver that reads only `S`, `B` and the
-    /// multiplier block (mstar-kkt's Schur backend) does not need it; the
-    /// block then stays zero and [`kkt`](Self::kkt) is not the whole matrix.
-    pub fn set_fill_transpose(&mut self, fill: bool) {
-        self.fill_transpose = fill;
-        if !fill {
-            for &k in &self.slots.bt {
-                self.kkt.values[k as usize] = 0.0;
-            }
-        }
+    /// The KKT structure assembled.
+    #[must_use]
+    pub fn structure(&self) -> Structure {
+        self.structure
     }
 
     /// Whether the KKT matrix carries the `BᵀB` term (see
-    /// [`with_augmentation`](Self::with_augmentation)).
+    /// [`with_structure`](Self::with_structure)).
     #[must_use]
     pub fn augmented(&self) -> bool {
-        self.augmented
+        self.structure.augmented
+    }
+
+    /// Values of `M` on the system's mass pattern, as last evaluated.
+    #[must_use]
+    pub fn mass(&self) -> &[f64] {
+        &self.mass
+    }
+
+    /// Values of `B` on the system's `B` pattern, as last evaluated.
+    #[must_use]
+    pub fn b(&self) -> &[f64] {
+        &self.b
+    }
+
+    /// The forces `g` (eq. 3), as last evaluated.
+    #[must_use]
+    pub fn g(&self) -> &[f64] {
+        &self.g
+    }
+
+    /// The constraints `Φ` (eq. 4), as last evaluated.
+    #[must_use]
+    pub fn phi(&self) -> &[f64] {
+        &self.phi
+    }
+
+    /// The residual `r = g − Bᵀλ − M ü` (eq. 3) of the last
+    /// [`eval_residual`](Self::eval_residual) ([`eval_kkt_rhs`](Self::eval_kkt_rhs)
+    /// writes `r` into the KKT right-hand side instead and leaves this as it was).
+    #[must_use]
+    pub fn r(&self) -> &[f64] {
+        &self.r
+    }
+
+    /// Values of `Σ λᵢ ∂²Φᵢ/∂u²`, `∂g/∂u`, `∂g/∂u̇` and `∂(M ü)/∂u` on the
+    /// system's patterns, as last [`eval_jacobians`](Self::eval_jacobians)
+    /// evaluated them.
+    #[must_use]
+    pub fn jacobians(&self) -> [&[f64]; 4] {
+        [&self.hessian, &self.g_u, &self.g_v, &self.mass_du]
     }
 
     /// Whether every diagonal entry of `M`, as last evaluated, is positive
@@ -511,8 +392,8 @@ impl Linearization {
     /// in one: writes the right-hand side `[scale·r; −Φ]` of (16) into `rhs`
     /// as the residual is formed, without storing `r` (the field
     /// [`r`](Self::r) keeps its last value), and returns `‖rhs‖∞` (see
-    /// [`kkt_rhs_norm`](Self::kkt_rhs_norm)). At 10⁵ bodies it saves a pass
-    /// writing `r` and one reading it back. The norms are those of
+    /// [`kkt_rhs_norm`](Self::kkt_rhs_norm)). On a long chain it saves a
+    /// pass writing `r` and one reading it back. The norms are those of
     /// `eval_residual`.
     ///
     /// # Panics
@@ -532,18 +413,13 @@ impl Linearization {
         assert_eq!(rhs.len(), self.n + self.m);
         let (primal, dual) = rhs.split_at_mut(self.n);
         self.residual_into(sys, t, u, v, a, lambda, scale, primal);
-        // −Φ and ‖Φ‖∞ in one pass; `0 · Φᵢ` carries a NaN or an infinity.
-        let (mut phi_max, mut nan) = (0.0f64, 0.0f64);
+        // −Φ and ‖Φ‖∞ in one pass.
+        let mut phi_max = MaxAbs::new();
         for (x, &p) in dual.iter_mut().zip(&self.phi) {
             *x = -p;
-            phi_max = if p.abs() > phi_max { p.abs() } else { phi_max };
-            nan += 0.0 * p;
+            phi_max.push(p);
         }
-        self.phi_max = if nan.is_nan() {
-            max_abs(&self.phi)
-        } else {
-            phi_max
-        };
+        self.phi_max = phi_max.value();
         self.kkt_rhs_norm(scale)
     }
 
@@ -561,12 +437,26 @@ impl Linearization {
         scale_out: f64,
         out: &mut [f64],
     ) {
-        // A constant M (System::mass_is_constant) is evaluated once.
+        self.evaluate(sys, t, u, v, a, lambda);
+        self.form_residual(a, lambda, scale_out, out);
+    }
+
+    /// `M` (once when constant), `Φ` and `B`, `g` (once when constant), and
+    /// where they are stored `Bᵀλ` and `M ü`.
+    fn evaluate<S: System + ?Sized>(
+        &mut self,
+        sys: &S,
+        t: f64,
+        u: &[f64],
+        v: &[f64],
+        a: &[f64],
+        lambda: &[f64],
+    ) {
         if !(self.mass_ready && sys.mass_is_constant()) {
             sys.mass_into(t, u, &mut self.mass);
             self.mass_ready = true;
         }
-        sys.phi_b_into(t, u, &mut self.phi, &mut self.b);
+        sys.phi_b_into(t, u, &mut self.phi, &mut self.b, &mut self.work);
         if !(self.forces_ready && sys.forces_are_constant()) {
             sys.forces_into(t, u, v, &mut self.g);
             self.forces_ready = true;
@@ -580,10 +470,14 @@ impl Linearization {
             self.m_a.fill(0.0);
             self.mass_pattern.mul_add(&self.mass, a, &mut self.m_a);
         }
-        // r and, in the same pass, the force scale and ‖r‖∞, with Bᵀλ (32-bit
-        // indices) and M ü (diagonal M) formed on the way, not stored: at 10⁵
-        // bodies every stored vector is a pass through memory.
-        let (mut scale, mut r_max, mut nan) = (0.0f64, 0.0f64, 0.0f64);
+    }
+
+    /// `out = scale_out · r` and, in the same pass, the force scale and
+    /// `‖r‖∞`, with `Bᵀλ` (32-bit indices) and `M ü` (diagonal `M`) formed on
+    /// the way, not stored: on a long chain every stored vector is a pass
+    /// through memory.
+    fn form_residual(&mut self, a: &[f64], lambda: &[f64], scale_out: f64, out: &mut [f64]) {
+        let (mut scale, mut r_max) = (0.0f64, MaxAbs::new());
         let bigger = |m: f64, x: f64| if x > m { x } else { m };
         let (b, mass, m_a, bt_lambda) = (&self.b, &self.mass, &self.m_a, &self.bt_lambda);
         let gather = self.bt_gather.as_ref();
@@ -600,15 +494,10 @@ impl Linearization {
             // rules cost a blend each, in the loop's chain of dependences.
             let local = bigger(bigger(g.abs(), bl.abs()), ma.abs());
             scale = bigger(scale, local);
-            r_max = bigger(r_max, r.abs());
-            nan += 0.0 * r;
-        }
-        // `0 · r` is NaN for a NaN or an infinite rᵢ; f64::max drops NaNs.
-        if nan.is_nan() && r_max.is_finite() {
-            r_max = f64::NAN;
+            r_max.push(r);
         }
         self.force_scale = scale.max(max_abs(lambda));
-        self.r_max = r_max;
+        self.r_max = r_max.value();
     }
 
     /// Evaluates the parts of `K_T` and `C_T` (eqs. 6-7): the constraint Hessian
@@ -631,7 +520,7 @@ impl Linearization {
     }
 
     fn eval_bb(&mut self) {
-        for (out, &(p, q)) in self.bb_values.iter_mut().zip(&self.bb_pairs) {
+        for (out, &(p, q)) in self.bb_values.iter_mut().zip(&self.layout.bb_pairs) {
             *out = self.b[p] * self.b[q];
         }
     }
@@ -642,27 +531,31 @@ impl Linearization {
     /// − ∂g/∂u + ∂(Mü)/∂u`, `C_T = −∂g/∂u̇`), scaled by `scale`, plus
     /// `c_identity I`.
     pub fn assemble(&mut self, c: &Coefficients) {
-        let c_bb = if self.augmented { c.c_bb } else { 0.0 };
+        let c_bb = if self.structure.augmented {
+            c.c_bb
+        } else {
+            0.0
+        };
         if c_bb != 0.0 {
             self.eval_bb();
         }
         let s = c.scale;
-        let vals = &mut self.kkt.values;
-        // Without BᵀB and the Bᵀ block (Schur backend) the matrix is the S
-        // terms and B: zero the S slots and assign B, each slot of which has
-        // one entry, instead of zeroing everything and adding B (fewer
-        // instructions; at 10⁵ bodies the same cache lines are written, the
-        // S entries sharing them with B). The Bᵀ block stays zero
-        // (`set_fill_transpose(false)`).
-        let assign_b = !self.fill_transpose && !self.augmented && self.b_slots_unique;
+        let layout = &mut self.layout;
+        let vals = &mut layout.kkt.values;
+        // Without BᵀB and the Bᵀ block (the Schur backend's structure) the
+        // matrix is the S terms and B: zero the S slots and assign B, each
+        // slot of which has one entry, instead of zeroing everything and
+        // adding B (fewer instructions; the same cache lines are written).
+        let assign_b =
+            !self.structure.transpose && !self.structure.augmented && layout.b_slots_unique;
         if assign_b {
-            for &k in &self.s_slots {
+            for &k in &layout.s_slots {
                 vals[k as usize] = 0.0;
             }
         } else {
             vals.fill(0.0);
         }
-        let sl = &self.slots;
+        let sl = &layout.slots;
         scatter(vals, &sl.mass, &self.mass, s * c.c_a);
         if c.c_u != 0.0 {
             scatter(vals, &sl.hessian, &self.hessian, s * c.c_u);
@@ -687,16 +580,15 @@ impl Linearization {
         } else {
             scatter(vals, &sl.b, &self.b, 1.0);
         }
-        if self.fill_transpose {
-            scatter(vals, &sl.bt, &self.b, 1.0);
-        }
+        // (No Bᵀ slots when the structure has no Bᵀ block.)
+        scatter(vals, &sl.bt, &self.b, 1.0);
     }
 
     /// The KKT matrix (16) as last [`assemble`](Self::assemble)d; unknowns are
     /// ordered `[Δu (n); Δλ (m)]`. Its structure never changes.
     #[must_use]
     pub fn kkt(&self) -> &Csc {
-        &self.kkt
+        &self.layout.kkt
     }
 
     /// The right-hand side of (16), `[scale·r; −Φ]`; returns its `‖·‖∞`
@@ -732,11 +624,12 @@ impl Linearization {
     /// the last [`eval_residual`](Self::eval_residual).
     pub fn m_star(&mut self) -> &Csc {
         self.eval_bb();
-        let vals = &mut self.m_star.values;
+        let layout = &mut self.layout;
+        let vals = &mut layout.m_star.values;
         vals.fill(0.0);
-        scatter(vals, &self.m_star_mass, &self.mass, 1.0);
-        scatter(vals, &self.m_star_bb, &self.bb_values, 1.0);
-        &self.m_star
+        scatter(vals, &layout.m_star_mass, &self.mass, 1.0);
+        scatter(vals, &layout.m_star_bb, &self.bb_values, 1.0);
+        &layout.m_star
     }
 
     /// `‖r‖∞`, the residual norm of the last evaluation.
@@ -759,27 +652,5 @@ impl Linearization {
     #[must_use]
     pub fn force_scale(&self) -> f64 {
         self.force_scale
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use crate::max_abs;
-
-    #[test]
-    fn max_abs_finds_the_largest_magnitude_and_non_finite_entries() {
-        for len in 0usize..11 {
-            let mut x: Vec<f64> = (0..len).map(|i| i as f64 * 0.5 - 2.0).collect();
-            let want = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            assert_eq!(max_abs(&x), want, "len {len}");
-            if len > 0 {
-                x[len - 1] = -7.5;
-                assert_eq!(max_abs(&x), 7.5);
-                x[len / 2] = f64::NAN;
-                assert!(max_abs(&x).is_nan(), "NaN at {} of {len}", len / 2);
-                x[len / 2] = f64::NEG_INFINITY;
-                assert_eq!(max_abs(&x), f64::INFINITY);
-            }
-        }
     }
 }

@@ -20,13 +20,16 @@
 //! ```
 #![deny(missing_docs)]
 
+mod fd;
+mod fn_system;
 mod pattern;
 mod pendulum;
 pub mod planar;
 mod sample;
 mod system;
 
+pub use fn_system::{FnSystem, NamesError};
 pub use pattern::Pattern;
 pub use pendulum::{Link, PendulumChain};
-pub use sample::Sample;
+pub use sample::{Sample, SampleRef};
 pub use system::{System, constraint_names, coord_names, kinetic_energy};

@@ -35,3 +35,73 @@ impl Sample {
         self.kinetic + self.potential
     }
 }
+
+/// A [`Sample`] borrowed from where it lives (an integrator's state): what
+/// an observer sees at every step, without copying the vectors.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleRef<'a> {
+    /// Time, s.
+    pub t: f64,
+    /// Coordinates `u`.
+    pub u: &'a [f64],
+    /// Velocities `u̇`.
+    pub v: &'a [f64],
+    /// Accelerations `ü`.
+    pub a: &'a [f64],
+    /// Lagrange multipliers `λ`.
+    pub lambda: &'a [f64],
+    /// Kinetic energy `½ u̇ᵀ M u̇`.
+    pub kinetic: f64,
+    /// Potential energy.
+    pub potential: f64,
+    /// Newton iterations spent on this sample.
+    pub iterations: usize,
+    /// Final `‖r‖∞` of the equations of motion (eq. 3).
+    pub residual: f64,
+    /// Final `‖Φ‖∞` of the constraints (eq. 4).
+    pub constraint: f64,
+}
+
+impl SampleRef<'_> {
+    /// Total energy, kinetic plus potential.
+    #[must_use]
+    pub fn energy(&self) -> f64 {
+        self.kinetic + self.potential
+    }
+
+    /// An owned copy.
+    #[must_use]
+    pub fn to_sample(&self) -> Sample {
+        Sample {
+            t: self.t,
+            u: self.u.to_vec(),
+            v: self.v.to_vec(),
+            a: self.a.to_vec(),
+            lambda: self.lambda.to_vec(),
+            kinetic: self.kinetic,
+            potential: self.potential,
+            iterations: self.iterations,
+            residual: self.residual,
+            constraint: self.constraint,
+        }
+    }
+}
+
+impl Sample {
+    /// A borrowed view of this sample.
+    #[must_use]
+    pub fn view(&self) -> SampleRef<'_> {
+        SampleRef {
+            t: self.t,
+            u: &self.u,
+            v: &self.v,
+            a: &self.a,
+            lambda: &self.lambda,
+            kinetic: self.kinetic,
+            potential: self.potential,
+            iterations: self.iterations,
+            residual: self.residual,
+            constraint: self.constraint,
+        }
+    }
+}

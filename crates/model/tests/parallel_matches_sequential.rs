@@ -26,7 +26,8 @@ fn parallel_phi_b_and_hessian_match_sequential() {
             let mut phi = vec![f64::NAN; m];
             let mut b = vec![f64::NAN; sys.b_pattern().len()];
             let mut h = vec![f64::NAN; sys.hessian_pattern().len()];
-            sys.phi_b_into(0.0, &u, &mut phi, &mut b);
+            let mut work = vec![f64::NAN; sys.workspace_len()];
+            sys.phi_b_into(0.0, &u, &mut phi, &mut b, &mut work);
             sys.hessian_into(0.0, &u, &mu, &mut h);
             (phi, b, h)
         })

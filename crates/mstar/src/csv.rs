@@ -4,7 +4,8 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
 
-use mstar_model::{Sample, System, coord_names};
+use mstar_model::{Sample, SampleRef, System, coord_names};
+use mstar_newmark::Observer;
 
 /// The CSV header: `t`, then `u:<name>`, `v:<name>`, `a:<name>` for each
 /// coordinate, `lambda:<i>` for each multiplier (0-based), then `energy`,
@@ -33,21 +34,19 @@ fn number(out: &mut String, x: f64) {
 }
 
 /// Appends one sample as a CSV row.
-fn row(out: &mut String, s: &Sample) {
-    {
-        number(out, s.t);
-        for &x in s.u.iter().chain(&s.v).chain(&s.a).chain(&s.lambda) {
-            out.push(',');
-            number(out, x);
-        }
+fn row(out: &mut String, s: &SampleRef<'_>) {
+    number(out, s.t);
+    for &x in s.u.iter().chain(s.v).chain(s.a).chain(s.lambda) {
         out.push(',');
-        number(out, s.energy());
-        let _ = write!(out, ",{},", s.iterations);
-        number(out, s.residual);
-        out.push(',');
-        number(out, s.constraint);
-        out.push('\n');
+        number(out, x);
     }
+    out.push(',');
+    number(out, s.energy());
+    let _ = write!(out, ",{},", s.iterations);
+    number(out, s.residual);
+    out.push(',');
+    number(out, s.constraint);
+    out.push('\n');
 }
 
 /// The samples as CSV text (header first), numbers in shortest round-trip form.
@@ -56,7 +55,7 @@ pub fn to_csv<S: System + ?Sized>(sys: &S, samples: &[Sample]) -> String {
     let mut out = header(sys).join(",");
     out.push('\n');
     for s in samples {
-        row(&mut out, s);
+        row(&mut out, &s.view());
     }
     out
 }
@@ -98,7 +97,7 @@ impl CsvStream {
     }
 
     /// Appends a sample (the first I/O error is kept and reported by `finish`).
-    pub fn push(&mut self, s: &Sample) {
+    pub fn push(&mut self, s: &SampleRef<'_>) {
         if self.error.is_some() {
             return;
         }
@@ -131,6 +130,13 @@ impl CsvStream {
                 format!("could not write {}: {e}", self.path.display()),
             )
         })
+    }
+}
+
+impl Observer for CsvStream {
+    /// Appends every observed sample ([`push`](Self::push)).
+    fn observe(&mut self, sample: &SampleRef<'_>) {
+        self.push(sample);
     }
 }
 
@@ -232,7 +238,7 @@ mod tests {
             ..Sample::default()
         };
         let mut unfinished = CsvStream::create(&path, &sys).expect("create");
-        unfinished.push(&sample);
+        unfinished.push(&sample.view());
         drop(unfinished);
         assert!(!path.exists());
         assert_eq!(
@@ -241,8 +247,8 @@ mod tests {
             "temporary file left"
         );
         let mut stream = CsvStream::create(&path, &sys).expect("create");
-        stream.push(&sample);
-        stream.push(&sample);
+        stream.push(&sample.view());
+        stream.observe(&sample.view());
         stream.finish().expect("finish");
         let text = std::fs::read_to_string(&path).expect("written");
         assert_eq!(text, to_csv(&sys, &[sample.clone(), sample]));

@@ -39,7 +39,7 @@ pub use mstar_newmark as newmark;
 pub use mstar_rk4 as rk4;
 
 pub use mstar_model::planar;
-pub use mstar_model::{Link, Pattern, PendulumChain, Sample, System};
+pub use mstar_model::{FnSystem, Link, Pattern, PendulumChain, Sample, SampleRef, System};
 pub use mstar_newmark::{
     AlphaParams, Config, IntegrationError, Integrator, Newton, Observer, Predictor, RunStats,
     Scheme, Start, Trajectory,

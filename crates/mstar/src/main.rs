@@ -8,7 +8,9 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use mstar::kkt::Backend;
 use mstar::pendulum::PendulumRun;
-use mstar::{Config, Newton, Sample, Scheme, Start, System, csv};
+use mstar::{
+    Config, IntegrationError, Newton, Observer, Sample, SampleRef, Scheme, Start, System, csv,
+};
 
 /// mstar: time integration of constrained multibody systems (index-3 DAEs
 /// M ü + Bᵀλ = g, Φ(u, t) = 0) with Newmark / HHT-α / generalized-α and
@@ -88,25 +90,25 @@ enum Init {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 enum NewtonArg {
-    /// Refactor at every iteration (fastest on chains; see --help of the
-    /// library's Newton::Full for its robustness caveat).
+    /// Refactor at every iteration: one iteration per step on chains, the
+    /// fastest there; but step control has no error estimate, and cheap
+    /// converged steps let h regrow into fast motion it does not resolve.
     Full,
     /// Reuse the factorization while the iteration contracts fast.
     Modified,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-enum KktArg {
-    /// Chosen from the size and structure (see --help).
-    Auto,
-    /// Dense LU with partial pivoting.
-    Dense,
-    /// Sparse LU (faer) of the KKT matrix with M*.
-    Lu,
-    /// Sparse LDLᵀ (faer) of the KKT matrix with M*, in a KKT ordering.
-    Ldlt,
-    /// Schur complement on the block-diagonal S_T (without BᵀB).
-    Schur,
+/// The `--kkt` values: `auto` and every registered backend, with its summary.
+fn kkt_values() -> clap::builder::PossibleValuesParser {
+    let auto = clap::builder::PossibleValue::new("auto")
+        .help("chosen from the size and structure (the default, see --kkt)");
+    clap::builder::PossibleValuesParser::new(
+        std::iter::once(auto).chain(
+            mstar::kkt::backends()
+                .iter()
+                .map(|r| clap::builder::PossibleValue::new(r.backend.name()).help(r.summary)),
+        ),
+    )
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -144,8 +146,8 @@ struct IntegratorArgs {
     newton: Option<NewtonArg>,
     /// KKT solver [default: auto: dense up to 24 unknowns, else Schur when the
     /// bodies interact only through constraints and have mass, else LDLᵀ].
-    #[arg(long, value_enum)]
-    kkt: Option<KktArg>,
+    #[arg(long, value_parser = kkt_values())]
+    kkt: Option<String>,
     /// Relative Newton tolerance on ‖r‖ and ‖Φ‖ [default: 1e-10].
     #[arg(long)]
     tol: Option<f64>,
@@ -203,8 +205,24 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
+            if let Some(hint) = e.downcast_ref::<IntegrationError>().and_then(hint) {
+                eprintln!("hint: {hint}");
+            }
             ExitCode::FAILURE
         }
+    }
+}
+
+/// The command-line form of a library error's advice.
+fn hint(e: &IntegrationError) -> Option<&'static str> {
+    match e {
+        IntegrationError::NewtonFailed { .. } => Some(
+            "generalized-α is --integrator generalized-alpha (--rho sets ρ∞); the step size is --h, the tolerance --tol",
+        ),
+        IntegrationError::StepSizeTooSmall { .. } => {
+            Some("the step size is --h, the smallest step size --h-min")
+        }
+        _ => None,
     }
 }
 
@@ -296,14 +314,9 @@ fn apply_integrator(args: &IntegratorArgs, c: &mut Config, paper_preset: bool) -
             NewtonArg::Modified => Newton::MODIFIED,
         };
     }
-    if let Some(k) = args.kkt {
-        c.kkt.backend = match k {
-            KktArg::Auto => Backend::Auto,
-            KktArg::Dense => Backend::Dense,
-            KktArg::Lu => Backend::SparseLu,
-            KktArg::Ldlt => Backend::SparseLdlt,
-            KktArg::Schur => Backend::Schur,
-        };
+    if let Some(name) = &args.kkt {
+        c.kkt.backend =
+            Backend::named(name).with_context(|| format!("no KKT solver is called '{name}'"))?;
     }
     // Scheme: explicit --integrator, else implied by --beta/--gamma, --rho, --alpha.
     let newmark_args = args.beta.is_some() || args.gamma.is_some();
@@ -477,7 +490,7 @@ fn chain(args: &ChainArgs) -> Result<()> {
     let mut integ = mstar::Integrator::new(&sys, config, 0.0, &u0, &v0)?;
     let setup = clock.elapsed();
     println!(
-        "KKT solver: {:?}; Newton: {}",
+        "KKT solver: {}; Newton: {}",
         integ.backend(),
         match integ.newton() {
             Newton::Modified { max_rate } => format!("modified (rate ≤ {max_rate})"),
@@ -489,29 +502,14 @@ fn chain(args: &ChainArgs) -> Result<()> {
         .as_deref()
         .map(|p| csv::CsvStream::create(p, &sys))
         .transpose()?;
-    if let Some(s) = stream.as_mut() {
-        s.push(&integ.sample());
-    }
     let clock = Instant::now();
-    let mut last_report = Instant::now();
-    while !integ.reached(args.t_end) {
-        integ.step(args.t_end)?;
-        if let Some(s) = stream.as_mut() {
-            s.push(&integ.sample());
+    let mut progress = Progress::new(args.t_end);
+    integ.run(args.t_end, &mut |s: &SampleRef<'_>| {
+        if let Some(stream) = stream.as_mut() {
+            stream.observe(s);
         }
-        if last_report.elapsed().as_secs_f64() > 2.0 {
-            last_report = Instant::now();
-            let st = integ.stats();
-            eprintln!(
-                "  t = {:.4} s of {} ({:.0} %), {} steps, {:.1} s elapsed",
-                integ.time(),
-                args.t_end,
-                100.0 * integ.time() / args.t_end,
-                st.steps,
-                clock.elapsed().as_secs_f64()
-            );
-        }
-    }
+        progress.observe(s);
+    })?;
     let wall = clock.elapsed().as_secs_f64();
     let st = integ.stats();
     let steps = st.steps.max(1) as f64;
@@ -548,6 +546,43 @@ fn chain(args: &ChainArgs) -> Result<()> {
         println!("wrote {}", out.display());
     }
     Ok(())
+}
+
+/// Reports the time reached on standard error every two seconds.
+struct Progress {
+    t_end: f64,
+    start: Instant,
+    last: Instant,
+    steps: usize,
+}
+
+impl Progress {
+    fn new(t_end: f64) -> Self {
+        let now = Instant::now();
+        Self {
+            t_end,
+            start: now,
+            last: now,
+            steps: 0,
+        }
+    }
+}
+
+impl Observer for Progress {
+    fn observe(&mut self, s: &SampleRef<'_>) {
+        self.steps += 1;
+        if self.last.elapsed().as_secs_f64() > 2.0 {
+            self.last = Instant::now();
+            eprintln!(
+                "  t = {:.4} s of {} ({:.0} %), {} steps, {:.1} s elapsed",
+                s.t,
+                self.t_end,
+                100.0 * s.t / self.t_end,
+                self.steps.saturating_sub(1),
+                self.start.elapsed().as_secs_f64()
+            );
+        }
+    }
 }
 
 fn summary(samples: &[Sample]) {
@@ -626,10 +661,15 @@ mod tests {
             "chain", "--links", "3", "--rho", "0.8", "--h", "0.002", "--newton", "full",
         ])?;
         assert_eq!((c.h, c.newton), (0.002, Newton::Full));
-        assert_eq!(c.kkt.backend, Backend::Auto);
+        assert_eq!(c.kkt.backend, Backend::AUTO);
         assert_eq!(c.scheme, Scheme::GeneralizedAlpha { rho_inf: 0.8 });
         let c = parse_chain(&["chain", "--links", "3", "--kkt", "ldlt"])?;
-        assert_eq!(c.kkt.backend, Backend::SparseLdlt);
+        assert_eq!(c.kkt.backend, Backend::SPARSE_LDLT);
+        for r in mstar::kkt::backends() {
+            let name = r.backend.name();
+            let c = parse_chain(&["chain", "--links", "3", "--kkt", name])?;
+            assert_eq!(c.kkt.backend, r.backend, "--kkt {name}");
+        }
         assert!(parse_chain(&["chain", "--links", "3", "--kkt", "qr"]).is_err());
         assert!(parse_chain(&["chain", "--links", "0"]).is_err());
         assert!(parse_chain(&["chain", "--links", "5", "--t-end", "-1"]).is_err());

@@ -1,6 +1,6 @@
 //! The pendulum presets shared by the `mstar pendulum` command and the studies.
 
-use mstar_model::{PendulumChain, Sample};
+use mstar_model::{PendulumChain, Sample, SampleRef};
 use mstar_newmark::{Config, IntegrationError, Integrator, RunStats, Trajectory};
 use mstar_rk4::ChainOracle;
 
@@ -60,13 +60,13 @@ impl PendulumRun {
     /// Integrates; returns every accepted sample and how the run ended. On an
     /// error, the samples up to the failure are still returned.
     pub fn run(&self) -> (Vec<Sample>, Result<RunStats, IntegrationError>) {
-        self.run_observed(&mut |_: &Sample| {})
+        self.run_observed(&mut |_: &SampleRef<'_>| {})
     }
 
     /// Like [`run`](Self::run), also handing each sample to `progress`.
     pub fn run_observed(
         &self,
-        progress: &mut dyn FnMut(&Sample),
+        progress: &mut dyn FnMut(&SampleRef<'_>),
     ) -> (Vec<Sample>, Result<RunStats, IntegrationError>) {
         let sys = self.system();
         let u0 = sys.position(&[self.theta0]);
@@ -74,9 +74,9 @@ impl PendulumRun {
         let mut traj = Trajectory::default();
         let result =
             Integrator::new(&sys, self.config.clone(), 0.0, &u0, &v0).and_then(|mut integ| {
-                integ.run(self.t_end, &mut |s: &Sample| {
+                integ.run(self.t_end, &mut |s: &SampleRef<'_>| {
                     progress(s);
-                    traj.samples.push(s.clone());
+                    traj.samples.push(s.to_sample());
                 })
             });
         (traj.samples, result)

@@ -6,7 +6,7 @@
 
 use mstar::planar::{PlanarSystem, bar_chain, point_mass_chain};
 use mstar::rk4::{AngleChain, AngleLink};
-use mstar::{Config, Integrator, Sample, System};
+use mstar::{Config, Integrator, SampleRef, System};
 
 /// The tip's centre of mass at `t_end` from the DAE path.
 fn dae_tip(sys: &PlanarSystem, h: f64, t_end: f64) -> [f64; 2] {
@@ -19,7 +19,7 @@ fn dae_tip(sys: &PlanarSystem, h: f64, t_end: f64) -> [f64; 2] {
     let mut integ = Integrator::new(sys, config, 0.0, &u0, &v0).expect("start");
     let mut last = None;
     integ
-        .run(t_end, &mut |s: &Sample| last = Some(s.u.clone()))
+        .run(t_end, &mut |s: &SampleRef<'_>| last = Some(s.u.to_vec()))
         .expect("integration");
     let u = last.expect("samples");
     let tip = sys
@@ -118,19 +118,19 @@ fn every_kkt_backend_and_newton_variant_gives_the_same_motion() {
         let resolved = (integ.backend(), integ.newton());
         let mut last = None;
         integ
-            .run(0.3, &mut |s: &Sample| last = Some(s.u.clone()))
+            .run(0.3, &mut |s: &SampleRef<'_>| last = Some(s.u.to_vec()))
             .expect("integration");
         let u = last.expect("samples");
         (resolved, [u[tip], u[tip + 1]])
     };
-    let (resolved, reference) = run(Backend::Auto, Newton::default());
-    assert_eq!(resolved, (Backend::Schur, Newton::MODIFIED));
+    let (resolved, reference) = run(Backend::AUTO, Newton::default());
+    assert_eq!(resolved, (Backend::SCHUR, Newton::MODIFIED));
     for (backend, newton) in [
-        (Backend::Schur, Newton::Full),
-        (Backend::SparseLdlt, Newton::MODIFIED),
-        (Backend::SparseLdlt, Newton::Full),
-        (Backend::SparseLu, Newton::MODIFIED),
-        (Backend::Dense, Newton::Full),
+        (Backend::SCHUR, Newton::Full),
+        (Backend::SPARSE_LDLT, Newton::MODIFIED),
+        (Backend::SPARSE_LDLT, Newton::Full),
+        (Backend::SPARSE_LU, Newton::MODIFIED),
+        (Backend::DENSE, Newton::Full),
     ] {
         let ((b, nw), got) = run(backend, newton);
         assert_eq!((b, nw), (backend, newton));

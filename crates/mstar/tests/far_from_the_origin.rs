@@ -5,7 +5,7 @@
 //! tolerance, relative to the forces) without iterating on that noise.
 
 use mstar::planar::{At, PlanarBuilder, PlanarSystem};
-use mstar::{Config, Integrator, Sample};
+use mstar::{Config, Integrator, SampleRef};
 
 /// A 10-bar chain (1 kg, 1 m), horizontal at rest, hinged at `(x0, 0)`.
 fn chain(x0: f64) -> PlanarSystem {
@@ -37,7 +37,7 @@ fn tip(x0: f64, t_end: f64) -> ([f64; 2], usize) {
     let mut integ = Integrator::new(&sys, config, 0.0, &u0, &v0).expect("start");
     let mut last = None;
     integ
-        .run(t_end, &mut |s: &Sample| last = Some(s.u.clone()))
+        .run(t_end, &mut |s: &SampleRef<'_>| last = Some(s.u.to_vec()))
         .unwrap_or_else(|e| panic!("hinge at x = {x0}: {e}"));
     let u = last.expect("samples");
     let i = sys.body_x("link10").expect("tip");

@@ -6,7 +6,7 @@
 
 use mstar::linearize::check_derivatives;
 use mstar::planar::{At, PlanarBuilder, PlanarSystem};
-use mstar::{Config, Integrator, Sample, System};
+use mstar::{Config, Integrator, SampleRef, System};
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 
@@ -64,8 +64,8 @@ fn run(sys: &PlanarSystem, h: f64) -> Result<(f64, f64, f64), TestCaseError> {
     // Every third coordinate is a link angle.
     let angles: Vec<usize> = (2..sys.n_coords()).step_by(3).collect();
     integ
-        .run(1.0, &mut |s: &Sample| {
-            sys.phi_into(s.t, &s.u, &mut phi);
+        .run(1.0, &mut |s: &SampleRef<'_>| {
+            sys.phi_into(s.t, s.u, &mut phi);
             let eta = tol * s.u.iter().fold(1.0f64, |m, x| m.max(x.abs()));
             worst = worst.max(phi.iter().fold(0.0f64, |m, x| m.max(x.abs())) / eta);
             let e = s.energy();

@@ -72,7 +72,7 @@ pub enum IntegrationError {
         "Newton iteration did not converge at t = {t} s (h = {h:e}): after {iterations} iterations \
          ‖r‖∞ = {residual:.3e} (tolerance {residual_tol:.3e}) and ‖Φ‖∞ = {constraint:.3e} (tolerance {constraint_tol:.3e}). \
          With the trapezoidal rule (Newmark γ = 1/2) this is usually the growing period-2h oscillation of λ: use \
-         generalized-α (--integrator generalized-alpha, the default); otherwise try a smaller h or a looser tolerance"
+         generalized-α (Scheme::GeneralizedAlpha, the default); otherwise try a smaller step size h or a looser tolerance"
     )]
     NewtonFailed {
         /// Time of the failed step's end.
@@ -93,7 +93,10 @@ pub enum IntegrationError {
     /// Step control reached the smallest allowed step.
     #[error(
         "step size too small at t = {t} s: the step with h = {h:e} failed and h/2 would be below h_min = {h_min:e} \
-         (‖r‖∞ = {residual:.3e}, ‖Φ‖∞ = {constraint:.3e}). If even tiny steps fail, the state reached at t was          already wrong: steps are only rejected when Newton fails (there is no local error estimate), so a fast          motion (a whip) can be under-resolved before it breaks Newton: rerun with a smaller --h. Otherwise the          model may be singular here (a lock-up of the constraints), or lower h_min"
+         (‖r‖∞ = {residual:.3e}, ‖Φ‖∞ = {constraint:.3e}). If even tiny steps fail, the state reached at t was \
+         already wrong: steps are only rejected when Newton fails (there is no local error estimate), so a fast \
+         motion (a whip) can be under-resolved before it breaks Newton: integrate again with a smaller step size h. \
+         Otherwise the model may be singular here (a lock-up of the constraints), or lower h_min"
     )]
     StepSizeTooSmall {
         /// Time at the start of the failed step.
@@ -125,5 +128,74 @@ fn describe_unknown(unknown: &Option<String>) -> String {
             "; {u} is undetermined (a redundant or inconsistent constraint, or a coordinate that neither inertia, stiffness nor a constraint determines)"
         ),
         None => String::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One of every variant, with sample values.
+    fn every_error() -> Vec<IntegrationError> {
+        vec![
+            IntegrationError::Config("h must be positive".into()),
+            IntegrationError::Structure(LinearizeError::TooLarge { nnz: 7 }),
+            IntegrationError::Dimension {
+                what: "u0",
+                got: 2,
+                want: 3,
+            },
+            IntegrationError::InconsistentInitialState {
+                t: 0.0,
+                level: "position",
+                constraint: "pin.x".into(),
+                value: 0.2,
+            },
+            IntegrationError::ProjectionFailed {
+                t: 0.0,
+                iterations: 50,
+                residual: 1.0,
+                constraint: "pin.x".into(),
+            },
+            IntegrationError::Kkt {
+                context: "solving with the iteration matrix",
+                t: 1.0,
+                h: 0.01,
+                unknown: Some("coordinate 'x'".into()),
+                source: KktError::Singular { unknown: Some(0) },
+            },
+            IntegrationError::NewtonFailed {
+                t: 1.0,
+                h: 0.01,
+                iterations: 20,
+                residual: 1.0,
+                residual_tol: 1e-10,
+                constraint: 1.0,
+                constraint_tol: 1e-10,
+            },
+            IntegrationError::StepSizeTooSmall {
+                t: 1.0,
+                h: 1e-5,
+                h_min: 1e-5,
+                residual: 1.0,
+                constraint: 1.0,
+            },
+            IntegrationError::NonFinite {
+                t: 1.0,
+                what: "the forces g".into(),
+            },
+        ]
+    }
+
+    /// The library's messages speak of its own options (Scheme, h), not of
+    /// the command line's flags, which a library user does not have; and
+    /// they read as single lines of prose.
+    #[test]
+    fn library_errors_name_no_command_line_flag() {
+        for e in every_error() {
+            let text = e.to_string();
+            assert!(!text.contains("--"), "{text}");
+            assert!(!text.contains("  "), "a run of spaces: {text}");
+        }
     }
 }

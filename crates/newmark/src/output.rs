@@ -1,16 +1,18 @@
 //! Per-step output: observers and the in-memory trajectory.
 
-use mstar_model::Sample;
+use mstar_model::{Sample, SampleRef};
 
-/// Receives every accepted step (and the initial state) of an integration.
+/// Receives every accepted step (and the initial state) of an integration, as
+/// a view of the integrator's state (copy what you keep:
+/// [`SampleRef::to_sample`]).
 pub trait Observer {
     /// Called with the converged state after every accepted step, and once with
     /// the initial state.
-    fn observe(&mut self, sample: &Sample);
+    fn observe(&mut self, sample: &SampleRef<'_>);
 }
 
-impl<F: FnMut(&Sample)> Observer for F {
-    fn observe(&mut self, sample: &Sample) {
+impl<F: FnMut(&SampleRef<'_>)> Observer for F {
+    fn observe(&mut self, sample: &SampleRef<'_>) {
         self(sample);
     }
 }
@@ -23,8 +25,8 @@ pub struct Trajectory {
 }
 
 impl Observer for Trajectory {
-    fn observe(&mut self, sample: &Sample) {
-        self.samples.push(sample.clone());
+    fn observe(&mut self, sample: &SampleRef<'_>) {
+        self.samples.push(sample.to_sample());
     }
 }
 

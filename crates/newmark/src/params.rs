@@ -258,7 +258,12 @@ pub struct Config {
     /// Scale the KKT system (equilibrium rows × `1/c_a`, multipliers ÷ `1/c_a`)
     /// so that its conditioning does not grow like `h⁻⁴` (default: true).
     pub scaling: bool,
-    /// Linear solver options (default: dense below 24 unknowns, sparse LU above).
+    /// Linear solver options (default: [`KktOptions::default`], the automatic
+    /// choice: dense up to 24 unknowns; above, the Schur complement when `S_T`
+    /// without `BᵀB` is block-diagonal and `M`'s diagonal is positive, else
+    /// sparse LDLᵀ of the augmented matrix; see
+    /// [`KktOptions::candidates`]). The integrator sets
+    /// [`KktOptions::n_primal`] to the number of coordinates.
     pub kkt: KktOptions,
 }
 

@@ -4,6 +4,20 @@
 use super::geometry::{Anchor, Kind, Pt, Slots};
 use super::time::TimeFunction;
 
+/// Most coordinate slots of an element: two rigid bodies.
+pub(crate) const MAX_SLOTS: usize = 6;
+
+/// Most values of an element's `∂²Φ/∂q²`: 3 rows of `MAX_SLOTS²`.
+pub(crate) const MAX_HESSIAN: usize = 3 * MAX_SLOTS * MAX_SLOTS;
+
+/// A spring's length `ℓ`, `∂ℓ/∂q` and `∂²ℓ/∂q²` (row-major) on its slots, on
+/// the stack (forces are evaluated at every Newton iteration).
+struct SpringGeometry {
+    l: f64,
+    dl: [f64; MAX_SLOTS],
+    hl: [f64; MAX_SLOTS * MAX_SLOTS],
+}
+
 /// What a constraint element enforces.
 #[derive(Clone, Debug)]
 pub(crate) enum Joint {
@@ -367,26 +381,31 @@ impl Force {
     }
 
     /// Spring geometry: `ℓ`, `∂ℓ/∂q` and `∂²ℓ/∂q²` (dense, `n × n`) on the slots.
-    fn spring_geometry(&self, u: &[f64]) -> (f64, Vec<f64>, Vec<f64>) {
+    fn spring_geometry(&self, u: &[f64]) -> SpringGeometry {
         let s = &self.slots;
         let n = s.len();
         let pts = [self.anchors[0].point(u), self.anchors[1].point(u)];
         let d = [pts[0].p[0] - pts[1].p[0], pts[0].p[1] - pts[1].p[1]];
         let l = (d[0] * d[0] + d[1] * d[1]).sqrt().max(f64::MIN_POSITIVE);
         let e = [d[0] / l, d[1] / l];
-        let jd: Vec<[f64; 2]> = (0..n)
-            .map(|a| [s.d_grad(a, 0, &pts), s.d_grad(a, 1, &pts)])
-            .collect();
-        let dl: Vec<f64> = jd.iter().map(|j| e[0] * j[0] + e[1] * j[1]).collect();
-        let mut hl = vec![0.0; n * n];
+        let mut jd = [[0.0; 2]; MAX_SLOTS];
+        let mut g = SpringGeometry {
+            l,
+            dl: [0.0; MAX_SLOTS],
+            hl: [0.0; MAX_SLOTS * MAX_SLOTS],
+        };
+        for a in 0..n {
+            jd[a] = [s.d_grad(a, 0, &pts), s.d_grad(a, 1, &pts)];
+            g.dl[a] = e[0] * jd[a][0] + e[1] * jd[a][1];
+        }
         for a in 0..n {
             for b in 0..n {
                 let dot = jd[a][0] * jd[b][0] + jd[a][1] * jd[b][1];
                 let curv: f64 = (0..2).map(|k| e[k] * s.d_hess(a, b, k, &pts)).sum();
-                hl[a * n + b] = (dot - dl[a] * dl[b]) / l + curv;
+                g.hl[a * n + b] = (dot - g.dl[a] * g.dl[b]) / l + curv;
             }
         }
-        (l, dl, hl)
+        g
     }
 
     fn theta(&self, side: usize, w: &[f64]) -> f64 {
@@ -417,7 +436,7 @@ impl Force {
                 }
             }
             Load::Spring { k, c, rest } => {
-                let (l, dl, _) = self.spring_geometry(u);
+                let SpringGeometry { l, dl, .. } = self.spring_geometry(u);
                 let ldot: f64 = (0..s.len()).map(|a| dl[a] * v[s.global[a]]).sum();
                 let tension = k * (l - rest) + c * ldot;
                 for a in 0..s.len() {
@@ -450,20 +469,24 @@ impl Force {
             }
             Load::Torque { .. } => {}
             Load::Spring { k, c, rest } => {
-                let (l, dl, hl) = self.spring_geometry(u);
+                let SpringGeometry { l, dl, hl } = self.spring_geometry(u);
                 let pattern = if wrt_v { &self.g_v } else { &self.g_u };
                 if wrt_v {
                     for (o, &(a, b)) in out.iter_mut().zip(pattern) {
                         *o = -c * dl[a] * dl[b];
                     }
                 } else {
-                    let vl: Vec<f64> = (0..n).map(|a| v[s.global[a]]).collect();
+                    let mut vl = [0.0; MAX_SLOTS];
+                    for (a, x) in vl.iter_mut().enumerate().take(n) {
+                        *x = v[s.global[a]];
+                    }
                     let ldot: f64 = (0..n).map(|a| dl[a] * vl[a]).sum();
                     let tension = k * (l - rest) + c * ldot;
                     // ∂ℓ̇/∂q_b = Σ_a ∂²ℓ/∂q_a∂q_b q̇_a
-                    let dldot: Vec<f64> = (0..n)
-                        .map(|b| (0..n).map(|a| hl[a * n + b] * vl[a]).sum())
-                        .collect();
+                    let mut dldot = [0.0; MAX_SLOTS];
+                    for (b, x) in dldot.iter_mut().enumerate().take(n) {
+                        *x = (0..n).map(|a| hl[a * n + b] * vl[a]).sum();
+                    }
                     for (o, &(a, b)) in out.iter_mut().zip(pattern) {
                         *o = -(k * dl[b] + c * dldot[b]) * dl[a] - tension * hl[a * n + b];
                     }
@@ -484,7 +507,7 @@ impl Force {
     pub(crate) fn potential(&self, u: &[f64]) -> f64 {
         match &self.load {
             Load::Spring { k, rest, .. } => {
-                let (l, _, _) = self.spring_geometry(u);
+                let l = self.spring_geometry(u).l;
                 0.5 * k * (l - rest) * (l - rest)
             }
             Load::RotationalSpring { k, angle, .. } => {
@@ -502,8 +525,8 @@ impl Force {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RevoluteKernel {
     anchors: [Anchor; 2],
-    /// For each rigid side, the position of its body's `(sin θ, cos θ)` in
-    /// the table [`phi_b`](Self::phi_b) is given.
+    /// For each rigid side, the position of its body's `(sin θ, cos θ)` pair
+    /// in the table [`phi_b`](Self::phi_b) is given.
     trig: [u32; 2],
     /// First global constraint row.
     row0: usize,
@@ -547,7 +570,7 @@ impl RevoluteKernel {
     pub(crate) fn phi_b(
         &self,
         u: &[f64],
-        trig: &[(f64, f64)],
+        trig: &[f64],
         phi: &mut [f64],
         b: &mut [f64],
         base: (usize, usize),
@@ -555,7 +578,10 @@ impl RevoluteKernel {
         let point = |k: usize| {
             let a = &self.anchors[k];
             match a {
-                Anchor::Rigid { .. } => a.point_at(u, trig[self.trig[k] as usize]),
+                Anchor::Rigid { .. } => {
+                    let at = 2 * self.trig[k] as usize;
+                    a.point_at(u, (trig[at], trig[at + 1]))
+                }
                 _ => a.point(u),
             }
         };

@@ -12,7 +12,7 @@ mod elements;
 mod geometry;
 mod time;
 
-pub use chains::{bar_chain, point_mass_chain};
+pub use chains::{Bar, bar_chain, bar_chain_of, point_mass_chain};
 pub use time::TimeFunction;
 
 use elements::{Constraint, Force, Joint, Load, RevoluteKernel};
@@ -21,12 +21,6 @@ use geometry::{Anchor, Slots};
 use rayon::prelude::*;
 
 use crate::{Pattern, System};
-
-thread_local! {
-    /// Scratch for `(sin θ, cos θ)` of each rigid body's angle (in the order of
-    /// `PlanarSystem::angles`) during one evaluation.
-    static TRIG: std::cell::RefCell<Vec<(f64, f64)>> = const { std::cell::RefCell::new(Vec::new()) };
-}
 
 /// Handle of a body in a [`PlanarBuilder`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -546,7 +540,7 @@ impl PlanarSystem {
             .filter(|b| b.inertia.is_some())
             .map(|b| b.x + 2)
             .collect();
-        // Position of each angle's (sin θ, cos θ) in the table of phi_b_into.
+        // Position of each angle's (sin θ, cos θ) in the workspace of phi_b_into.
         let mut trig_slot = vec![0u32; n];
         for (k, &x) in angles.iter().enumerate() {
             trig_slot[x] = u32::try_from(k).unwrap_or(u32::MAX);
@@ -709,43 +703,49 @@ impl System for PlanarSystem {
         }
     }
 
-    fn phi_b_into(&self, t: f64, u: &[f64], phi: &mut [f64], b: &mut [f64]) {
-        // Each body's (sin θ, cos θ) once, not once per joint it takes part
-        // in, in a table of the angles alone (no gaps: at 10⁵ bodies it is
-        // written and read through memory).
-        TRIG.with_borrow_mut(|trig| {
-            trig.resize(self.angles.len(), (0.0, 1.0));
-            for (t, &x) in trig.iter_mut().zip(&self.angles) {
-                *t = u[x].sin_cos();
+    fn workspace_len(&self) -> usize {
+        2 * self.angles.len()
+    }
+
+    fn phi_b_into(&self, t: f64, u: &[f64], phi: &mut [f64], b: &mut [f64], work: &mut [f64]) {
+        // The workspace holds each body's (sin θ, cos θ), computed once, not
+        // once per joint it takes part in, in a table of the angles alone (no
+        // gaps: on a long chain it is written and read through memory).
+        let Some(trig) = work.get_mut(..2 * self.angles.len()) else {
+            self.phi_into(t, u, phi);
+            self.b_into(t, u, b);
+            return;
+        };
+        for (t, &x) in trig.chunks_exact_mut(2).zip(&self.angles) {
+            (t[0], t[1]) = u[x].sin_cos();
+        }
+        let trig: &[f64] = trig;
+        let revolutes = |ks: &[RevoluteKernel], phi: &mut [f64], b: &mut [f64], base| {
+            for k in ks {
+                k.phi_b(u, trig, phi, b, base);
             }
-            let trig: &[(f64, f64)] = trig;
-            let revolutes = |ks: &[RevoluteKernel], phi: &mut [f64], b: &mut [f64], base| {
-                for k in ks {
-                    k.phi_b(u, trig, phi, b, base);
-                }
-            };
-            let parts = self.parallel_parts();
-            if parts.is_empty() {
-                revolutes(&self.revolutes, phi, b, (0, 0));
-            } else {
-                let phi_parts = split_at_bases(phi, parts.iter().map(|p| p.1.0));
-                let b_parts = split_at_bases(b, parts.iter().map(|p| p.1.1));
-                parts
-                    .into_par_iter()
-                    .zip(phi_parts)
-                    .zip(b_parts)
-                    .for_each(|(((ks, base), phi), b)| revolutes(ks, phi, b, (base.0, base.1)));
-            }
-            for &i in &self.others {
-                let (c, off) = (&self.constraints[i], self.b_offsets[i]);
-                c.phi_grad(
-                    t,
-                    u,
-                    &mut phi[c.row0..c.row0 + c.rows],
-                    &mut b[off..off + c.grad.len()],
-                );
-            }
-        });
+        };
+        let parts = self.parallel_parts();
+        if parts.is_empty() {
+            revolutes(&self.revolutes, phi, b, (0, 0));
+        } else {
+            let phi_parts = split_at_bases(phi, parts.iter().map(|p| p.1.0));
+            let b_parts = split_at_bases(b, parts.iter().map(|p| p.1.1));
+            parts
+                .into_par_iter()
+                .zip(phi_parts)
+                .zip(b_parts)
+                .for_each(|(((ks, base), phi), b)| revolutes(ks, phi, b, (base.0, base.1)));
+        }
+        for &i in &self.others {
+            let (c, off) = (&self.constraints[i], self.b_offsets[i]);
+            c.phi_grad(
+                t,
+                u,
+                &mut phi[c.row0..c.row0 + c.rows],
+                &mut b[off..off + c.grad.len()],
+            );
+        }
     }
 
     fn phi_t_into(&self, t: f64, _u: &[f64], phi_t: &mut [f64]) {
@@ -787,8 +787,10 @@ impl System for PlanarSystem {
     }
 
     fn accel_rhs_into(&self, t: f64, u: &[f64], v: &[f64], out: &mut [f64]) {
-        // c = −vᵀ (∂²Φ/∂q²) v − Φ_tt (no element has a B_t).
-        let mut hess = Vec::new();
+        // c = −vᵀ (∂²Φ/∂q²) v − Φ_tt (no element has a B_t). An element
+        // has at most two bodies (6 slots): its Hessian at most 3 × 6 × 6
+        // values, on the stack.
+        let mut buffer = [0.0; elements::MAX_HESSIAN];
         let (mut t1, mut tt) = ([0.0; 3], [0.0; 3]);
         for c in &self.constraints {
             c.phi_t(t, &mut t1[..c.rows], &mut tt[..c.rows]);
@@ -796,8 +798,8 @@ impl System for PlanarSystem {
             for (o, &x) in rows.iter_mut().zip(&tt) {
                 *o = -x;
             }
-            hess.resize(c.hess.len(), 0.0);
-            c.hess_values(u, &mut hess);
+            let hess = &mut buffer[..c.hess.len()];
+            c.hess_values(u, hess);
             for (h, &(r, a, b)) in hess.iter().zip(&c.hess) {
                 rows[r] -= h * v[c.slots.global[a]] * v[c.slots.global[b]];
             }

@@ -31,10 +31,27 @@
 //! takes leaner paths: the factorization is one pass over the columns whose
 //! slots in `C` come from the envelope's row pointers (no table of pairs), and
 //! the residual check is formed inside the solve ([`Schur::solve_checked`]).
+//!
+//! The symbolic analysis is in `analyse.rs`; this file holds the numeric
+//! factorization, the solves and the products.
 
+mod analyse;
+
+use crate::backend::{Backend, KktBackend, Registration, Structure};
 use crate::envelope::EnvelopeLdlt;
-use crate::sparse_ldlt::{SparseLdlt, kkt_ordering};
-use crate::{Csc, KktError, max_abs};
+use crate::sparse_ldlt::SparseLdlt;
+use crate::{Csc, Finite, KktError, KktOptions, MaxAbs, max_abs};
+
+/// The `schur` backend.
+pub(crate) const REGISTRATION: Registration = Registration {
+    backend: Backend::SCHUR,
+    summary: "Schur complement on a block-diagonal S_T (bodies coupled only by constraints)",
+    structure: Structure::PLAIN,
+    analyse: |a, options: &KktOptions| {
+        let np = options.require_n_primal(Backend::SCHUR)?;
+        Ok(Box::new(Schur::new(a, np)?))
+    },
+};
 
 /// The largest diagonal block of `S` that the Schur backend inverts densely.
 pub const MAX_BLOCK: usize = 12;
@@ -52,7 +69,7 @@ struct Block {
     s_entries: std::ops::Range<usize>,
     /// Its entries of `B`: `(position in the KKT values, local row, local j)`.
     b_entries: std::ops::Range<usize>,
-    /// Its rows in `Parts::rows` (original constraint indices).
+    /// Its rows in `analyse::Parts::rows` (original constraint indices).
     rows: std::ops::Range<usize>,
     /// Number of constraint rows touching it.
     n_rows: usize,
@@ -60,16 +77,6 @@ struct Block {
     inverse: usize,
     /// Its contributions to `C`: `(local row, local row, slot in C)`.
     pairs: std::ops::Range<usize>,
-}
-
-/// The block structure while it is being built.
-struct Parts {
-    blocks: Vec<Block>,
-    coords: Vec<usize>,
-    s_entries: Vec<(usize, usize, usize)>,
-    b_entries: Vec<(usize, usize, usize)>,
-    /// Each block's rows (original constraint indices), block after block.
-    rows: Vec<usize>,
 }
 
 /// The analysed structure and reused buffers of the Schur backend.
@@ -139,281 +146,6 @@ pub(crate) struct Schur {
 }
 
 impl Schur {
-    /// Analyses `a` (values ignored) whose first `n_primal` unknowns are primal.
-    ///
-    /// # Errors
-    /// [`KktError::Structure`] when a diagonal block of `S` has more than
-    /// [`MAX_BLOCK`] unknowns or the structure is not symmetric.
-    pub(crate) fn new(a: &Csc, n_primal: usize) -> Result<Self, KktError> {
-        let n = n_primal;
-        let m = a.n - n;
-        // Connected components of S's pattern (union–find).
-        let mut parent: Vec<usize> = (0..n).collect();
-        fn find(p: &mut [usize], mut i: usize) -> usize {
-            while p[i] != i {
-                p[i] = p[p[i]];
-                i = p[i];
-            }
-            i
-        }
-        for j in 0..n {
-            for &i in &a.row_idx[a.col_ptr[j]..a.col_ptr[j + 1]] {
-                if i < n {
-                    let (ri, rj) = (find(&mut parent, i), find(&mut parent, j));
-                    if ri != rj {
-                        parent[ri.max(rj)] = ri.min(rj);
-                    }
-                }
-            }
-        }
-        let mut members: Vec<Vec<usize>> = vec![Vec::new(); n];
-        for i in 0..n {
-            let r = find(&mut parent, i);
-            members[r].push(i);
-        }
-        let mut local = vec![0usize; n];
-        let mut row_local = vec![usize::MAX; m];
-        let mut this = Parts {
-            blocks: Vec::new(),
-            coords: Vec::with_capacity(n),
-            s_entries: Vec::new(),
-            b_entries: Vec::new(),
-            rows: Vec::new(),
-        };
-        let (mut inv_len, mut max_k, mut max_rows) = (0, 0, 0);
-        for group in members.iter().filter(|g| !g.is_empty()) {
-            let k = group.len();
-            if k > MAX_BLOCK {
-                return Err(KktError::Structure(format!(
-                    "the Schur backend needs a block-diagonal S with blocks of at most {MAX_BLOCK} unknowns; unknowns {}, {}, … form a block of {k}",
-                    group[0], group[1]
-                )));
-            }
-            let c0 = this.coords.len();
-            for (l, &i) in group.iter().enumerate() {
-                local[i] = l;
-            }
-            this.coords.extend_from_slice(group);
-            let (s0, b0, r0) = (this.s_entries.len(), this.b_entries.len(), this.rows.len());
-            for &j in group {
-                for p in a.col_ptr[j]..a.col_ptr[j + 1] {
-                    let i = a.row_idx[p];
-                    if i < n {
-                        this.s_entries.push((p, local[i], local[j]));
-                    } else if row_local[i - n] == usize::MAX {
-                        row_local[i - n] = 0;
-                        this.rows.push(i - n);
-                    }
-                }
-            }
-            // Rows ascending, then local indices: for one unknown, the order
-            // of its column's B entries.
-            this.rows[r0..].sort_unstable();
-            for (l, &r) in this.rows[r0..].iter().enumerate() {
-                row_local[r] = l;
-            }
-            for &j in group {
-                for p in a.col_ptr[j]..a.col_ptr[j + 1] {
-                    let i = a.row_idx[p];
-                    if i >= n {
-                        this.b_entries.push((p, row_local[i - n], local[j]));
-                    }
-                }
-            }
-            let n_rows = this.rows.len() - r0;
-            for &r in &this.rows[r0..] {
-                row_local[r] = usize::MAX;
-            }
-            this.blocks.push(Block {
-                coords: c0..this.coords.len(),
-                s_entries: s0..this.s_entries.len(),
-                b_entries: b0..this.b_entries.len(),
-                rows: r0..this.rows.len(),
-                n_rows,
-                inverse: inv_len,
-                pairs: 0..0,
-            });
-            inv_len += k * k;
-            max_k = max_k.max(k);
-            max_rows = max_rows.max(n_rows);
-        }
-        if max_rows > usize::from(u16::MAX) {
-            return Err(KktError::Structure(format!(
-                "a block of S touches {max_rows} constraint rows; the Schur backend takes at most {}",
-                u16::MAX
-            )));
-        }
-        // C's pattern (original constraint order): every block's row pairs,
-        // D's entries, and the diagonal.
-        let mut d_pos = Vec::new();
-        for j in n..a.n {
-            for p in a.col_ptr[j]..a.col_ptr[j + 1] {
-                if a.row_idx[p] >= n {
-                    d_pos.push((p, a.row_idx[p] - n, j - n));
-                }
-            }
-        }
-        let mut pattern: Vec<(usize, usize)> = Vec::new();
-        for b in &this.blocks {
-            let rows = &this.rows[b.rows.clone()];
-            for &r in rows {
-                for &s in rows {
-                    pattern.push((s, r));
-                }
-            }
-        }
-        pattern.extend(d_pos.iter().map(|&(_, r, s)| (s, r)));
-        pattern.extend((0..m).map(|r| (r, r)));
-        let c_orig = csc_of(m, &mut pattern);
-        // (csc_of sorted and deduplicated `pattern`: it is C's entry list.)
-        // How C is factored: in the constraints' own order by its envelope
-        // when that is at most FILL_SLACK times the factor AMD gives (a
-        // chain's joints in order: a band of width 3, factored and solved in
-        // sequential passes), else by faer's sparse LDLᵀ after AMD, on the
-        // one triangle it reads (faer then factors it in place).
-        let first: Vec<usize> = (0..m)
-            .map(|i| c_orig.row_idx[c_orig.col_ptr[i]..c_orig.col_ptr[i + 1]][0].min(i))
-            .collect();
-        // (None: too large for its 32-bit row pointers.)
-        let envelope = EnvelopeLdlt::new(&first);
-        let (c_fwd, c_inv) = kkt_ordering(&c_orig, m, Default::default())?;
-        let mut permuted: Vec<(usize, usize)> =
-            pattern.iter().map(|&(s, r)| (c_inv[s], c_inv[r])).collect();
-        let c_amd = csc_of(m, &mut permuted);
-        let amd = SparseLdlt::preordered(&c_amd)?;
-        let narrow = envelope.filter(|e| e.len() as f64 <= FILL_SLACK * amd.factor_len() as f64);
-        let (c_fwd, c_inv, cf) = if let Some(envelope) = narrow {
-            let identity: Vec<usize> = (0..m).collect();
-            (identity.clone(), identity, CFactor::Envelope(envelope))
-        } else {
-            let upper = amd.reads_upper();
-            let mut triangle: Vec<(usize, usize)> = (0..m)
-                .flat_map(|s| {
-                    c_amd.row_idx[c_amd.col_ptr[s]..c_amd.col_ptr[s + 1]]
-                        .iter()
-                        .map(move |&r| (s, r))
-                })
-                .filter(|&(s, r)| if upper { r <= s } else { r >= s })
-                .collect();
-            let c_tri = csc_of(m, &mut triangle);
-            let cf = match SparseLdlt::preordered_triangle(&c_tri, upper)? {
-                Some(ldlt) => CFactor::Sparse {
-                    c: c_tri,
-                    ldlt: Box::new(ldlt),
-                },
-                None => CFactor::Sparse {
-                    c: c_amd,
-                    ldlt: Box::new(amd),
-                },
-            };
-            (c_fwd, c_inv, cf)
-        };
-        let read = |r: usize, s: usize| cf.reads(r, s);
-        let slot = |cf: &CFactor, r: usize, s: usize| cf.slot(r, s);
-        let c = &cf;
-        let mut pairs = Vec::new();
-        let mut blocks = this.blocks;
-        for b in &mut blocks {
-            let start = pairs.len();
-            let rows = &this.rows[b.rows.clone()];
-            for (lr, &r) in rows.iter().enumerate() {
-                for (ls, &s) in rows.iter().enumerate() {
-                    let (pr, ps) = (c_inv[r], c_inv[s]);
-                    if read(pr, ps) {
-                        let at = u32::try_from(slot(c, pr, ps)).map_err(|_| {
-                            KktError::Structure("C has more than 2³² entries".to_string())
-                        })?;
-                        // Lossless: both below max_rows ≤ u16::MAX.
-                        pairs.push((lr as u16, ls as u16, at));
-                    }
-                }
-            }
-            b.pairs = start..pairs.len();
-        }
-        let d_entries = d_pos
-            .iter()
-            .enumerate()
-            .filter(|&(_, &(_, r, s))| read(c_inv[r], c_inv[s]))
-            .map(|(k, &(_, r, s))| (k, slot(c, c_inv[r], c_inv[s])))
-            .collect();
-        // B by primal column, rows in C's order, for the products in the solve.
-        let fits = |x: usize| {
-            u32::try_from(x).map_err(|_| {
-                KktError::Structure(
-                    "the Schur backend indexes the KKT entries with 32 bits".to_string(),
-                )
-            })
-        };
-        let (mut b_col_ptr, mut b_rows, mut b_pos) = (vec![0; n + 1], Vec::new(), Vec::new());
-        for j in 0..n {
-            for p in a.col_ptr[j]..a.col_ptr[j + 1] {
-                let i = a.row_idx[p];
-                if i >= n {
-                    b_rows.push(fits(c_inv[i - n])?);
-                    b_pos.push(fits(p)?);
-                }
-            }
-            b_col_ptr[j + 1] = fits(b_rows.len())?;
-        }
-        let diagonal = this.coords.iter().enumerate().all(|(i, &c)| i == c)
-            && blocks.iter().all(|b| b.coords.len() == 1);
-        let (diag_s, pair_ptr) = if diagonal {
-            (
-                blocks
-                    .iter()
-                    .map(|b| this.s_entries[b.s_entries.start].0)
-                    .collect(),
-                std::iter::once(0)
-                    .chain(blocks.iter().map(|b| b.pairs.end))
-                    .collect(),
-            )
-        } else {
-            (Vec::new(), Vec::new())
-        };
-        let n_s_entries = this.s_entries.len();
-        let natural = c_fwd.iter().enumerate().all(|(k, &r)| k == r);
-        let banded = diagonal && natural && matches!(cf, CFactor::Envelope(_));
-        // The one-pass factorization computes C's slots from the envelope:
-        // no table of pairs (8 bytes a pair, about 20 pairs a bar).
-        let (pairs, pair_ptr) = if banded {
-            (Vec::new(), Vec::new())
-        } else {
-            (pairs, pair_ptr)
-        };
-        Ok(Self {
-            banded,
-            norm: None,
-            n_primal: n,
-            diagonal,
-            diag_s,
-            pair_ptr,
-            blocks,
-            coords: this.coords,
-            s_entries: this.s_entries,
-            b_entries: this.b_entries,
-            pairs,
-            d_entries,
-            s_values: vec![0.0; n_s_entries],
-            d_values: vec![0.0; d_pos.len()],
-            d_all: d_pos,
-            inverse: vec![0.0; inv_len],
-            cf,
-            c_inv,
-            c_fwd,
-            block: vec![0.0; max_k * max_k],
-            bk: vec![0.0; max_rows * max_k],
-            w: vec![0.0; max_rows * max_k],
-            x: vec![0.0; n],
-            y: vec![0.0; m],
-            b_values: vec![0.0; b_rows.len()],
-            natural,
-            row_sums: vec![0.0; a.n],
-            b_col_ptr,
-            b_rows,
-            b_pos,
-        })
-    }
-
     /// Whether `C` is factored by its envelope (else by faer after AMD).
     #[cfg(test)]
     pub(crate) fn uses_envelope(&self) -> bool {
@@ -436,55 +168,16 @@ impl Schur {
     /// Inverts every block of `S`, forms `C = B S⁻¹ Bᵀ − D` and factors it.
     ///
     /// # Errors
+    /// [`KktError::NonFinite`] for a NaN or infinite value it reads;
     /// [`KktError::Singular`] naming the primal unknown without a pivot in its
     /// block, or the multiplier whose pivot in `C` vanishes.
-    pub(crate) fn factor(&mut self, values: &[f64]) -> Result<(), KktError> {
+    fn factor_matrix(&mut self, values: &[f64]) -> Result<(), KktError> {
         self.cf.values_mut().fill(0.0);
         self.norm = None;
         if self.banded {
             return self.factor_banded(values);
         }
-        // Gather S, B and D (all the matrix: its Bᵀ mirrors B), checking them.
-        // With B, its part of the absolute row sums (for `norm_inf`).
-        let mut finite = 0.0;
-        let n = self.n_primal;
-        self.row_sums.fill(0.0);
-        let (wp, wm) = self.row_sums.split_at_mut(n);
-        for (j, w) in wp.iter_mut().enumerate() {
-            let mut column = 0.0;
-            for q in range(&self.b_col_ptr, j) {
-                let (row, p) = (self.b_rows[q], self.b_pos[q]);
-                let v = values[p as usize];
-                self.b_values[q] = v;
-                finite += 0.0 * v;
-                column += v.abs();
-                let r = if self.natural {
-                    row as usize
-                } else {
-                    self.c_fwd[row as usize]
-                };
-                wm[r] += v.abs();
-            }
-            *w = column;
-        }
-        if self.diagonal {
-            for (v, &p) in self.s_values.iter_mut().zip(&self.diag_s) {
-                *v = values[p];
-                finite += 0.0 * *v;
-            }
-        } else {
-            for (v, &(p, _, _)) in self.s_values.iter_mut().zip(&self.s_entries) {
-                *v = values[p];
-                finite += 0.0 * *v;
-            }
-        }
-        for (v, &(p, _, _)) in self.d_values.iter_mut().zip(&self.d_all) {
-            *v = values[p];
-            finite += 0.0 * *v;
-        }
-        if f64::is_nan(finite) {
-            return Err(KktError::NonFinite);
-        }
+        self.gather(values)?;
         if self.diagonal {
             self.factor_diagonal()?;
         } else {
@@ -501,7 +194,55 @@ impl Schur {
         })
     }
 
-    /// [`factor`](Self::factor) for a diagonal `S` and `C` in its envelope
+    /// Copies `S`, `B` and `D` (all the matrix: its `Bᵀ` mirrors `B`),
+    /// checking that they are finite, and begins the absolute row sums with
+    /// `B` (completed by [`norm_inf`](Self::norm_inf)).
+    fn gather(&mut self, values: &[f64]) -> Result<(), KktError> {
+        let mut finite = Finite::new();
+        let n = self.n_primal;
+        self.row_sums.fill(0.0);
+        let (wp, wm) = self.row_sums.split_at_mut(n);
+        for (j, w) in wp.iter_mut().enumerate() {
+            let mut column = 0.0;
+            for q in range(&self.b_col_ptr, j) {
+                let (row, p) = (self.b_rows[q], self.b_pos[q]);
+                let v = values[p as usize];
+                self.b_values[q] = v;
+                finite.push(v);
+                column += v.abs();
+                let r = if self.natural {
+                    row as usize
+                } else {
+                    self.c_fwd[row as usize]
+                };
+                wm[r] += v.abs();
+            }
+            *w = column;
+        }
+        let mut take = |v: &mut f64, p: usize| {
+            *v = values[p];
+            finite.push(*v);
+        };
+        if self.diagonal {
+            for (v, &p) in self.s_values.iter_mut().zip(&self.diag_s) {
+                take(v, p);
+            }
+        } else {
+            for (v, &(p, _, _)) in self.s_values.iter_mut().zip(&self.s_entries) {
+                take(v, p);
+            }
+        }
+        for (v, &(p, _, _)) in self.d_values.iter_mut().zip(&self.d_all) {
+            take(v, p);
+        }
+        if finite.all() {
+            Ok(())
+        } else {
+            Err(KktError::NonFinite)
+        }
+    }
+
+    /// [`factor_matrix`](Self::factor_matrix) for a diagonal `S` and `C` in its envelope
     /// in the constraints' own order (a chain), in one pass over the columns:
     /// `S_jj` and column `j` of `B` gathered and checked, `C += b_r b_s / S_jj`
     /// into slots computed from the envelope's row pointers, and the absolute
@@ -516,12 +257,12 @@ impl Schur {
         };
         let wm = &mut self.row_sums[n..];
         wm.fill(0.0);
-        let (mut finite, mut wp_max) = (0.0f64, 0.0f64);
+        let (mut finite, mut wp_max) = (Finite::new(), 0.0f64);
         let mut zero_pivot = None;
         for j in 0..n {
             let s = values[self.diag_s[j]];
             self.s_values[j] = s;
-            finite += 0.0 * s;
+            finite.push(s);
             if s == 0.0 && zero_pivot.is_none() {
                 zero_pivot = Some(j);
             }
@@ -532,7 +273,7 @@ impl Schur {
             for q in col.clone() {
                 let v = values[self.b_pos[q] as usize];
                 self.b_values[q] = v;
-                finite += 0.0 * v;
+                finite.push(v);
                 column += v.abs();
                 wm[self.b_rows[q] as usize] += v.abs();
             }
@@ -548,15 +289,16 @@ impl Schur {
         }
         for (v, &(p, r, _)) in self.d_values.iter_mut().zip(&self.d_all) {
             *v = values[p];
-            finite += 0.0 * *v;
+            finite.push(*v);
             wm[r] += v.abs();
         }
-        if f64::is_nan(finite) {
+        if !finite.all() {
             return Err(KktError::NonFinite);
         }
         if let Some(j) = zero_pivot {
             return Err(KktError::Singular { unknown: Some(j) });
         }
+        // Finite values: finite row sums.
         let norm = wm.iter().fold(wp_max, |m: f64, &x| m.max(x));
         for &(k, slot) in &self.d_entries {
             env.values_mut()[slot] -= self.d_values[k];
@@ -628,7 +370,7 @@ impl Schur {
 
     /// `y = A x` for the last factored matrix, from the compact copies of
     /// `S`, `B` and `D` (`A = [[S, Bᵀ], [B, D]]`).
-    pub(crate) fn mul(&self, x: &[f64], y: &mut [f64]) {
+    fn product(&self, x: &[f64], y: &mut [f64]) {
         let n = self.n_primal;
         y.fill(0.0);
         let (yp, ym) = y.split_at_mut(n);
@@ -658,8 +400,8 @@ impl Schur {
     }
 
     /// `‖A‖∞`, the largest absolute row sum of the last factored matrix
-    /// (completes the row sums that [`factor`](Self::factor) began with `B`).
-    pub(crate) fn norm_inf(&mut self) -> f64 {
+    /// (completes the row sums that [`gather`](Self::gather) began with `B`).
+    fn norm_inf(&mut self) -> f64 {
         if let Some(norm) = self.norm {
             return norm;
         }
@@ -682,7 +424,7 @@ impl Schur {
 
     /// Solves in place with the last factorization; returns `‖x‖∞` (as
     /// [`max_abs`] would).
-    pub(crate) fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64 {
+    fn solve(&mut self, rhs: &mut [f64]) -> f64 {
         if self.diagonal && self.natural {
             return self.solve_diagonal(rhs, false).0;
         }
@@ -695,7 +437,7 @@ impl Schur {
         self.diagonal && self.natural
     }
 
-    /// [`solve_in_place`](Self::solve_in_place) that also returns
+    /// [`solve`](Self::solve) that also returns
     /// `‖A x − b‖∞`, formed in the solve's own sweeps instead of a product
     /// with the matrix afterwards (the check of the first solve after each
     /// factorization); for [`checks_in_solve`](Self::checks_in_solve) only.
@@ -707,7 +449,7 @@ impl Schur {
 
     /// The solve for a diagonal `S` and `C` in the constraints' own order:
     /// the steps of the general path in two sweeps over `B` and no scratch
-    /// (each pass over `B` at 10⁵ bodies streams it from memory):
+    /// (on a long chain each pass over `B` streams it from memory):
     /// `g ← B S⁻¹ f − g`, `g ← C⁻¹ g`, `f ← S⁻¹ (f − Bᵀ g)`. With `check`, the
     /// second sweep also forms the residual `A x − b`: for a primal row `j`,
     /// `S_jj x_j − s_j` (`s_j = f_j − (Bᵀ y)_j`, formed anyway), for a
@@ -717,13 +459,36 @@ impl Schur {
     fn solve_diagonal(&mut self, rhs: &mut [f64], check: bool) -> (f64, f64) {
         let n = self.n_primal;
         let (f, g) = rhs.split_at_mut(n);
-        let res = &mut self.y;
         if check {
             // The constraint rows' residual starts at D y − g.
-            for (r, &gr) in res.iter_mut().zip(g.iter()) {
+            for (r, &gr) in self.y.iter_mut().zip(g.iter()) {
                 *r = -gr;
             }
         }
+        let g_norm = self.diagonal_multipliers(f, g);
+        if check {
+            for (&(_, r, c), &v) in self.d_all.iter().zip(&self.d_values) {
+                self.y[r] += v * g[c];
+            }
+        }
+        let (f_max, primal_res) = self.diagonal_primal(f, g, check);
+        let residual = if check {
+            primal_res.max(max_abs(&self.y))
+        } else {
+            0.0
+        };
+        let x_norm = if f_max.is_finite() {
+            f_max.finite_max().max(g_norm)
+        } else {
+            // A NaN or an infinity: max_abs tells which (a rare path).
+            max_abs(rhs)
+        };
+        (x_norm, residual)
+    }
+
+    /// First sweep and `C` solve of [`solve_diagonal`](Self::solve_diagonal):
+    /// `g ← C⁻¹ (B S⁻¹ f − g)`, the multipliers; returns `‖g‖∞`.
+    fn diagonal_multipliers(&mut self, f: &[f64], g: &mut [f64]) -> f64 {
         // The envelope solve stores −C⁻¹ w: then w = g − B S⁻¹ f needs no
         // pass negating g first, and −C⁻¹ w = C⁻¹ (B S⁻¹ f − g) = y bit for
         // bit (negation is exact and rounding symmetric).
@@ -740,20 +505,21 @@ impl Schur {
                 g[self.b_rows[q] as usize] += self.b_values[q] * xj;
             }
         }
-        let g_norm = match &mut self.cf {
+        match &mut self.cf {
             CFactor::Envelope(e) => e.solve(g, true),
             cf => {
                 cf.solve_in_place(g);
                 max_abs(g)
             }
-        };
-        if check {
-            for (&(_, r, c), &v) in self.d_all.iter().zip(&self.d_values) {
-                res[r] += v * g[c];
-            }
         }
-        // ‖f‖∞ on the way; `0 · x` carries a NaN or an infinity.
-        let (mut f_max, mut nan, mut primal_res) = (0.0f64, 0.0f64, 0.0f64);
+    }
+
+    /// Second sweep of [`solve_diagonal`](Self::solve_diagonal):
+    /// `f ← S⁻¹ (f − Bᵀ g)`, with `‖f‖∞` on the way and, with `check`, the
+    /// primal rows' residual (returned) and the constraint rows' (added into
+    /// the scratch `y`).
+    fn diagonal_primal(&mut self, f: &mut [f64], g: &[f64], check: bool) -> (MaxAbs, f64) {
+        let (mut f_max, mut primal_res) = (MaxAbs::new(), MaxAbs::new());
         for (j, (fj, &inv)) in f.iter_mut().zip(&self.inverse).enumerate() {
             let mut s = *fj;
             let col = range(&self.b_col_ptr, j);
@@ -762,28 +528,15 @@ impl Schur {
             }
             let x = inv * s;
             *fj = x;
-            f_max = if x.abs() > f_max { x.abs() } else { f_max };
-            nan += 0.0 * x;
+            f_max.push(x);
             if check {
-                let r = (self.s_values[j] * x - s).abs();
-                primal_res = if r > primal_res { r } else { primal_res };
+                primal_res.push(self.s_values[j] * x - s);
                 for q in col {
-                    res[self.b_rows[q] as usize] += self.b_values[q] * x;
+                    self.y[self.b_rows[q] as usize] += self.b_values[q] * x;
                 }
             }
         }
-        let residual = if check {
-            primal_res.max(max_abs(res))
-        } else {
-            0.0
-        };
-        let x_norm = if nan.is_nan() {
-            // A NaN or an infinity: max_abs tells which (a rare path).
-            max_abs(rhs)
-        } else {
-            f_max.max(g_norm)
-        };
-        (x_norm, residual)
+        (f_max, primal_res.value())
     }
 
     /// The solve for block-diagonal `S` or `C` in another order.
@@ -848,6 +601,27 @@ impl Schur {
     }
 }
 
+impl KktBackend for Schur {
+    fn factor(&mut self, values: &[f64]) -> Result<f64, KktError> {
+        self.factor_matrix(values)?;
+        Ok(self.norm_inf())
+    }
+
+    fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64 {
+        self.solve(rhs)
+    }
+
+    fn mul(&self, x: &[f64], y: &mut [f64]) {
+        self.product(x, y);
+    }
+
+    /// A chain (`S` diagonal, `C` in the constraints' order) forms the
+    /// residual inside its solve: no copy of `rhs`, no product afterwards.
+    fn solve_with_residual(&mut self, rhs: &mut [f64]) -> Option<(f64, f64)> {
+        self.checks_in_solve().then(|| self.solve_checked(rhs))
+    }
+}
+
 /// The positions `ptr[j]..ptr[j + 1]` (column `j`'s `B` entries in `b_rows`,
 /// `b_pos`, `b_values`).
 #[inline]
@@ -896,14 +670,21 @@ impl CFactor {
     }
 
     /// Position of a read entry `(r, s)` in [`values_mut`](Self::values_mut).
-    fn slot(&self, r: usize, s: usize) -> usize {
-        match self {
-            Self::Envelope(e) => e.slot(r, s),
-            Self::Sparse { c, .. } => {
-                let col = &c.row_idx[c.col_ptr[s]..c.col_ptr[s + 1]];
-                c.col_ptr[s] + col.binary_search(&r).unwrap_or(0)
-            }
-        }
+    ///
+    /// # Errors
+    /// [`KktError::Structure`] when `(r, s)` is not stored. The analysis asks
+    /// only for entries of `C`'s own pattern, so this is a broken invariant
+    /// of the analysis, reported instead of writing into another entry's slot.
+    fn slot(&self, r: usize, s: usize) -> Result<usize, KktError> {
+        let slot = match self {
+            Self::Envelope(e) => e.checked_slot(r, s),
+            Self::Sparse { c, .. } => c.position(r, s),
+        };
+        slot.ok_or_else(|| {
+            KktError::Structure(format!(
+                "the Schur analysis asked for entry ({r}, {s}) of C, which its pattern does not hold"
+            ))
+        })
     }
 
     fn values_mut(&mut self) -> &mut [f64] {
@@ -929,27 +710,6 @@ impl CFactor {
             Self::Sparse { ldlt, .. } => ldlt.solve_in_place(y),
         }
     }
-}
-
-/// The `n × n` CSC pattern of the `(column, row)` pairs (sorted and
-/// deduplicated in place), values zero.
-fn csc_of(n: usize, pairs: &mut Vec<(usize, usize)>) -> Csc {
-    pairs.sort_unstable();
-    pairs.dedup();
-    let mut c = Csc {
-        n,
-        col_ptr: vec![0; n + 1],
-        row_idx: Vec::with_capacity(pairs.len()),
-        values: vec![0.0; pairs.len()],
-    };
-    for &(col, row) in pairs.iter() {
-        c.col_ptr[col + 1] += 1;
-        c.row_idx.push(row);
-    }
-    for j in 0..n {
-        c.col_ptr[j + 1] += c.col_ptr[j];
-    }
-    c
 }
 
 /// Inverts the row-major `k × k` matrix `a` (destroyed) into `inv` by
@@ -997,4 +757,26 @@ fn invert(a: &mut [f64], inv: &mut [f64], k: usize) -> Result<(), usize> {
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::analyse::csc_of;
+    use super::*;
+
+    /// The analysis asks for slots of `C`'s own entries only; an entry
+    /// outside the pattern is an error, not some other entry's slot.
+    #[test]
+    fn an_entry_outside_the_pattern_of_c_has_no_slot() {
+        let envelope = CFactor::Envelope(EnvelopeLdlt::new(&[0, 0, 1]).expect("small"));
+        assert_eq!(envelope.slot(2, 1), Ok(3)); // rows hold 1, 2 and 2 values
+        assert!(matches!(envelope.slot(2, 0), Err(KktError::Structure(_))));
+        assert!(matches!(envelope.slot(3, 3), Err(KktError::Structure(_))));
+        let mut entries = vec![(0, 0), (0, 1), (1, 0), (1, 1), (2, 2)];
+        let c = csc_of(3, &mut entries);
+        let ldlt = Box::new(SparseLdlt::preordered(&c).expect("symmetric"));
+        let sparse = CFactor::Sparse { c, ldlt };
+        assert_eq!(sparse.slot(1, 0), Ok(1));
+        assert!(matches!(sparse.slot(2, 0), Err(KktError::Structure(_))));
+    }
 }

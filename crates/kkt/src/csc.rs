@@ -1,0 +1,114 @@
+//! The compressed sparse column matrix every backend reads.
+
+use crate::KktError;
+
+/// A square sparse matrix in compressed sparse column form with sorted row
+/// indices and no duplicates.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Csc {
+    /// Dimension.
+    pub n: usize,
+    /// Column pointers, length `n + 1`.
+    pub col_ptr: Vec<usize>,
+    /// Row indices, length `nnz`.
+    pub row_idx: Vec<usize>,
+    /// Values, length `nnz`.
+    pub values: Vec<f64>,
+}
+
+impl Csc {
+    /// Number of stored values.
+    #[must_use]
+    pub fn nnz(&self) -> usize {
+        self.row_idx.len()
+    }
+
+    /// The row indices of column `j`.
+    #[must_use]
+    pub fn column(&self, j: usize) -> &[usize] {
+        &self.row_idx[self.col_ptr[j]..self.col_ptr[j + 1]]
+    }
+
+    /// `y = A x`.
+    ///
+    /// # Panics
+    /// If `x` or `y` is not of length `n`.
+    pub fn mul(&self, x: &[f64], y: &mut [f64]) {
+        assert_eq!(x.len(), self.n);
+        assert_eq!(y.len(), self.n);
+        y.fill(0.0);
+        for (j, &xj) in x.iter().enumerate() {
+            for k in self.col_ptr[j]..self.col_ptr[j + 1] {
+                y[self.row_idx[k]] += self.values[k] * xj;
+            }
+        }
+    }
+
+    /// The dense row-major matrix (for tests, diagnostics and small systems).
+    #[must_use]
+    pub fn to_dense(&self) -> Vec<Vec<f64>> {
+        let mut a = vec![vec![0.0; self.n]; self.n];
+        for j in 0..self.n {
+            for k in self.col_ptr[j]..self.col_ptr[j + 1] {
+                a[self.row_idx[k]][j] += self.values[k];
+            }
+        }
+        a
+    }
+
+    /// Checks the structure: lengths, bounds, sorted unique row indices.
+    ///
+    /// # Errors
+    /// [`KktError::Structure`] saying what is malformed.
+    pub fn validate(&self) -> Result<(), KktError> {
+        let bad = |why: &str| Err(KktError::Structure(why.to_string()));
+        if self.col_ptr.len() != self.n + 1 || self.col_ptr[0] != 0 {
+            return bad("col_ptr must have n + 1 entries starting at 0");
+        }
+        if self.col_ptr.windows(2).any(|w| w[0] > w[1]) {
+            return bad("col_ptr must be non-decreasing");
+        }
+        if self.col_ptr[self.n] != self.row_idx.len() || self.values.len() != self.row_idx.len() {
+            return bad("row_idx and values must have col_ptr[n] entries");
+        }
+        for j in 0..self.n {
+            let col = self.column(j);
+            if col.windows(2).any(|w| w[0] >= w[1]) || col.iter().any(|&i| i >= self.n) {
+                return bad("row indices must be sorted, unique and below n");
+            }
+        }
+        Ok(())
+    }
+
+    /// Position of entry `(i, j)` in the values, if it is stored.
+    #[must_use]
+    pub fn position(&self, i: usize, j: usize) -> Option<usize> {
+        self.column(j)
+            .binary_search(&i)
+            .ok()
+            .map(|k| self.col_ptr[j] + k)
+    }
+}
+
+/// The 2-norm condition number `σ_max / σ_min` of a (small) sparse matrix,
+/// computed from the singular values of its dense form; `inf` when singular.
+/// For diagnostics and conditioning studies, not for large systems.
+#[must_use]
+pub fn condition_number(a: &Csc) -> f64 {
+    let mut d = nalgebra::DMatrix::<f64>::zeros(a.n, a.n);
+    for j in 0..a.n {
+        for k in a.col_ptr[j]..a.col_ptr[j + 1] {
+            d[(a.row_idx[k], j)] += a.values[k];
+        }
+    }
+    let s = d.singular_values();
+    let max = crate::max_abs(s.as_slice());
+    let min = s.iter().fold(f64::INFINITY, |m, &x| m.min(x));
+    if max.is_nan() {
+        f64::NAN
+    } else if min == 0.0 {
+        f64::INFINITY
+    } else {
+        max / min
+    }
+}

@@ -1,0 +1,417 @@
+//! The Schur backend's symbolic analysis, step by step: the blocks of `S`
+//! (connected components of its pattern), the pattern of `C = B S⁻¹ Bᵀ − D`,
+//! how `C` is factored (envelope or AMD), the slots every block writes in `C`,
+//! and `B` by primal column.
+
+use super::{Block, CFactor, FILL_SLACK, MAX_BLOCK, Schur};
+use crate::envelope::EnvelopeLdlt;
+use crate::sparse_ldlt::{SparseLdlt, kkt_ordering};
+use crate::{Csc, KktError};
+
+/// The block structure of `S` and each block's rows of `B`.
+pub(super) struct Parts {
+    pub(super) blocks: Vec<Block>,
+    /// Unknowns of all blocks, block after block.
+    pub(super) coords: Vec<usize>,
+    /// `(KKT value position, local i, local j)` of every block's `S` entries.
+    pub(super) s_entries: Vec<(usize, usize, usize)>,
+    /// `(KKT value position, local row, local column)` of every block's `B`.
+    pub(super) b_entries: Vec<(usize, usize, usize)>,
+    /// Each block's rows (original constraint indices), block after block.
+    pub(super) rows: Vec<usize>,
+    /// Total size of the blocks' dense inverses, the largest block and the
+    /// most rows a block touches (scratch sizes).
+    pub(super) inverse_len: usize,
+    pub(super) max_k: usize,
+    pub(super) max_rows: usize,
+}
+
+/// `B` by primal column (column `j`'s entries are `col_ptr[j]..col_ptr[j + 1]`):
+/// each entry's row in `C`'s order and its position in the KKT values, on 32
+/// bits and apart (the solve reads the rows only).
+pub(super) struct BColumns {
+    pub(super) col_ptr: Vec<u32>,
+    pub(super) rows: Vec<u32>,
+    pub(super) pos: Vec<u32>,
+}
+
+/// How `C` is factored and its order: `fwd[k]` is the constraint in position
+/// `k`, `inv` the inverse.
+pub(super) struct COrder {
+    pub(super) fwd: Vec<usize>,
+    pub(super) inv: Vec<usize>,
+    pub(super) factor: CFactor,
+}
+
+impl Schur {
+    /// Analyses `a` (values ignored) whose first `n_primal` unknowns are primal.
+    ///
+    /// # Errors
+    /// [`KktError::Structure`] when a diagonal block of `S` has more than
+    /// [`MAX_BLOCK`] unknowns, touches more than `u16::MAX` rows, or the
+    /// structure is too large for 32-bit indices.
+    pub(crate) fn new(a: &Csc, n_primal: usize) -> Result<Self, KktError> {
+        let n = n_primal;
+        let m = a.n - n;
+        let mut parts = Parts::gather(a, n, &components(a, n))?;
+        // Every entry of the multiplier block D: (KKT value position, row, column).
+        let d_all: Vec<(usize, usize, usize)> = (n..a.n)
+            .flat_map(|j| (a.col_ptr[j]..a.col_ptr[j + 1]).map(move |p| (p, j)))
+            .filter(|&(p, _)| a.row_idx[p] >= n)
+            .map(|(p, j)| (p, a.row_idx[p] - n, j - n))
+            .collect();
+        let order = COrder::choose(&parts, &d_all, m)?;
+        let pairs = pair_slots(&mut parts, &order)?;
+        let b = BColumns::new(a, n, &order.inv)?;
+        Self::from_parts(a.n, parts, order, pairs, d_all, b)
+    }
+
+    /// The backend from its analysed parts, with its buffers.
+    fn from_parts(
+        dim: usize,
+        parts: Parts,
+        order: COrder,
+        pairs: Vec<(u16, u16, u32)>,
+        d_all: Vec<(usize, usize, usize)>,
+        b: BColumns,
+    ) -> Result<Self, KktError> {
+        let n = parts.coords.len();
+        let m = dim - n;
+        // Index in `d_all` of each entry of D in the read triangle, and its slot.
+        let d_entries = d_all
+            .iter()
+            .enumerate()
+            .filter(|&(_, &(_, r, s))| order.factor.reads(order.inv[r], order.inv[s]))
+            .map(|(k, &(_, r, s))| Ok((k, order.factor.slot(order.inv[r], order.inv[s])?)))
+            .collect::<Result<_, KktError>>()?;
+        // S diagonal: every block one unknown, in order, with one S entry.
+        let diagonal = parts.coords.iter().enumerate().all(|(i, &c)| i == c)
+            && parts
+                .blocks
+                .iter()
+                .all(|b| b.coords.len() == 1 && b.s_entries.len() == 1);
+        let natural = order.fwd.iter().enumerate().all(|(k, &r)| k == r);
+        let banded = diagonal && natural && matches!(order.factor, CFactor::Envelope(_));
+        // The one-pass factorization of a chain computes C's slots from the
+        // envelope: no table of pairs (8 bytes a pair, about 20 pairs a bar).
+        let (diag_s, pair_ptr, pairs) = match (diagonal, banded) {
+            (false, _) => (Vec::new(), Vec::new(), pairs),
+            (true, banded) => (
+                parts
+                    .blocks
+                    .iter()
+                    .map(|b| parts.s_entries[b.s_entries.start].0)
+                    .collect(),
+                if banded {
+                    Vec::new()
+                } else {
+                    std::iter::once(0)
+                        .chain(parts.blocks.iter().map(|b| b.pairs.end))
+                        .collect()
+                },
+                if banded { Vec::new() } else { pairs },
+            ),
+        };
+        Ok(Self {
+            banded,
+            norm: None,
+            n_primal: n,
+            diagonal,
+            diag_s,
+            pair_ptr,
+            pairs,
+            d_entries,
+            s_values: vec![0.0; parts.s_entries.len()],
+            d_values: vec![0.0; d_all.len()],
+            d_all,
+            inverse: vec![0.0; parts.inverse_len],
+            cf: order.factor,
+            c_inv: order.inv,
+            c_fwd: order.fwd,
+            block: vec![0.0; parts.max_k * parts.max_k],
+            bk: vec![0.0; parts.max_rows * parts.max_k],
+            w: vec![0.0; parts.max_rows * parts.max_k],
+            x: vec![0.0; n],
+            y: vec![0.0; m],
+            b_values: vec![0.0; b.rows.len()],
+            natural,
+            row_sums: vec![0.0; dim],
+            b_col_ptr: b.col_ptr,
+            b_rows: b.rows,
+            b_pos: b.pos,
+            blocks: parts.blocks,
+            coords: parts.coords,
+            s_entries: parts.s_entries,
+            b_entries: parts.b_entries,
+        })
+    }
+}
+
+/// The connected components of the pattern of `S` (entries `(i, j)` with
+/// `i, j < n`), each sorted, in the order of their smallest unknown.
+fn components(a: &Csc, n: usize) -> Vec<Vec<usize>> {
+    fn find(p: &mut [usize], mut i: usize) -> usize {
+        while p[i] != i {
+            p[i] = p[p[i]];
+            i = p[i];
+        }
+        i
+    }
+    let mut parent: Vec<usize> = (0..n).collect();
+    for j in 0..n {
+        for &i in a.column(j) {
+            if i < n {
+                let (ri, rj) = (find(&mut parent, i), find(&mut parent, j));
+                if ri != rj {
+                    parent[ri.max(rj)] = ri.min(rj);
+                }
+            }
+        }
+    }
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for i in 0..n {
+        let r = find(&mut parent, i);
+        members[r].push(i);
+    }
+    members.retain(|g| !g.is_empty());
+    members
+}
+
+impl Parts {
+    /// The blocks of the given components with their `S` entries and rows of
+    /// `B` (rows ascending, then local indices: for one unknown, the order of
+    /// its column's `B` entries).
+    fn gather(a: &Csc, n: usize, members: &[Vec<usize>]) -> Result<Self, KktError> {
+        let m = a.n - n;
+        let mut local = vec![0usize; n];
+        let mut row_local = vec![usize::MAX; m];
+        let mut this = Self {
+            blocks: Vec::new(),
+            coords: Vec::with_capacity(n),
+            s_entries: Vec::new(),
+            b_entries: Vec::new(),
+            rows: Vec::new(),
+            inverse_len: 0,
+            max_k: 0,
+            max_rows: 0,
+        };
+        for group in members {
+            let k = group.len();
+            if k > MAX_BLOCK {
+                return Err(KktError::Structure(format!(
+                    "the Schur backend needs a block-diagonal S with blocks of at most {MAX_BLOCK} unknowns; unknowns {}, {}, … form a block of {k}",
+                    group[0], group[1]
+                )));
+            }
+            for (l, &i) in group.iter().enumerate() {
+                local[i] = l;
+            }
+            this.push_block(a, n, group, &local, &mut row_local);
+        }
+        if this.max_rows > usize::from(u16::MAX) {
+            return Err(KktError::Structure(format!(
+                "a block of S touches {} constraint rows; the Schur backend takes at most {}",
+                this.max_rows,
+                u16::MAX
+            )));
+        }
+        Ok(this)
+    }
+
+    /// Appends the block of the unknowns `group` (`local` their local
+    /// indices; `row_local` is `usize::MAX` everywhere on entry and exit).
+    fn push_block(
+        &mut self,
+        a: &Csc,
+        n: usize,
+        group: &[usize],
+        local: &[usize],
+        row_local: &mut [usize],
+    ) {
+        let (c0, s0, b0, r0) = (
+            self.coords.len(),
+            self.s_entries.len(),
+            self.b_entries.len(),
+            self.rows.len(),
+        );
+        self.coords.extend_from_slice(group);
+        for &j in group {
+            for p in a.col_ptr[j]..a.col_ptr[j + 1] {
+                let i = a.row_idx[p];
+                if i < n {
+                    self.s_entries.push((p, local[i], local[j]));
+                } else if row_local[i - n] == usize::MAX {
+                    row_local[i - n] = 0;
+                    self.rows.push(i - n);
+                }
+            }
+        }
+        self.rows[r0..].sort_unstable();
+        for (l, &r) in self.rows[r0..].iter().enumerate() {
+            row_local[r] = l;
+        }
+        for &j in group {
+            for p in a.col_ptr[j]..a.col_ptr[j + 1] {
+                let i = a.row_idx[p];
+                if i >= n {
+                    self.b_entries.push((p, row_local[i - n], local[j]));
+                }
+            }
+        }
+        for &r in &self.rows[r0..] {
+            row_local[r] = usize::MAX;
+        }
+        let (k, n_rows) = (group.len(), self.rows.len() - r0);
+        self.blocks.push(Block {
+            coords: c0..self.coords.len(),
+            s_entries: s0..self.s_entries.len(),
+            b_entries: b0..self.b_entries.len(),
+            rows: r0..self.rows.len(),
+            n_rows,
+            inverse: self.inverse_len,
+            pairs: 0..0,
+        });
+        self.inverse_len += k * k;
+        self.max_k = self.max_k.max(k);
+        self.max_rows = self.max_rows.max(n_rows);
+    }
+}
+
+impl COrder {
+    /// `C`'s pattern is every block's row pairs, `D`'s entries and the
+    /// diagonal. It is factored in the constraints' own order by its envelope
+    /// when that is at most `FILL_SLACK` times the factor AMD gives (a chain's
+    /// joints in order: a band of width 3, factored and solved in sequential
+    /// passes), else by faer's sparse LDLᵀ after AMD, on the one triangle it
+    /// reads (faer then factors it in place).
+    fn choose(parts: &Parts, d_all: &[(usize, usize, usize)], m: usize) -> Result<Self, KktError> {
+        let mut pattern: Vec<(usize, usize)> = Vec::new();
+        for b in &parts.blocks {
+            let rows = &parts.rows[b.rows.clone()];
+            for &r in rows {
+                for &s in rows {
+                    pattern.push((s, r));
+                }
+            }
+        }
+        pattern.extend(d_all.iter().map(|&(_, r, s)| (s, r)));
+        pattern.extend((0..m).map(|r| (r, r)));
+        // csc_of sorts and deduplicates `pattern`: it is C's entry list.
+        let c_orig = csc_of(m, &mut pattern);
+        let first: Vec<usize> = (0..m).map(|i| c_orig.column(i)[0].min(i)).collect();
+        // (None: too large for its 32-bit row pointers.)
+        let envelope = EnvelopeLdlt::new(&first);
+        let (fwd, inv) = kkt_ordering(&c_orig, m, Default::default())?;
+        let mut permuted: Vec<(usize, usize)> =
+            pattern.iter().map(|&(s, r)| (inv[s], inv[r])).collect();
+        let c_amd = csc_of(m, &mut permuted);
+        let amd = SparseLdlt::preordered(&c_amd)?;
+        let narrow = envelope.filter(|e| e.len() as f64 <= FILL_SLACK * amd.factor_len() as f64);
+        if let Some(envelope) = narrow {
+            let identity: Vec<usize> = (0..m).collect();
+            return Ok(Self {
+                fwd: identity.clone(),
+                inv: identity,
+                factor: CFactor::Envelope(envelope),
+            });
+        }
+        Ok(Self {
+            fwd,
+            inv,
+            factor: sparse_c_factor(c_amd, amd)?,
+        })
+    }
+}
+
+/// `C` (stored with both triangles, in AMD order) factored by faer, on the one
+/// triangle its kernel reads when faer agrees to take only that one.
+fn sparse_c_factor(c_amd: Csc, amd: SparseLdlt) -> Result<CFactor, KktError> {
+    let m = c_amd.n;
+    let upper = amd.reads_upper();
+    let mut triangle: Vec<(usize, usize)> = (0..m)
+        .flat_map(|s| c_amd.column(s).iter().map(move |&r| (s, r)))
+        .filter(|&(s, r)| if upper { r <= s } else { r >= s })
+        .collect();
+    let c_tri = csc_of(m, &mut triangle);
+    Ok(match SparseLdlt::preordered_triangle(&c_tri, upper)? {
+        Some(ldlt) => CFactor::Sparse {
+            c: c_tri,
+            ldlt: Box::new(ldlt),
+        },
+        None => CFactor::Sparse {
+            c: c_amd,
+            ldlt: Box::new(amd),
+        },
+    })
+}
+
+/// Every block's contributions to `C`: `(local row, local row, slot in C)`
+/// for the pairs in the triangle the factorization reads; sets each block's
+/// range of pairs.
+fn pair_slots(parts: &mut Parts, order: &COrder) -> Result<Vec<(u16, u16, u32)>, KktError> {
+    let mut pairs = Vec::new();
+    for b in &mut parts.blocks {
+        let start = pairs.len();
+        let rows = &parts.rows[b.rows.clone()];
+        for (lr, &r) in rows.iter().enumerate() {
+            for (ls, &s) in rows.iter().enumerate() {
+                let (pr, ps) = (order.inv[r], order.inv[s]);
+                if order.factor.reads(pr, ps) {
+                    let at = u32::try_from(order.factor.slot(pr, ps)?).map_err(|_| {
+                        KktError::Structure("C has more than 2³² entries".to_string())
+                    })?;
+                    // Lossless: both below max_rows ≤ u16::MAX (Parts::gather).
+                    pairs.push((lr as u16, ls as u16, at));
+                }
+            }
+        }
+        b.pairs = start..pairs.len();
+    }
+    Ok(pairs)
+}
+
+impl BColumns {
+    /// `B`'s entries of `a` by primal column, rows in `C`'s order (`c_inv`).
+    fn new(a: &Csc, n: usize, c_inv: &[usize]) -> Result<Self, KktError> {
+        let fits = |x: usize| {
+            u32::try_from(x).map_err(|_| {
+                KktError::Structure(
+                    "the Schur backend indexes the KKT entries with 32 bits".to_string(),
+                )
+            })
+        };
+        let (mut col_ptr, mut rows, mut pos) = (vec![0; n + 1], Vec::new(), Vec::new());
+        for j in 0..n {
+            for p in a.col_ptr[j]..a.col_ptr[j + 1] {
+                let i = a.row_idx[p];
+                if i >= n {
+                    rows.push(fits(c_inv[i - n])?);
+                    pos.push(fits(p)?);
+                }
+            }
+            col_ptr[j + 1] = fits(rows.len())?;
+        }
+        Ok(Self { col_ptr, rows, pos })
+    }
+}
+
+/// The `n × n` CSC pattern of the `(column, row)` pairs (sorted and
+/// deduplicated in place), values zero.
+pub(super) fn csc_of(n: usize, pairs: &mut Vec<(usize, usize)>) -> Csc {
+    pairs.sort_unstable();
+    pairs.dedup();
+    let mut c = Csc {
+        n,
+        col_ptr: vec![0; n + 1],
+        row_idx: Vec::with_capacity(pairs.len()),
+        values: vec![0.0; pairs.len()],
+    };
+    for &(col, row) in pairs.iter() {
+        c.col_ptr[col + 1] += 1;
+        c.row_idx.push(row);
+    }
+    for j in 0..n {
+        c.col_ptr[j + 1] += c.col_ptr[j];
+    }
+    c
+}

@@ -1,0 +1,220 @@
+//! The KKT structure of a system, built once: the system's patterns checked,
+//! their union in compressed sparse columns, and the slot of every term's
+//! entries in its values (eq. 16-17).
+
+use mstar_kkt::{Csc, Structure};
+use mstar_model::{Pattern, System};
+
+use crate::LinearizeError;
+use crate::csc::{Slot, from_terms};
+
+/// A system's declared patterns, checked against its dimensions.
+#[derive(Clone, Debug)]
+pub(crate) struct Patterns {
+    pub(crate) n: usize,
+    pub(crate) m: usize,
+    pub(crate) mass: Pattern,
+    pub(crate) b: Pattern,
+    pub(crate) hessian: Pattern,
+    pub(crate) g_u: Pattern,
+    pub(crate) g_v: Pattern,
+    pub(crate) mass_du: Pattern,
+}
+
+impl Patterns {
+    /// Reads and checks every pattern of `sys`.
+    pub(crate) fn read<S: System + ?Sized>(sys: &S) -> Result<Self, LinearizeError> {
+        let (n, m) = (sys.n_coords(), sys.n_constraints());
+        Ok(Self {
+            n,
+            m,
+            mass: checked(sys.mass_pattern(), "mass", n, n)?,
+            b: checked(sys.b_pattern(), "B", m, n)?,
+            hessian: checked(sys.hessian_pattern(), "constraint Hessian", n, n)?,
+            g_u: checked(sys.forces_du_pattern(), "∂g/∂u", n, n)?,
+            g_v: checked(sys.forces_dv_pattern(), "∂g/∂u̇", n, n)?,
+            mass_du: checked(sys.mass_du_pattern(), "∂(Mü)/∂u", n, n)?,
+        })
+    }
+
+    /// Whether `M`'s pattern is its diagonal in order (`M ü = m ⊙ ü`).
+    pub(crate) fn mass_is_diagonal(&self) -> bool {
+        self.mass.len() == self.n
+            && self
+                .mass
+                .entries
+                .iter()
+                .enumerate()
+                .all(|(k, &(i, j))| i == k && j == k)
+    }
+
+    /// `BᵀB`: for every constraint row, all pairs `(p, q)` of its entries
+    /// (positions in `B`'s values).
+    pub(crate) fn bb_pairs(&self) -> Vec<(usize, usize)> {
+        let mut rows: Vec<Vec<usize>> = vec![Vec::new(); self.m];
+        for (k, &(i, _)) in self.b.entries.iter().enumerate() {
+            rows[i].push(k);
+        }
+        rows.iter()
+            .flat_map(|row| row.iter().flat_map(|&p| row.iter().map(move |&q| (p, q))))
+            .collect()
+    }
+}
+
+fn checked(
+    p: Pattern,
+    matrix: &'static str,
+    rows: usize,
+    cols: usize,
+) -> Result<Pattern, LinearizeError> {
+    if p.nrows != rows || p.ncols != cols {
+        return Err(LinearizeError::PatternShape {
+            matrix,
+            got_rows: p.nrows,
+            got_cols: p.ncols,
+            want_rows: rows,
+            want_cols: cols,
+        });
+    }
+    if let Some((row, col)) = p.out_of_bounds() {
+        return Err(LinearizeError::PatternEntry { matrix, row, col });
+    }
+    Ok(p)
+}
+
+/// The slot in the KKT values of every entry of every term.
+#[derive(Clone, Debug)]
+pub(crate) struct KktSlots {
+    pub(crate) mass: Vec<Slot>,
+    pub(crate) hessian: Vec<Slot>,
+    pub(crate) g_u: Vec<Slot>,
+    pub(crate) g_v: Vec<Slot>,
+    pub(crate) mass_du: Vec<Slot>,
+    pub(crate) bb: Vec<Slot>,
+    pub(crate) identity: Vec<Slot>,
+    pub(crate) b: Vec<Slot>,
+    pub(crate) bt: Vec<Slot>,
+}
+
+/// The KKT matrix's structure and slot maps, and those of `M* = M + BᵀB`.
+#[derive(Clone, Debug)]
+pub(crate) struct Layout {
+    pub(crate) kkt: Csc,
+    pub(crate) slots: KktSlots,
+    /// The slots of every term of `S_T` (sorted, once each).
+    pub(crate) s_slots: Vec<Slot>,
+    /// Whether every slot of the `B` block has exactly one entry of `B`.
+    pub(crate) b_slots_unique: bool,
+    /// `BᵀB` as pairs of positions in `B`'s values.
+    pub(crate) bb_pairs: Vec<(usize, usize)>,
+    pub(crate) m_star: Csc,
+    pub(crate) m_star_mass: Vec<Slot>,
+    pub(crate) m_star_bb: Vec<Slot>,
+}
+
+impl Layout {
+    /// The union of the patterns of `M`, the constraint Hessian, `∂g/∂u`,
+    /// `∂g/∂u̇`, `∂(Mü)/∂u`, the primal diagonal, `B`, and as `structure`
+    /// says `BᵀB`, `Bᵀ` and the multiplier diagonal.
+    pub(crate) fn new(p: &Patterns, structure: Structure) -> Result<Self, LinearizeError> {
+        let (n, m) = (p.n, p.m);
+        let bb_pairs = p.bb_pairs();
+        let bb_entries: Vec<(usize, usize)> = bb_pairs
+            .iter()
+            .map(|&(a, b)| (p.b.entries[a].1, p.b.entries[b].1))
+            .collect();
+        let identity: Vec<(usize, usize)> = (0..n + m).map(|i| (i, i)).collect();
+        let b_entries: Vec<(usize, usize)> = p.b.entries.iter().map(|&(i, j)| (n + i, j)).collect();
+        let bt_entries: Vec<(usize, usize)> =
+            p.b.entries.iter().map(|&(i, j)| (j, n + i)).collect();
+        let (kkt, slots) = from_terms(
+            n + m,
+            &[
+                &p.mass.entries,
+                &p.hessian.entries,
+                &p.g_u.entries,
+                &p.g_v.entries,
+                &p.mass_du.entries,
+                when(structure.augmented, &bb_entries),
+                &identity[..n],
+                &b_entries,
+                when(structure.transpose, &bt_entries),
+                // The multiplier block is zero. LDLᵀ of the augmented matrix
+                // wants its diagonal in the pattern; the Schur backend forms
+                // the diagonal of C itself and would only read these zeros.
+                when(structure.augmented, &identity[n..]),
+            ],
+        )
+        .map_err(|nnz| LinearizeError::TooLarge { nnz })?;
+        let slots = KktSlots::from(slots);
+        let (m_star, ms) = from_terms(n, &[&p.mass.entries, &bb_entries])
+            .map_err(|nnz| LinearizeError::TooLarge { nnz })?;
+        let mut ms = ms.into_iter();
+        Ok(Self {
+            kkt,
+            s_slots: slots.s_terms(),
+            b_slots_unique: slots.b_unique(),
+            slots,
+            bb_pairs,
+            m_star,
+            m_star_mass: ms.next().unwrap_or_default(),
+            m_star_bb: ms.next().unwrap_or_default(),
+        })
+    }
+}
+
+/// `entries` when `yes`, else none.
+fn when(yes: bool, entries: &[(usize, usize)]) -> &[(usize, usize)] {
+    if yes { entries } else { &[] }
+}
+
+impl From<Vec<Vec<Slot>>> for KktSlots {
+    /// The terms' slots in the order [`Layout::new`] lists them.
+    fn from(slots: Vec<Vec<Slot>>) -> Self {
+        let mut it = slots.into_iter();
+        let mut next = || it.next().unwrap_or_default();
+        let mut this = Self {
+            mass: next(),
+            hessian: next(),
+            g_u: next(),
+            g_v: next(),
+            mass_du: next(),
+            bb: next(),
+            identity: next(),
+            b: next(),
+            bt: next(),
+        };
+        this.b.shrink_to_fit();
+        this
+    }
+}
+
+impl KktSlots {
+    /// The slots of every term of `S_T`, sorted, once each.
+    fn s_terms(&self) -> Vec<Slot> {
+        let mut s: Vec<Slot> = [
+            &self.mass,
+            &self.hessian,
+            &self.g_u,
+            &self.g_v,
+            &self.mass_du,
+            &self.bb,
+            &self.identity,
+        ]
+        .into_iter()
+        .flatten()
+        .copied()
+        .collect();
+        s.sort_unstable();
+        s.dedup();
+        s
+    }
+
+    /// Whether every slot of the `B` block has exactly one entry of `B`.
+    fn b_unique(&self) -> bool {
+        let mut sorted = self.b.clone();
+        sorted.sort_unstable();
+        sorted.dedup();
+        sorted.len() == self.b.len()
+    }
+}

@@ -1,0 +1,593 @@
+//! The integrator: state, step control and output. The Newton iteration of
+//! one step (paper §2.2, Fig. 2; `algorithm.md` §4) is in `newton.rs`, the
+//! initial conditions (§3, §6) in `start.rs`.
+
+mod newton;
+mod start;
+
+use mstar_kkt::{Backend, KktError, KktSolver};
+use mstar_linearize::Linearization;
+use mstar_model::{Sample, SampleRef, System, kinetic_energy};
+
+use crate::{AlphaParams, Config, IntegrationError, Newton, Observer, Predictor, RunStats, Start};
+
+/// What the initialization did, for the run summary.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StartReport {
+    /// `‖Φ(u₀)‖∞` of the state as given.
+    pub position_violation: f64,
+    /// `‖B u̇₀ + Φ_t‖∞` of the state as given.
+    pub velocity_violation: f64,
+    /// How far projection moved each coordinate (all zero when nothing moved).
+    pub position_correction: Vec<f64>,
+    /// How far projection changed each velocity.
+    pub velocity_correction: Vec<f64>,
+    /// The third time derivative estimate `u⃛₀` used for the Arnold-Brüls start
+    /// (empty when not used).
+    pub jerk: Vec<f64>,
+    /// The `O(h²)` starting velocity correction `δu̇` (normal to the constraints)
+    /// that puts the start on the discrete solution (empty when not used).
+    pub velocity_start_correction: Vec<f64>,
+}
+
+/// Why one attempt at a step failed (before step control decides).
+enum Failure {
+    NotConverged {
+        iterations: usize,
+        residual: f64,
+        residual_tol: f64,
+        constraint: f64,
+        constraint_tol: f64,
+    },
+    NonFinite(String),
+    Kkt {
+        /// What the solver was doing: factoring or solving.
+        context: &'static str,
+        source: KktError,
+    },
+}
+
+/// The state at one time: `u, u̇, ü, λ` and the generalized-α acceleration-like
+/// variable.
+#[derive(Clone, Debug, Default)]
+struct State {
+    u: Vec<f64>,
+    v: Vec<f64>,
+    a: Vec<f64>,
+    /// The acceleration-like variable `a` of Arnold & Brüls (2007); equals `ü`
+    /// for Newmark.
+    a_alpha: Vec<f64>,
+    lambda: Vec<f64>,
+}
+
+impl State {
+    fn zeros(n: usize, m: usize) -> Self {
+        Self {
+            u: vec![0.0; n],
+            v: vec![0.0; n],
+            a: vec![0.0; n],
+            a_alpha: vec![0.0; n],
+            lambda: vec![0.0; m],
+        }
+    }
+}
+
+/// Integrates a [`System`] in time with the configured scheme: Newmark /
+/// HHT-α / generalized-α, Newton-Raphson on the KKT system (16), step control.
+///
+/// ```
+/// use mstar_model::PendulumChain;
+/// use mstar_newmark::{Config, Integrator, Trajectory};
+///
+/// let sys = PendulumChain::paper(1.0, 1.0, 9.81);
+/// let u0 = sys.position(&[std::f64::consts::FRAC_PI_2]);
+/// let mut integ = Integrator::new(&sys, Config::default(), 0.0, &u0, &[0.0; 3])?;
+/// let mut traj = Trajectory::default();
+/// let stats = integ.run(1.0, &mut traj)?;
+/// assert_eq!(stats.steps, 100);
+/// assert_eq!(traj.samples.len(), 101);
+/// # Ok::<(), mstar_newmark::IntegrationError>(())
+/// ```
+pub struct Integrator<'s, S: System + ?Sized> {
+    sys: &'s S,
+    config: Config,
+    p: AlphaParams,
+    lin: Linearization,
+    solver: KktSolver,
+    t: f64,
+    state: State,
+    trial: State,
+    /// The state before the last accepted step and that step's size (for the
+    /// extrapolating predictor).
+    previous: State,
+    previous_h: Option<f64>,
+    rhs: Vec<f64>,
+    /// Current nominal step size (≤ config.h).
+    h: f64,
+    /// The step size the current factorization was made for.
+    factored_h: Option<f64>,
+    easy_steps: usize,
+    /// Time bookkeeping without drift: `t = t_anchor + steps_at_h · h_anchor`.
+    t_anchor: f64,
+    h_anchor: f64,
+    steps_at_h: u64,
+    stats: RunStats,
+    start: StartReport,
+    residual: f64,
+    constraint: f64,
+    iterations: usize,
+    observed_start: bool,
+}
+
+impl<S: System + ?Sized> std::fmt::Debug for Integrator<'_, S> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Integrator")
+            .field("t", &self.t)
+            .field("h", &self.h)
+            .field("config", &self.config)
+            .field("stats", &self.stats)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'s, S: System + ?Sized> Integrator<'s, S> {
+    /// Prepares the integration of `sys` from `(u₀, u̇₀)` at `t0`: checks the
+    /// configuration and the system's structure, analyses the KKT pattern once,
+    /// checks (and if allowed projects) the initial state, and computes the
+    /// initial accelerations and multipliers as [`Config::start`] says.
+    ///
+    /// # Errors
+    /// [`IntegrationError`] for an invalid configuration or structure, wrong
+    /// dimensions, an inconsistent initial state (with projection off), or a
+    /// singular initial system.
+    pub fn new(
+        sys: &'s S,
+        config: Config,
+        t0: f64,
+        u0: &[f64],
+        v0: &[f64],
+    ) -> Result<Self, IntegrationError> {
+        let p = config.validate()?;
+        let (n, m) = (sys.n_coords(), sys.n_constraints());
+        for (what, got) in [("u0", u0.len()), ("v0", v0.len())] {
+            if got != n {
+                return Err(IntegrationError::Dimension { what, got, want: n });
+            }
+        }
+        if let Start::Paper { lambda0 } = &config.start
+            && lambda0.len() != m
+        {
+            return Err(IntegrationError::Dimension {
+                what: "lambda0",
+                got: lambda0.len(),
+                want: m,
+            });
+        }
+        let (lin, solver) = linear_algebra(sys, &config, t0, u0)?;
+        let h = config.h;
+        let mut this = Self {
+            sys,
+            p,
+            lin,
+            solver,
+            t: t0,
+            state: State::zeros(n, m),
+            trial: State::zeros(n, m),
+            previous: State::zeros(n, m),
+            previous_h: None,
+            rhs: vec![0.0; n + m],
+            h,
+            factored_h: None,
+            easy_steps: 0,
+            t_anchor: t0,
+            h_anchor: h,
+            steps_at_h: 0,
+            stats: RunStats {
+                h_min_used: h,
+                t: t0,
+                ..RunStats::default()
+            },
+            start: StartReport::default(),
+            residual: 0.0,
+            constraint: 0.0,
+            iterations: 0,
+            observed_start: false,
+            config,
+        };
+        this.state.u.copy_from_slice(u0);
+        this.state.v.copy_from_slice(v0);
+        this.check_finite_start()?;
+        this.make_consistent()?;
+        this.initial_acceleration()?;
+        // The state's own residual and constraint norms, for the t0 sample.
+        let s = &this.state;
+        this.lin.eval_residual(sys, t0, &s.u, &s.v, &s.a, &s.lambda);
+        this.residual = this.lin.residual_norm();
+        this.constraint = this.lin.constraint_norm();
+        Ok(this)
+    }
+
+    /// The Newton variant in use.
+    #[must_use]
+    pub fn newton(&self) -> Newton {
+        self.config.newton
+    }
+
+    /// The KKT backend in use ([`Backend::AUTO`] resolved).
+    #[must_use]
+    pub fn backend(&self) -> Backend {
+        self.solver.backend()
+    }
+
+    /// Current time.
+    #[must_use]
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
+    /// Counters so far.
+    #[must_use]
+    pub fn stats(&self) -> RunStats {
+        self.stats
+    }
+
+    /// What the initialization did.
+    #[must_use]
+    pub fn start_report(&self) -> &StartReport {
+        &self.start
+    }
+
+    /// The scheme's parameters in use.
+    #[must_use]
+    pub fn params(&self) -> AlphaParams {
+        self.p
+    }
+
+    /// The current state as an owned [`Sample`] (energies, last Newton
+    /// figures).
+    #[must_use]
+    pub fn sample(&self) -> Sample {
+        self.view().to_sample()
+    }
+
+    /// The current state, borrowed (what observers see).
+    #[must_use]
+    pub fn view(&self) -> SampleRef<'_> {
+        let s = &self.state;
+        SampleRef {
+            t: self.t,
+            u: &s.u,
+            v: &s.v,
+            a: &s.a,
+            lambda: &s.lambda,
+            kinetic: kinetic_energy(self.lin.mass_pattern(), self.lin.mass(), &s.v),
+            potential: self.sys.potential_energy(self.t, &s.u),
+            iterations: self.iterations,
+            residual: self.residual,
+            constraint: self.constraint,
+        }
+    }
+
+    /// Integrates to `t_end`, handing the initial state (on the first call) and
+    /// every accepted step to `observer`.
+    ///
+    /// # Errors
+    /// The first [`IntegrationError`] of a step that even step control could not
+    /// save; every step accepted before it has been observed.
+    pub fn run(
+        &mut self,
+        t_end: f64,
+        observer: &mut dyn Observer,
+    ) -> Result<RunStats, IntegrationError> {
+        if !self.observed_start {
+            observer.observe(&self.view());
+            self.observed_start = true;
+        }
+        while !self.reached(t_end) {
+            self.step(t_end)?;
+            observer.observe(&self.view());
+        }
+        Ok(self.stats)
+    }
+
+    /// Whether the integration has reached `t_end` (within `1e-9 h`).
+    #[must_use]
+    pub fn reached(&self, t_end: f64) -> bool {
+        t_end - self.t <= 1e-9 * self.config.h
+    }
+
+    /// Takes one accepted step towards `t_end` (shortened to land on it),
+    /// rejecting and retrying with `h/2` while Newton fails and `h/2 ≥ h_min`,
+    /// and regrowing `h` (never beyond [`Config::h`]) after a run of easy steps.
+    ///
+    /// # Errors
+    /// [`IntegrationError::NewtonFailed`], [`IntegrationError::NonFinite`] or
+    /// [`IntegrationError::Kkt`] when step control is off (`h_min = h`), and
+    /// [`IntegrationError::StepSizeTooSmall`] when it gives up.
+    pub fn step(&mut self, t_end: f64) -> Result<(), IntegrationError> {
+        let h_min = self.config.h_min();
+        let mut h = self.h;
+        let mut retried_fresh = false;
+        loop {
+            let remaining = t_end - self.t;
+            // Land on t_end without a tiny last step: the last one or two steps
+            // share what remains.
+            let h_try = if remaining <= h * (1.0 + 1e-9) {
+                remaining
+            } else if remaining < 2.0 * h {
+                0.5 * remaining
+            } else {
+                h
+            };
+            let factorizations_before = self.stats.factorizations;
+            match self.attempt(h_try) {
+                Ok(iterations) => {
+                    self.accept(h_try, iterations);
+                    return Ok(());
+                }
+                Err(failure) => {
+                    let fresh = self.stats.factorizations > factorizations_before;
+                    let stale_jacobian = matches!(self.config.newton, Newton::Modified { .. })
+                        && !(fresh && self.factorized_every_iteration());
+                    if stale_jacobian && !retried_fresh {
+                        // Retry the same step with a Jacobian evaluated here.
+                        self.factored_h = None;
+                        retried_fresh = true;
+                        self.stats.rejected += 1;
+                        continue;
+                    }
+                    if h * 0.5 >= h_min * (1.0 - 1e-12) {
+                        h *= 0.5;
+                        self.h = h;
+                        self.easy_steps = 0;
+                        self.factored_h = None;
+                        retried_fresh = false;
+                        self.stats.rejected += 1;
+                        continue;
+                    }
+                    return Err(self.failure_error(failure, h_try, h_min));
+                }
+            }
+        }
+    }
+
+    fn factorized_every_iteration(&self) -> bool {
+        matches!(self.config.newton, Newton::Full)
+    }
+
+    fn failure_error(&self, failure: Failure, h: f64, h_min: f64) -> IntegrationError {
+        let t = self.step_end(h);
+        let step_control = h_min < self.config.h;
+        match failure {
+            Failure::NotConverged {
+                iterations,
+                residual,
+                residual_tol,
+                constraint,
+                constraint_tol,
+            } => {
+                if step_control {
+                    IntegrationError::StepSizeTooSmall {
+                        t: self.t,
+                        h,
+                        h_min,
+                        residual,
+                        constraint,
+                    }
+                } else {
+                    IntegrationError::NewtonFailed {
+                        t,
+                        h,
+                        iterations,
+                        residual,
+                        residual_tol,
+                        constraint,
+                        constraint_tol,
+                    }
+                }
+            }
+            Failure::NonFinite(what) => IntegrationError::NonFinite { t, what },
+            Failure::Kkt { context, source } => self.kkt_error(context, t, h, source),
+        }
+    }
+
+    /// Names the unknown of a KKT error.
+    fn kkt_error(
+        &self,
+        context: &'static str,
+        t: f64,
+        h: f64,
+        source: KktError,
+    ) -> IntegrationError {
+        let n = self.sys.n_coords();
+        let unknown = match source {
+            KktError::Singular { unknown: Some(k) } if k < n => {
+                Some(format!("coordinate '{}'", self.sys.coord_name(k)))
+            }
+            KktError::Singular { unknown: Some(k) } if k < self.solver.dim() => Some(format!(
+                "the multiplier of constraint '{}'",
+                self.sys.constraint_name(k - n)
+            )),
+            _ => None,
+        };
+        IntegrationError::Kkt {
+            context,
+            t,
+            h,
+            unknown,
+            source,
+        }
+    }
+
+    fn accept(&mut self, h: f64, iterations: usize) {
+        // Buffers change roles instead of being copied: the predictor rewrites
+        // every field of `trial` before it is read again.
+        if self.config.predictor == Predictor::Extrapolated {
+            std::mem::swap(&mut self.previous, &mut self.state);
+            self.previous_h = Some(h);
+        }
+        std::mem::swap(&mut self.state, &mut self.trial);
+        if h == self.h_anchor {
+            self.steps_at_h += 1;
+        } else {
+            (self.t_anchor, self.h_anchor, self.steps_at_h) = (self.t, h, 1);
+        }
+        self.t = self.t_anchor + self.steps_at_h as f64 * self.h_anchor;
+        self.residual = self.lin.residual_norm();
+        self.constraint = self.lin.constraint_norm();
+        self.iterations = iterations;
+        let st = &mut self.stats;
+        st.steps += 1;
+        st.max_iterations = st.max_iterations.max(iterations);
+        st.h_min_used = st.h_min_used.min(h);
+        st.t = self.t;
+        // A step that needed many iterations with a reused Jacobian asks for a
+        // fresh one at the next step.
+        if iterations > 4 {
+            self.factored_h = None;
+        }
+        // Regrow h after a run of easy steps. With a fresh Jacobian at every
+        // iteration a resolved step takes one correction (two at most); more
+        // means the predictor is far off, i.e. the motion is fast for this h,
+        // and regrowing would step straight back into it (a whip).
+        let easy = match self.config.newton {
+            Newton::Full => 2,
+            Newton::Modified { .. } => (self.config.max_iterations / 4).max(3),
+        };
+        if iterations <= easy {
+            self.easy_steps += 1;
+        } else {
+            self.easy_steps = 0;
+        }
+        if self.easy_steps >= 5 && self.h < self.config.h {
+            self.h = (2.0 * self.h).min(self.config.h);
+            self.easy_steps = 0;
+        }
+    }
+
+    /// The time at the end of a step of size `h` (as [`accept`](Self::accept) will
+    /// set it).
+    fn step_end(&self, h: f64) -> f64 {
+        if h == self.h_anchor {
+            self.t_anchor + (self.steps_at_h + 1) as f64 * h
+        } else {
+            self.t + h
+        }
+    }
+
+    fn locate_non_finite(&self) -> String {
+        let s = &self.trial;
+        let n = self.sys.n_coords();
+        let coord = |what: &str, x: &[f64]| {
+            x.iter()
+                .position(|v| !v.is_finite())
+                .map(|i| format!("{what}, coordinate '{}'", self.sys.coord_name(i)))
+        };
+        coord("the coordinates u", &s.u)
+            .or_else(|| coord("the velocities u̇", &s.v))
+            .or_else(|| coord("the accelerations ü", &s.a))
+            .or_else(|| coord("the forces g", self.lin.g()))
+            .or_else(|| {
+                s.lambda.iter().position(|v| !v.is_finite()).map(|i| {
+                    format!(
+                        "the multiplier of constraint '{}'",
+                        self.sys.constraint_name(i)
+                    )
+                })
+            })
+            .or_else(|| {
+                self.lin
+                    .phi()
+                    .iter()
+                    .position(|v| !v.is_finite())
+                    .map(|i| format!("constraint '{}'", self.sys.constraint_name(i)))
+            })
+            .unwrap_or_else(|| format!("the state ({n} coordinates)"))
+    }
+
+    fn check_finite_start(&self) -> Result<(), IntegrationError> {
+        let s = &self.state;
+        for (what, x) in [
+            ("the initial coordinates u0", &s.u),
+            ("the initial velocities v0", &s.v),
+        ] {
+            if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+                return Err(IntegrationError::NonFinite {
+                    t: self.t,
+                    what: format!("{what}, coordinate '{}'", self.sys.coord_name(i)),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The linearization and the KKT solver for `sys`: the first backend of
+/// [`mstar_kkt::KktOptions::candidates`] that takes the structure it asks for
+/// ([`mstar_kkt::Backend::structure`]). With the automatic choice, a backend
+/// that works on `S_T` without the `BᵀB` term (whose blocks then hold `β' M`)
+/// is only tried when `M`'s diagonal is positive at the start.
+fn linear_algebra<S: System + ?Sized>(
+    sys: &S,
+    config: &Config,
+    t0: f64,
+    u0: &[f64],
+) -> Result<(Linearization, KktSolver), IntegrationError> {
+    let (n, m) = (sys.n_coords(), sys.n_constraints());
+    // The KKT matrix's leading n unknowns are the coordinates.
+    let options = mstar_kkt::KktOptions {
+        n_primal: config.kkt.n_primal.or(Some(n)),
+        ..config.kkt
+    };
+    let auto = options.backend == Backend::AUTO;
+    let candidates = options.candidates(n + m);
+    let mut last = None;
+    for (k, &backend) in candidates.iter().enumerate() {
+        let Some(structure) = backend.structure() else {
+            return Err(IntegrationError::Config(format!(
+                "no KKT backend is called '{backend}'"
+            )));
+        };
+        if auto && !structure.augmented && !mass_diagonal_positive(sys, t0, u0) {
+            continue;
+        }
+        let lin = Linearization::with_structure(sys, structure)?;
+        let single = mstar_kkt::KktOptions { backend, ..options };
+        match KktSolver::new(lin.kkt(), &single) {
+            Ok(solver) => return Ok((lin, solver)),
+            // The next candidate may take what this one refuses.
+            Err(KktError::Structure(why)) if k + 1 < candidates.len() => {
+                last = Some(KktError::Structure(why));
+            }
+            Err(source) => return Err(analysis_error(t0, config.h, source)),
+        }
+    }
+    let source = last.unwrap_or_else(|| KktError::Structure("no KKT backend fits".to_string()));
+    Err(analysis_error(t0, config.h, source))
+}
+
+/// A failed analysis of the KKT structure.
+fn analysis_error(t: f64, h: f64, source: KktError) -> IntegrationError {
+    IntegrationError::Kkt {
+        context: "analysing the KKT pattern",
+        t,
+        h,
+        unknown: None,
+        source,
+    }
+}
+
+/// Whether every diagonal entry of `M(u₀)` is positive (necessary for a
+/// positive definite `M`).
+fn mass_diagonal_positive<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> bool {
+    let pattern = sys.mass_pattern();
+    let mut mass = vec![0.0; pattern.len()];
+    sys.mass_into(t, u, &mut mass);
+    let mut diagonal = vec![0.0; sys.n_coords()];
+    for (&(i, j), &v) in pattern.entries.iter().zip(&mass) {
+        if i == j && i < diagonal.len() {
+            diagonal[i] += v;
+        }
+    }
+    diagonal.iter().all(|&d| d > 0.0)
+}

@@ -1,0 +1,240 @@
+//! One step's Newton iteration (paper §2.2, Fig. 2; `algorithm.md` §4): the
+//! predictor (14), the residual and its tolerances, the iteration matrix
+//! (16)-(17) when it is refreshed, and the corrector (15).
+
+use mstar_linearize::{Coefficients, max_abs};
+use mstar_model::System;
+
+use super::{Failure, Integrator};
+use crate::{AlphaParams, Newton, Predictor};
+
+/// What stays fixed over one attempt's iterations.
+struct Corrector {
+    /// The end of the step.
+    t1: f64,
+    /// The KKT coefficients (17) and scaling.
+    coefficients: Coefficients,
+    /// `Δü = β' Δu`, `Δu̇ = γ' Δu` (15), and the acceleration-like
+    /// variable's `Δa = Δu / (β h²)`.
+    beta_p: f64,
+    gamma_p: f64,
+    a_p: f64,
+    /// Modified Newton refactors when `‖Δu_k‖ > max_rate ‖Δu_{k−1}‖`.
+    max_rate: f64,
+    /// The multiplier shift per correction, times `Φ` (see
+    /// [`Integrator::correct`]).
+    shift: f64,
+}
+
+/// The norms of one iteration's residual and their tolerances.
+struct Norms {
+    /// `‖[scale·r; −Φ]‖∞`.
+    rhs: f64,
+    residual: f64,
+    residual_tol: f64,
+    constraint: f64,
+    constraint_tol: f64,
+}
+
+impl Norms {
+    fn converged(&self) -> bool {
+        self.residual <= self.residual_tol && self.constraint <= self.constraint_tol
+    }
+
+    fn not_converged(&self, iterations: usize) -> Failure {
+        Failure::NotConverged {
+            iterations,
+            residual: self.residual,
+            residual_tol: self.residual_tol,
+            constraint: self.constraint,
+            constraint_tol: self.constraint_tol,
+        }
+    }
+}
+
+impl<S: System + ?Sized> Integrator<'_, S> {
+    /// One Newton attempt at the step `t → t + h`; returns the iterations.
+    pub(super) fn attempt(&mut self, h: f64) -> Result<usize, Failure> {
+        self.predict(h);
+        let k = self.corrector(h);
+        let mut force_refactor = false;
+        let mut previous_step = f64::INFINITY;
+        // ‖u‖∞ of the iterate, kept up to date by the corrector.
+        let mut u_max = max_abs(&self.trial.u);
+        for it in 0..=self.config.max_iterations {
+            let norms = self.residual(&k, u_max)?;
+            self.stats.iterations += usize::from(it > 0);
+            // At least one correction: a predictor that happens to meet the
+            // tolerances (small h, near rest) still needs its λ and ü updated.
+            if it > 0 && norms.converged() {
+                return Ok(it);
+            }
+            if it == self.config.max_iterations {
+                return Err(norms.not_converged(it));
+            }
+            let refactor = match self.config.newton {
+                Newton::Full => true,
+                Newton::Modified { .. } => force_refactor || self.factored_h != Some(h),
+            };
+            if refactor {
+                self.refactor(&k, h)?;
+                force_refactor = false;
+                previous_step = f64::INFINITY;
+            }
+            self.solver
+                .solve_in_place_with_norm(&mut self.rhs, norms.rhs)
+                .map_err(|source| Failure::Kkt {
+                    context: "solving with the iteration matrix",
+                    source,
+                })?;
+            let step;
+            (step, u_max) = self.correct(&k);
+            if step > k.max_rate * previous_step {
+                force_refactor = true;
+            }
+            previous_step = step;
+        }
+        unreachable!("the loop returns at max_iterations")
+    }
+
+    /// The corrector's coefficients for a step of size `h`.
+    fn corrector(&self, h: f64) -> Corrector {
+        let coefficients = self.p.coefficients(h, self.config.scaling);
+        // With M* in S_T (eq. 17) the solve returns Δλ + c_bb Φ (see
+        // `Config::exact_multiplier_update`), without the BᵀB term (the
+        // Schur backend's structure) it returns Δλ; the paper keeps the
+        // shift c_bb Φ, the exact update does not.
+        let in_matrix = if self.lin.augmented() {
+            coefficients.c_bb
+        } else {
+            0.0
+        };
+        let kept = if self.config.exact_multiplier_update {
+            0.0
+        } else {
+            coefficients.c_bb
+        };
+        Corrector {
+            t1: self.step_end(h),
+            beta_p: coefficients.c_a,
+            gamma_p: coefficients.c_v,
+            a_p: 1.0 / (self.p.beta * h * h),
+            max_rate: match self.config.newton {
+                Newton::Modified { max_rate } => max_rate,
+                Newton::Full => f64::INFINITY,
+            },
+            shift: kept - in_matrix,
+            coefficients,
+        }
+    }
+
+    /// The residual formed straight into the right-hand side of (16), its
+    /// norms and tolerances.
+    fn residual(&mut self, k: &Corrector, u_max: f64) -> Result<Norms, Failure> {
+        let s = &self.trial;
+        let rhs = self.lin.eval_kkt_rhs(
+            self.sys,
+            k.t1,
+            &s.u,
+            &s.v,
+            &s.a,
+            &s.lambda,
+            k.coefficients.scale,
+            &mut self.rhs,
+        );
+        let residual = self.lin.residual_norm();
+        let constraint = self.lin.constraint_norm();
+        if !residual.is_finite() || !constraint.is_finite() {
+            return Err(Failure::NonFinite(self.locate_non_finite()));
+        }
+        // Without the exact multiplier update (the paper's scheme) each
+        // correction shifts λ by c_bb·Φ, so round-off in Φ (ε‖u‖) comes back
+        // as a residual floor c_bb·ε·‖u‖·‖B‖ ~ 4ε‖u‖/h²: the tolerance cannot
+        // ask for less than that.
+        let floor = if self.config.exact_multiplier_update {
+            0.0
+        } else {
+            4.0 * k.coefficients.c_bb * f64::EPSILON * u_max.max(1.0) * max_abs(self.lin.b())
+        };
+        Ok(Norms {
+            rhs,
+            residual,
+            residual_tol: (self.config.tol * self.lin.force_scale()).max(floor),
+            constraint,
+            constraint_tol: self.config.tol * u_max.max(1.0),
+        })
+    }
+
+    /// Evaluates the Jacobians at the iterate, assembles the iteration
+    /// matrix (16)-(17) and factors it.
+    fn refactor(&mut self, k: &Corrector, h: f64) -> Result<(), Failure> {
+        let s = &self.trial;
+        self.lin
+            .eval_jacobians(self.sys, k.t1, &s.u, &s.v, &s.a, &s.lambda);
+        self.lin.assemble(&k.coefficients);
+        self.factored_h = None;
+        self.solver
+            .factor(&self.lin.kkt().values)
+            .map_err(|source| Failure::Kkt {
+                context: "factoring the iteration matrix",
+                source,
+            })?;
+        self.factored_h = Some(h);
+        self.stats.factorizations += 1;
+        Ok(())
+    }
+
+    /// The corrector (15) from the solution in `rhs`; returns `‖Δu‖∞` and
+    /// the new `‖u‖∞`.
+    fn correct(&mut self, k: &Corrector) -> (f64, f64) {
+        let n = self.trial.u.len();
+        let (du, dl) = self.rhs.split_at(n);
+        let s = &mut self.trial;
+        let (mut step, mut u_max) = (0.0f64, 0.0f64);
+        for i in 0..n {
+            s.u[i] += du[i];
+            s.v[i] += k.gamma_p * du[i];
+            s.a[i] += k.beta_p * du[i];
+            s.a_alpha[i] += k.a_p * du[i];
+            u_max = u_max.max(s.u[i].abs());
+            step = step.max(du[i].abs());
+        }
+        let scale = k.coefficients.scale;
+        for ((l, &d), &phi) in s.lambda.iter_mut().zip(dl).zip(self.lin.phi()) {
+            *l += d / scale + k.shift * phi;
+        }
+        (step, u_max)
+    }
+
+    /// Predictor: eq. (14) generalized (Arnold & Brüls 2007, Algorithm 1).
+    pub(super) fn predict(&mut self, h: f64) {
+        let AlphaParams {
+            alpha_m,
+            alpha_f,
+            beta,
+            gamma,
+        } = self.p;
+        let (s, t) = (&self.state, &mut self.trial);
+        // Linear extrapolation needs the previous step (of any size).
+        let ratio = match (self.config.predictor, self.previous_h) {
+            (Predictor::Extrapolated, Some(h_prev)) => h / h_prev,
+            _ => 0.0,
+        };
+        for i in 0..s.u.len() {
+            let a1 = match self.config.predictor {
+                Predictor::ZeroAcceleration => 0.0,
+                Predictor::ConstantAcceleration => s.a[i],
+                Predictor::Extrapolated => s.a[i] + ratio * (s.a[i] - self.previous.a[i]),
+            };
+            let aa1 = (alpha_f * s.a[i] - alpha_m * s.a_alpha[i] + (1.0 - alpha_f) * a1)
+                / (1.0 - alpha_m);
+            t.a[i] = a1;
+            t.a_alpha[i] = aa1;
+            t.v[i] = s.v[i] + h * ((1.0 - gamma) * s.a_alpha[i] + gamma * aa1);
+            t.u[i] = s.u[i] + h * s.v[i] + h * h * ((0.5 - beta) * s.a_alpha[i] + beta * aa1);
+        }
+        for (i, l) in t.lambda.iter_mut().enumerate() {
+            *l = s.lambda[i] + ratio * (s.lambda[i] - self.previous.lambda[i]);
+        }
+    }
+}
