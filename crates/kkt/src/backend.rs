@@ -92,6 +92,12 @@ pub struct Registration {
     pub summary: &'static str,
     /// The KKT structure it reads.
     pub structure: Structure,
+    /// Whether it needs a symmetric matrix: it reads one triangle of `S`
+    /// (or factors `C = B S⁻¹ Bᵀ` as symmetric). An unsymmetric iteration
+    /// matrix (velocity-dependent or non-conservative forces, a
+    /// configuration-dependent `M`) then gets a wrong factorization, which
+    /// the solver's residual check rejects.
+    pub symmetric: bool,
     /// The symbolic analysis of a structure (values ignored).
     pub analyse: Analyse,
 }

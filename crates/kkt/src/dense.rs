@@ -10,6 +10,7 @@ pub(crate) const REGISTRATION: Registration = Registration {
     backend: Backend::DENSE,
     summary: "dense LU with partial pivoting (tiny systems)",
     structure: Structure::AUGMENTED,
+    symmetric: false,
     analyse: |a, _: &KktOptions| Ok(Box::new(DenseLu::new(a))),
 };
 

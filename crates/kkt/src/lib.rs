@@ -41,8 +41,10 @@
 //!   fastest backend on chains (`docs/performance.md`).
 //! - [`Backend::AUTO`] (default): dense up to [`KktOptions::dense_threshold`]
 //!   unknowns; above it, when [`KktOptions::n_primal`] is given, Schur if the
-//!   structure's `S` is block-diagonal with small blocks, else LDLᵀ; sparse LU
-//!   without `n_primal` ([`KktOptions::candidates`]).
+//!   structure's `S` is block-diagonal with small blocks, else LDLᵀ, else
+//!   sparse LU; sparse LU without `n_primal` ([`KktOptions::candidates`]).
+//!   `ldlt` and `schur` need a symmetric matrix
+//!   ([`Registration::symmetric`]).
 //!
 //! A singular or numerically singular matrix is an `Err` naming the unknown that
 //! has no pivot, never NaN or a panic. This crate knows nothing of mechanics:
@@ -129,8 +131,10 @@ impl KktOptions {
     /// The backends [`KktSolver::new`] tries, in order, for a matrix of
     /// dimension `dim`: the chosen one alone, or for [`Backend::AUTO`] dense up
     /// to [`dense_threshold`](Self::dense_threshold) unknowns, else with
-    /// [`n_primal`](Self::n_primal) Schur then LDLᵀ (Schur refuses a structure
-    /// whose `S` is not block-diagonal with small blocks), else sparse LU.
+    /// [`n_primal`](Self::n_primal) Schur, LDLᵀ, then sparse LU (Schur
+    /// refuses a structure whose `S` is not block-diagonal with small blocks,
+    /// LDLᵀ one that is not symmetric; a caller that knows its matrix is not
+    /// symmetric skips both), else sparse LU.
     #[must_use]
     pub fn candidates(&self, dim: usize) -> Vec<Backend> {
         if self.backend != Backend::AUTO {
@@ -138,7 +142,7 @@ impl KktOptions {
         } else if dim <= self.dense_threshold {
             vec![Backend::DENSE]
         } else if self.n_primal.is_some() {
-            vec![Backend::SCHUR, Backend::SPARSE_LDLT]
+            vec![Backend::SCHUR, Backend::SPARSE_LDLT, Backend::SPARSE_LU]
         } else {
             vec![Backend::SPARSE_LU]
         }

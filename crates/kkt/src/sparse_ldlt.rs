@@ -46,6 +46,7 @@ pub(crate) const REGISTRATION: Registration = Registration {
     backend: Backend::SPARSE_LDLT,
     summary: "faer's sparse LDLᵀ without pivoting in a KKT ordering (S positive definite)",
     structure: Structure::AUGMENTED,
+    symmetric: true,
     analyse: |a, options| Ok(Box::new(LdltBackend::new(a, options)?)),
 };
 

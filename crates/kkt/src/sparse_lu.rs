@@ -16,6 +16,7 @@ pub(crate) const REGISTRATION: Registration = Registration {
     backend: Backend::SPARSE_LU,
     summary: "faer's sparse LU with partial pivoting, COLAMD order (any square matrix)",
     structure: Structure::AUGMENTED,
+    symmetric: false,
     analyse: |a, _: &KktOptions| Ok(Box::new(SparseLu::new(a)?)),
 };
 

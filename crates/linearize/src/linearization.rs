@@ -513,10 +513,20 @@ impl Linearization {
         a: &[f64],
         lambda: &[f64],
     ) {
-        sys.hessian_into(t, u, lambda, &mut self.hessian);
-        sys.forces_du_into(t, u, v, &mut self.g_u);
-        sys.forces_dv_into(t, u, v, &mut self.g_v);
-        sys.mass_du_into(t, u, a, &mut self.mass_du);
+        // (An empty pattern needs no call: the defaults of a constant M or
+        // constant forces would evaluate nothing.)
+        if !self.hessian.is_empty() {
+            sys.hessian_into(t, u, lambda, &mut self.hessian);
+        }
+        if !self.g_u.is_empty() {
+            sys.forces_du_into(t, u, v, &mut self.g_u);
+        }
+        if !self.g_v.is_empty() {
+            sys.forces_dv_into(t, u, v, &mut self.g_v);
+        }
+        if !self.mass_du.is_empty() {
+            sys.mass_du_into(t, u, a, &mut self.mass_du);
+        }
     }
 
     fn eval_bb(&mut self) {

@@ -76,6 +76,9 @@ fn jacobian_on(
     mut f: impl FnMut(&[f64], &mut [f64]),
     out: &mut [f64],
 ) {
+    if pattern.is_empty() {
+        return;
+    }
     let mut by_column: Vec<Vec<usize>> = vec![Vec::new(); pattern.ncols];
     for (e, &(_, j)) in pattern.entries.iter().enumerate() {
         by_column[j].push(e);
@@ -109,6 +112,9 @@ fn jacobian_on(
 
 /// `Σᵢ μᵢ ∂²Φᵢ/∂u²`: differences of `Bᵀμ`.
 pub(crate) fn hessian<S: System + ?Sized>(sys: &S, t: f64, u: &[f64], mu: &[f64], out: &mut [f64]) {
+    if out.is_empty() {
+        return;
+    }
     let bp = sys.b_pattern();
     let mut b = vec![0.0; bp.len()];
     let bt_mu = |x: &[f64], w: &mut [f64]| {
@@ -145,6 +151,9 @@ pub(crate) fn forces_dv<S: System + ?Sized>(
 
 /// `∂(M w)/∂u`: differences of `M(u) w`.
 pub(crate) fn mass_du<S: System + ?Sized>(sys: &S, t: f64, u: &[f64], w: &[f64], out: &mut [f64]) {
+    if out.is_empty() {
+        return;
+    }
     let mp = sys.mass_pattern();
     let mut mass = vec![0.0; mp.len()];
     let m_w = |x: &[f64], y: &mut [f64]| {

@@ -139,6 +139,16 @@ pub trait System: Send + Sync {
         false
     }
 
+    /// Whether the iteration matrix `S_T = c_u K_T + c_v C_T + c_a M` is
+    /// symmetric at every state: `∂g/∂u` and `∂g/∂u̇` symmetric (conservative
+    /// forces, dampers along a line) and `∂(M w)/∂u` zero. Velocity-dependent
+    /// inertia forces, follower forces and a configuration-dependent `M`
+    /// break it; KKT backends that need symmetry are then not used (default:
+    /// `true` when both `M` and `g` are constant, else `false`).
+    fn tangent_is_symmetric(&self) -> bool {
+        self.mass_is_constant() && self.forces_are_constant()
+    }
+
     /// Potential energy of the conservative forces in `g` (default: 0), for the
     /// energy output. Kinetic energy is `½ u̇ᵀ M u̇`.
     fn potential_energy(&self, _t: f64, _u: &[f64]) -> f64 {

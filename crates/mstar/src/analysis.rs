@@ -1,37 +1,45 @@
 //! Small tools for comparing solutions: errors against a reference, fitted
 //! convergence orders, the amplitude of the period-2h oscillation.
 
+use mstar_kkt::MaxAbs;
 use mstar_model::Sample;
 
+/// `max |x|` over `values`, NaN-aware ([`MaxAbs`]): a NaN error is never
+/// taken for a small one.
+fn largest(values: impl IntoIterator<Item = f64>) -> f64 {
+    let mut m = MaxAbs::new();
+    for v in values {
+        m.push(v);
+    }
+    m.value()
+}
+
 /// `max_k |f(samples[k]) − f(reference[k])|` over samples paired by index (the
-/// reference must be sampled at the same times).
+/// reference must be sampled at the same times); NaN when a difference is.
 ///
 /// # Panics
 /// If the two slices differ in length or their times differ by more than 1e-9.
 #[must_use]
 pub fn max_error(samples: &[Sample], reference: &[Sample], f: impl Fn(&Sample) -> f64) -> f64 {
     assert_eq!(samples.len(), reference.len(), "paired samples");
-    samples
-        .iter()
-        .zip(reference)
-        .map(|(s, r)| {
-            assert!(
-                (s.t - r.t).abs() <= 1e-9,
-                "times differ: {} vs {}",
-                s.t,
-                r.t
-            );
-            (f(s) - f(r)).abs()
-        })
-        .fold(0.0, f64::max)
+    largest(samples.iter().zip(reference).map(|(s, r)| {
+        assert!(
+            (s.t - r.t).abs() <= 1e-9,
+            "times differ: {} vs {}",
+            s.t,
+            r.t
+        );
+        f(s) - f(r)
+    }))
 }
 
 /// Largest error of any multiplier, `max_k ‖λ_k − λ_ref,k‖∞`.
 #[must_use]
 pub fn max_lambda_error(samples: &[Sample], reference: &[Sample]) -> f64 {
-    (0..samples.first().map_or(0, |s| s.lambda.len()))
-        .map(|i| max_error(samples, reference, |s| s.lambda[i]))
-        .fold(0.0, f64::max)
+    largest(
+        (0..samples.first().map_or(0, |s| s.lambda.len()))
+            .map(|i| max_error(samples, reference, |s| s.lambda[i])),
+    )
 }
 
 /// The least-squares slope of `log(error)` against `log(h)`: the observed order
@@ -59,9 +67,7 @@ pub fn fitted_order(h: &[f64], error: &[f64]) -> f64 {
 /// this is `A` plus `O(h² ẍ)` of the smooth part.
 #[must_use]
 pub fn nyquist_amplitude(x: &[f64]) -> f64 {
-    x.windows(3)
-        .map(|w| (w[2] - 2.0 * w[1] + w[0]).abs() / 4.0)
-        .fold(0.0, f64::max)
+    largest(x.windows(3).map(|w| (w[2] - 2.0 * w[1] + w[0]) / 4.0))
 }
 
 #[cfg(test)]
@@ -73,6 +79,22 @@ mod tests {
         let h = [0.1, 0.05, 0.025];
         let e: Vec<f64> = h.iter().map(|v| 3.0 * v * v).collect();
         assert!((fitted_order(&h, &e) - 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_nan_error_is_never_small() {
+        let sample = |t: f64, x: f64| Sample {
+            t,
+            u: vec![x],
+            lambda: vec![x],
+            ..Sample::default()
+        };
+        let got = [sample(0.0, 1.0), sample(1.0, f64::NAN), sample(2.0, 5.0)];
+        let want = [sample(0.0, 1.0), sample(1.0, 2.0), sample(2.0, 5.5)];
+        assert!(max_error(&got, &want, |s| s.u[0]).is_nan());
+        assert!(max_lambda_error(&got, &want).is_nan());
+        assert!(nyquist_amplitude(&[0.0, f64::NAN, 0.0, 1.0]).is_nan());
+        assert_eq!(max_error(&want, &want, |s| s.u[0]), 0.0);
     }
 
     #[test]

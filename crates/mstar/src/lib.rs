@@ -11,7 +11,9 @@
 //!   ([`Integrator`], [`Config`]);
 //! - [`rk4`]: independent minimal-coordinate references ([`ChainOracle`]);
 //! - [`csv`]: the output format; [`pendulum`]: the paper's presets;
-//!   [`analysis`]: errors, fitted orders, the period-2h amplitude.
+//!   [`analysis`]: errors, fitted orders, the period-2h amplitude;
+//! - [`testing`]: for model authors, the derivative checker;
+//!   [`catalogue`]: the test models with their independent references.
 //!
 //! ```
 //! use mstar::pendulum::PendulumRun;
@@ -29,8 +31,10 @@
 #![deny(missing_docs)]
 
 pub mod analysis;
+pub mod catalogue;
 pub mod csv;
 pub mod pendulum;
+pub mod testing;
 
 pub use mstar_kkt as kkt;
 pub use mstar_linearize as linearize;

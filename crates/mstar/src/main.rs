@@ -497,19 +497,17 @@ fn chain(args: &ChainArgs) -> Result<()> {
             Newton::Full => "full (a fresh Jacobian at every iteration)".to_string(),
         }
     );
-    let mut stream = args
+    let stream = args
         .out
         .as_deref()
         .map(|p| csv::CsvStream::create(p, &sys))
         .transpose()?;
     let clock = Instant::now();
-    let mut progress = Progress::new(args.t_end);
-    integ.run(args.t_end, &mut |s: &SampleRef<'_>| {
-        if let Some(stream) = stream.as_mut() {
-            stream.observe(s);
-        }
-        progress.observe(s);
-    })?;
+    let mut output = ChainOutput {
+        stream,
+        progress: Progress::new(args.t_end),
+    };
+    integ.run(args.t_end, &mut output)?;
     let wall = clock.elapsed().as_secs_f64();
     let st = integ.stats();
     let steps = st.steps.max(1) as f64;
@@ -541,11 +539,31 @@ fn chain(args: &ChainArgs) -> Result<()> {
         s.u[tip + 1],
         s.constraint
     );
-    if let (Some(stream), Some(out)) = (stream, &args.out) {
+    if let (Some(stream), Some(out)) = (output.stream, &args.out) {
         stream.finish()?;
         println!("wrote {}", out.display());
     }
     Ok(())
+}
+
+/// The chain's output: the CSV stream, if any, and the progress report.
+struct ChainOutput {
+    stream: Option<csv::CsvStream>,
+    progress: Progress,
+}
+
+impl Observer for ChainOutput {
+    fn observe(&mut self, s: &SampleRef<'_>) {
+        if let Some(stream) = self.stream.as_mut() {
+            stream.observe(s);
+        }
+        self.progress.observe(s);
+    }
+
+    /// Only the CSV file has an energy column.
+    fn reads_energy(&self) -> bool {
+        self.stream.is_some()
+    }
 }
 
 /// Reports the time reached on standard error every two seconds.
@@ -569,6 +587,10 @@ impl Progress {
 }
 
 impl Observer for Progress {
+    fn reads_energy(&self) -> bool {
+        false
+    }
+
     fn observe(&mut self, s: &SampleRef<'_>) {
         self.steps += 1;
         if self.last.elapsed().as_secs_f64() > 2.0 {

@@ -5,44 +5,10 @@
 //! conservative chain's energy stays within the second-order method's error.
 
 use mstar::linearize::check_derivatives;
-use mstar::planar::{At, PlanarBuilder, PlanarSystem};
+use mstar::planar::{Bar, PlanarSystem, bar_chain_of};
 use mstar::{Config, Integrator, SampleRef, System};
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
-
-/// A chain of bars hinged to the ground at the origin; link `k` has length
-/// `l_k`, mass `m_k`, angle `φ_k` from `+x` and angular velocity `ω_k`, with
-/// centre velocities consistent with the joints.
-fn chain(lengths: &[f64], masses: &[f64], angles: &[f64], rates: &[f64]) -> PlanarSystem {
-    let mut b = PlanarBuilder::new();
-    let mut previous = At::Ground([0.0, 0.0]);
-    let (mut joint, mut joint_velocity) = ([0.0, 0.0], [0.0, 0.0]);
-    for k in 0..lengths.len() {
-        let (l, m, phi, w) = (lengths[k], masses[k], angles[k], rates[k]);
-        let (s, c) = phi.sin_cos();
-        let centre = [joint[0] + 0.5 * l * c, joint[1] + 0.5 * l * s];
-        let centre_velocity = [
-            joint_velocity[0] - 0.5 * l * s * w,
-            joint_velocity[1] + 0.5 * l * c * w,
-        ];
-        let body = b.rigid_body(
-            &format!("link{}", k + 1),
-            m,
-            m * l * l / 12.0,
-            [centre[0], centre[1], phi],
-        );
-        b.velocity(body, [centre_velocity[0], centre_velocity[1], w]);
-        b.revolute(
-            &format!("joint{}", k + 1),
-            previous,
-            At::Body(body, [-0.5 * l, 0.0]),
-        );
-        previous = At::Body(body, [0.5 * l, 0.0]);
-        joint = [joint[0] + l * c, joint[1] + l * s];
-        joint_velocity = [joint_velocity[0] - l * s * w, joint_velocity[1] + l * c * w];
-    }
-    b.build().expect("valid chain")
-}
 
 /// Integrates 1 s with step `h`, checks ‖Φ‖∞ ≤ η after every step and returns
 /// the largest energy error and the largest energy (kinetic or potential).
@@ -92,7 +58,17 @@ fn chains() -> impl Strategy<Value = PlanarSystem> {
             prop::collection::vec(-std::f64::consts::PI..std::f64::consts::PI, n),
             prop::collection::vec(-3.0f64..3.0, n),
         )
-            .prop_map(|(l, m, a, w)| chain(&l, &m, &a, &w))
+            .prop_map(|(l, m, a, w)| {
+                let bars: Vec<Bar> = (0..l.len())
+                    .map(|k| Bar {
+                        length: l[k],
+                        mass: m[k],
+                        angle: a[k],
+                        rate: w[k],
+                    })
+                    .collect();
+                bar_chain_of(&bars).expect("valid bars")
+            })
     })
 }
 

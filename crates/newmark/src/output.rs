@@ -9,6 +9,14 @@ pub trait Observer {
     /// Called with the converged state after every accepted step, and once with
     /// the initial state.
     fn observe(&mut self, sample: &SampleRef<'_>);
+
+    /// Whether [`observe`](Self::observe) reads the energies (default: yes).
+    /// An observer that does not (a progress report) saves their evaluation,
+    /// a pass over the whole state, at every step; its views then carry NaN
+    /// energies.
+    fn reads_energy(&self) -> bool {
+        true
+    }
 }
 
 impl<F: FnMut(&SampleRef<'_>)> Observer for F {

@@ -47,6 +47,7 @@ pub(crate) const REGISTRATION: Registration = Registration {
     backend: Backend::SCHUR,
     summary: "Schur complement on a block-diagonal S_T (bodies coupled only by constraints)",
     structure: Structure::PLAIN,
+    symmetric: true,
     analyse: |a, options: &KktOptions| {
         let np = options.require_n_primal(Backend::SCHUR)?;
         Ok(Box::new(Schur::new(a, np)?))

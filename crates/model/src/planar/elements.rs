@@ -380,6 +380,12 @@ impl Force {
         }
     }
 
+    /// Whether `∂g/∂q` and `∂g/∂q̇` are symmetric at every state: all loads but
+    /// a damped spring, whose `∂g/∂q` holds `c ∂ℓ̇/∂q ∂ℓ/∂qᵀ`.
+    pub(crate) fn has_symmetric_jacobians(&self) -> bool {
+        !matches!(self.load, Load::Spring { c, .. } if c != 0.0)
+    }
+
     /// Spring geometry: `ℓ`, `∂ℓ/∂q` and `∂²ℓ/∂q²` (dense, `n × n`) on the slots.
     fn spring_geometry(&self, u: &[f64]) -> SpringGeometry {
         let s = &self.slots;

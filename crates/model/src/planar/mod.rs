@@ -653,6 +653,12 @@ impl System for PlanarSystem {
         self.forces.is_empty()
     }
 
+    fn tangent_is_symmetric(&self) -> bool {
+        // M is constant; only a spring's damping makes ∂g/∂u unsymmetric
+        // (its tension's rate times the spring direction).
+        self.forces.iter().all(Force::has_symmetric_jacobians)
+    }
+
     fn forces_into(&self, t: f64, u: &[f64], v: &[f64], g: &mut [f64]) {
         // Every coordinate belongs to a body: gravity writes all of g.
         for b in &self.bodies {

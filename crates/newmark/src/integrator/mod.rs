@@ -253,15 +253,28 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     /// The current state, borrowed (what observers see).
     #[must_use]
     pub fn view(&self) -> SampleRef<'_> {
+        self.view_with(true)
+    }
+
+    /// The current state, with its energies (else NaN).
+    fn view_with(&self, energy: bool) -> SampleRef<'_> {
         let s = &self.state;
+        let (kinetic, potential) = if energy {
+            (
+                kinetic_energy(self.lin.mass_pattern(), self.lin.mass(), &s.v),
+                self.sys.potential_energy(self.t, &s.u),
+            )
+        } else {
+            (f64::NAN, f64::NAN)
+        };
         SampleRef {
             t: self.t,
             u: &s.u,
             v: &s.v,
             a: &s.a,
             lambda: &s.lambda,
-            kinetic: kinetic_energy(self.lin.mass_pattern(), self.lin.mass(), &s.v),
-            potential: self.sys.potential_energy(self.t, &s.u),
+            kinetic,
+            potential,
             iterations: self.iterations,
             residual: self.residual,
             constraint: self.constraint,
@@ -279,13 +292,14 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         t_end: f64,
         observer: &mut dyn Observer,
     ) -> Result<RunStats, IntegrationError> {
+        let energy = observer.reads_energy();
         if !self.observed_start {
-            observer.observe(&self.view());
+            observer.observe(&self.view_with(energy));
             self.observed_start = true;
         }
         while !self.reached(t_end) {
             self.step(t_end)?;
-            observer.observe(&self.view());
+            observer.observe(&self.view_with(energy));
         }
         Ok(self.stats)
     }
@@ -525,8 +539,11 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
 /// The linearization and the KKT solver for `sys`: the first backend of
 /// [`mstar_kkt::KktOptions::candidates`] that takes the structure it asks for
 /// ([`mstar_kkt::Backend::structure`]). With the automatic choice, a backend
-/// that works on `S_T` without the `BᵀB` term (whose blocks then hold `β' M`)
-/// is only tried when `M`'s diagonal is positive at the start.
+/// that needs a symmetric matrix is only tried when the system's tangent is
+/// symmetric ([`System::tangent_is_symmetric`]; chosen explicitly for an
+/// unsymmetric one, it is an error), and one that works on `S_T` without the
+/// `BᵀB` term (whose blocks then hold `β' M`) only when `M`'s diagonal is
+/// positive at the start.
 fn linear_algebra<S: System + ?Sized>(
     sys: &S,
     config: &Config,
@@ -543,11 +560,23 @@ fn linear_algebra<S: System + ?Sized>(
     let candidates = options.candidates(n + m);
     let mut last = None;
     for (k, &backend) in candidates.iter().enumerate() {
-        let Some(structure) = backend.structure() else {
+        let Some(registration) = backend.registration() else {
             return Err(IntegrationError::Config(format!(
                 "no KKT backend is called '{backend}'"
             )));
         };
+        let structure = registration.structure;
+        if registration.symmetric && !sys.tangent_is_symmetric() {
+            if auto {
+                continue;
+            }
+            return Err(IntegrationError::Config(format!(
+                "the {backend} KKT backend needs a symmetric iteration matrix, and this system's tangent \
+                 is not symmetric (System::tangent_is_symmetric: velocity-dependent or non-conservative \
+                 forces, or a configuration-dependent mass matrix); use the lu or dense backend, or the \
+                 automatic choice"
+            )));
+        }
         if auto && !structure.augmented && !mass_diagonal_positive(sys, t0, u0) {
             continue;
         }
