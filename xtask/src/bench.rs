@@ -76,7 +76,35 @@ fn run_criterion(max_n: usize) -> Result<()> {
 fn report(out: &Path) -> Result<()> {
     let counts = std::fs::read_to_string(out.join("counts.csv"))
         .context("the benchmark wrote no counts.csv")?;
-    let mut table = Table::new(
+    let mut table = step_table();
+    let mut phases = phases_table();
+    let mut curves = Curves::default();
+    for line in counts.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let Some(n) = f.first().and_then(|s| s.parse::<usize>().ok()) else {
+            continue;
+        };
+        let Some(step) = median_us(&format!("chain_step/{n}")) else {
+            continue;
+        };
+        curves.push(n, step);
+        table.row(step_row(n, step, &f));
+        phases.row(phases_row(n));
+    }
+    if curves.per_step.is_empty() {
+        bail!("no criterion estimates found under target/criterion/chain_step/");
+    }
+    table.print();
+    table.write_csv(&out.join("bench.csv"))?;
+    phases.print();
+    phases.write_csv(&out.join("phases.csv"))?;
+    draw_figures("bench", out, &[("chain.png".to_string(), curves.panels())])?;
+    Ok(())
+}
+
+/// The empty per-step table, one row per N to come, titled with the machine.
+fn step_table() -> Table {
+    Table::new(
         format!(
             "chain of N bars, h = 1e-3, generalized-α ρ∞ = 0.8, tol 1e-8, default (modified) Newton and KKT solver (Schur), one thread — {}",
             machine()
@@ -92,8 +120,12 @@ fn report(out: &Path) -> Result<()> {
             "µs/step, 2 threads",
             "peak MiB",
         ],
-    );
-    let mut phases = Table::new(
+    )
+}
+
+/// The empty phase table, one row per N to come.
+fn phases_table() -> Table {
+    Table::new(
         "phases of one Newton iteration (µs; Schur on the matrix without BᵀB, LDLᵀ and LU on the one with M*)",
         &[
             "N",
@@ -108,90 +140,111 @@ fn report(out: &Path) -> Result<()> {
             "factor LU",
             "solve LU",
         ],
+    )
+}
+
+/// A median in µs with one decimal, `-` if that benchmark did not run.
+fn median_cell(id: &str) -> String {
+    median_us(id).map_or("-".into(), |v| format!("{v:.1}"))
+}
+
+/// The per-step row of a chain of `n` bodies taking `step` µs per step; `f`
+/// is its line of `counts.csv` (N, …, Newton iterations, factorizations, peak
+/// MiB).
+fn step_row(n: usize, step: f64, f: &[&str]) -> Vec<String> {
+    let iterations = f.get(2).and_then(|s| s.parse::<f64>().ok());
+    vec![
+        n.to_string(),
+        format!("{step:.1}"),
+        format!("{:.3}", step / n as f64),
+        f.get(2).copied().unwrap_or("-").to_string(),
+        iterations.map_or("-".into(), |k| format!("{:.1}", step / k.max(1.0))),
+        f.get(3).copied().unwrap_or("-").to_string(),
+        median_cell(&format!("chain_step/full-newton/{n}")),
+        median_cell(&format!("chain_step/2-threads/{n}")),
+        f.get(4).copied().unwrap_or("-").to_string(),
+    ]
+}
+
+/// The phase times of one Newton iteration for a chain of `n` bodies.
+fn phases_row(n: usize) -> Vec<String> {
+    let mut row = vec![n.to_string()];
+    row.extend(
+        [
+            "residual",
+            "residual-2-threads",
+            "jacobians+assembly",
+            "jacobians+assembly-2-threads",
+            "factor-schur",
+            "solve-schur",
+            "factor-ldlt",
+            "solve-ldlt",
+            "factor-lu",
+            "solve-lu",
+        ]
+        .map(|name| median_cell(&format!("chain_phase/{name}/{n}"))),
     );
-    let (mut per_step, mut per_body) = (Vec::new(), Vec::new());
-    let (mut full_step, mut full_body) = (Vec::new(), Vec::new());
-    for line in counts.lines().skip(1) {
-        let f: Vec<&str> = line.split(',').collect();
-        let Some(n) = f.first().and_then(|s| s.parse::<usize>().ok()) else {
-            continue;
-        };
-        let Some(step) = median_us(&format!("chain_step/{n}")) else {
-            continue;
-        };
-        let phase = |name: &str| {
-            median_us(&format!("chain_phase/{name}/{n}")).map_or("-".into(), |v| format!("{v:.1}"))
-        };
-        let iterations = f.get(2).and_then(|s| s.parse::<f64>().ok());
-        per_step.push((n as f64, step));
-        per_body.push((n as f64, step / n as f64));
+    row
+}
+
+/// The figure's curves, `(N, µs)`: per step and per body per step, for
+/// modified Newton (the default) and full Newton (where it ran).
+#[derive(Default)]
+struct Curves {
+    /// Modified Newton, µs per step.
+    per_step: Vec<(f64, f64)>,
+    /// Modified Newton, µs per body per step.
+    per_body: Vec<(f64, f64)>,
+    /// Full Newton, µs per step.
+    full_step: Vec<(f64, f64)>,
+    /// Full Newton, µs per body per step.
+    full_body: Vec<(f64, f64)>,
+}
+
+impl Curves {
+    /// Adds the chain of `n` bodies taking `step` µs per step, and its full
+    /// Newton time if that benchmark ran.
+    fn push(&mut self, n: usize, step: f64) {
+        self.per_step.push((n as f64, step));
+        self.per_body.push((n as f64, step / n as f64));
         if let Some(full) = median_us(&format!("chain_step/full-newton/{n}")) {
-            full_step.push((n as f64, full));
-            full_body.push((n as f64, full / n as f64));
+            self.full_step.push((n as f64, full));
+            self.full_body.push((n as f64, full / n as f64));
         }
-        table.row(vec![
-            n.to_string(),
-            format!("{step:.1}"),
-            format!("{:.3}", step / n as f64),
-            f.get(2).copied().unwrap_or("-").to_string(),
-            iterations.map_or("-".into(), |k| format!("{:.1}", step / k.max(1.0))),
-            f.get(3).copied().unwrap_or("-").to_string(),
-            median_us(&format!("chain_step/full-newton/{n}"))
-                .map_or("-".into(), |v| format!("{v:.1}")),
-            median_us(&format!("chain_step/2-threads/{n}"))
-                .map_or("-".into(), |v| format!("{v:.1}")),
-            f.get(4).copied().unwrap_or("-").to_string(),
-        ]);
-        phases.row(vec![
-            n.to_string(),
-            phase("residual"),
-            phase("residual-2-threads"),
-            phase("jacobians+assembly"),
-            phase("jacobians+assembly-2-threads"),
-            phase("factor-schur"),
-            phase("solve-schur"),
-            phase("factor-ldlt"),
-            phase("solve-ldlt"),
-            phase("factor-lu"),
-            phase("solve-lu"),
-        ]);
     }
-    if per_step.is_empty() {
-        bail!("no criterion estimates found under target/criterion/chain_step/");
+
+    /// The two panels, time per step (log-log) and per body per step (log-x),
+    /// one curve per Newton variant in each.
+    fn panels(self) -> Vec<Panel> {
+        vec![
+            variants(
+                Panel::new("time per step", "N (bodies)", "µs per step").scale(Scale::LogLog),
+                self.per_step,
+                self.full_step,
+            ),
+            variants(
+                Panel::new(
+                    "time per body per step",
+                    "N (bodies)",
+                    "µs per body per step",
+                )
+                .scale(Scale::LogX)
+                .y_range(0.0, 0.5),
+                self.per_body,
+                self.full_body,
+            ),
+        ]
     }
-    table.print();
-    table.write_csv(&out.join("bench.csv"))?;
-    phases.print();
-    phases.write_csv(&out.join("phases.csv"))?;
-    // One curve per Newton variant in each panel.
-    let variants = |panel: Panel, modified: Vec<(f64, f64)>, full: Vec<(f64, f64)>| {
-        panel
-            .series(
-                "modified Newton (default)",
-                modified,
-                Style::solid(crate::common::color(0)),
-            )
-            .series("full Newton", full, Style::solid(crate::common::color(2)))
-            .legend(Legend::UpperLeft)
-    };
-    let figure = vec![
-        variants(
-            Panel::new("time per step", "N (bodies)", "µs per step").scale(Scale::LogLog),
-            per_step,
-            full_step,
-        ),
-        variants(
-            Panel::new(
-                "time per body per step",
-                "N (bodies)",
-                "µs per body per step",
-            )
-            .scale(Scale::LogX)
-            .y_range(0.0, 0.5),
-            per_body,
-            full_body,
-        ),
-    ];
-    draw_figures("bench", out, &[("chain.png".to_string(), figure)])?;
-    Ok(())
+}
+
+/// `panel` with one curve per Newton variant: modified (the default) and full.
+fn variants(panel: Panel, modified: Vec<(f64, f64)>, full: Vec<(f64, f64)>) -> Panel {
+    panel
+        .series(
+            "modified Newton (default)",
+            modified,
+            Style::solid(crate::common::color(0)),
+        )
+        .series("full Newton", full, Style::solid(crate::common::color(2)))
+        .legend(Legend::UpperLeft)
 }

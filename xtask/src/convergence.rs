@@ -11,6 +11,7 @@
 //! ([`fitted_order`]).
 
 use std::f64::consts::FRAC_PI_2;
+use std::path::Path;
 
 use anyhow::Result;
 use mstar::analysis::fitted_order;
@@ -143,93 +144,150 @@ pub fn run() -> Result<()> {
         ),
     ];
     let mut figures = Vec::new();
-    let mut header = vec!["start", "scheme"];
-    let names: Vec<String> = FIELDS
-        .iter()
-        .map(|(n, _)| format!("{n} at 1 s"))
-        .chain(FIELDS.iter().map(|(n, _)| format!("{n} max (0,1]")))
-        .collect();
-    header.extend(names.iter().map(String::as_str));
-    let mut orders = Table::new(
-        format!(
-            "Fitted orders, pendulum g₀ = 10, h = {} … {} (cargo xtask convergence)",
-            HS[0],
-            HS[HS.len() - 1]
-        ),
-        &header,
-    );
-    let mut fine = Table::new(
-        "Fitted orders over the four smallest h only (cargo xtask convergence)",
-        &header,
-    );
-    let mut raw_header = vec!["start", "scheme", "h"];
-    raw_header.extend(names.iter().map(String::as_str));
-    raw_header.extend(["t of max λ err", "0-iteration steps"]);
-    let mut stops = Vec::new();
-    let mut raw = Table::new(
-        "Errors (max-norm over coordinates) against RK4 (cargo xtask convergence)",
-        &raw_header,
-    );
+    let mut tables = Tables::new();
     for (key, label, init) in &starts {
-        let mut panels_end: Vec<Panel> = FIELDS
-            .iter()
-            .map(|(n, _)| panel(label, n, "at t = 1 s"))
-            .collect();
-        let mut panels_max: Vec<Panel> = FIELDS
-            .iter()
-            .map(|(n, _)| panel(label, n, "max over (0, 1] s"))
-            .collect();
-        for (j, (name, config)) in schemes().into_iter().enumerate() {
-            let e = errors(&sys, init, config);
-            stops.extend(e.failures.iter().map(|f| format!("{key} / {name}, {f}")));
-            let order_all = |v: &[f64]| order(&HS, v);
-            let order_fine = |v: &[f64]| order(&HS[2..], &v[2..]);
-            let mut row = vec![(*key).to_string(), name.to_string()];
-            let mut row_fine = row.clone();
-            for v in e.at_end.iter().chain(&e.max) {
-                row.push(order_all(v));
-                row_fine.push(order_fine(v));
-            }
-            orders.row(row);
-            fine.row(row_fine);
-            for (i, h) in HS.iter().enumerate() {
-                let mut r = vec![(*key).to_string(), name.to_string(), format!("{h}")];
-                r.extend(e.at_end.iter().chain(&e.max).map(|v| sci(v[i])));
-                r.push(format!("{:.4}", e.worst_at[i]));
-                r.push(e.zero_iterations[i].to_string());
-                raw.row(r);
-            }
-            // Past six colours: dashed, in the colour of the run it varies
-            // (the uncorrected start next to gen.-α ρ∞ = 0.9).
-            let style = if j < 6 {
-                Style::solid(color(j))
-            } else {
-                Style::dashed(color(j - 3))
-            };
-            for (k, p) in panels_end.iter_mut().enumerate() {
-                p.series
-                    .push(Series::new(name, points(&e.at_end[k]), style));
-            }
-            for (k, p) in panels_max.iter_mut().enumerate() {
-                p.series.push(Series::new(name, points(&e.max[k]), style));
-            }
-        }
-        figures.push((format!("{key}_at_1s.png"), panels_end));
-        figures.push((format!("{key}_max.png"), panels_max));
+        figures.extend(start_figures(&sys, (key, label), init, &mut tables));
     }
-    raw.print();
-    raw.write_csv(&out.join("errors.csv"))?;
-    for s in &stops {
-        println!("{s}");
-    }
-    println!("(* in the order tables: fitted without the runs that stopped early)");
-    println!();
-    orders.print();
-    orders.write_csv(&out.join("orders.csv"))?;
-    fine.print();
-    fine.write_csv(&out.join("orders_fine.csv"))?;
+    tables.report(&out)?;
     draw_figures(STUDY, &out, &figures)?;
     Ok(())
+}
+
+/// Runs every scheme from one start (`key` for tables and file names, `label`
+/// for titles), adds their rows to `tables`, and returns the two figures:
+/// errors at t = 1 s and max over (0, 1] s against h.
+fn start_figures(
+    sys: &PendulumChain,
+    (key, label): (&str, &str),
+    init: &Initial,
+    tables: &mut Tables,
+) -> [(String, Vec<Panel>); 2] {
+    let mut panels_end: Vec<Panel> = FIELDS
+        .iter()
+        .map(|(n, _)| panel(label, n, "at t = 1 s"))
+        .collect();
+    let mut panels_max: Vec<Panel> = FIELDS
+        .iter()
+        .map(|(n, _)| panel(label, n, "max over (0, 1] s"))
+        .collect();
+    for (j, (name, config)) in schemes().into_iter().enumerate() {
+        let e = errors(sys, init, config);
+        tables.add(key, name, &e);
+        let style = scheme_style(j);
+        for (k, p) in panels_end.iter_mut().enumerate() {
+            p.series
+                .push(Series::new(name, points(&e.at_end[k]), style));
+        }
+        for (k, p) in panels_max.iter_mut().enumerate() {
+            p.series.push(Series::new(name, points(&e.max[k]), style));
+        }
+    }
+    [
+        (format!("{key}_at_1s.png"), panels_end),
+        (format!("{key}_max.png"), panels_max),
+    ]
+}
+
+/// The style of the `j`-th scheme: past six colours, dashed, in the colour of
+/// the run it varies (the uncorrected start next to gen.-α ρ∞ = 0.9).
+fn scheme_style(j: usize) -> Style {
+    if j < 6 {
+        Style::solid(color(j))
+    } else {
+        Style::dashed(color(j - 3))
+    }
+}
+
+/// The study's tables, filled start by start and scheme by scheme, and why
+/// runs stopped early.
+struct Tables {
+    /// Fitted orders over all h.
+    orders: Table,
+    /// Fitted orders over the four smallest h.
+    fine: Table,
+    /// The errors for every h.
+    raw: Table,
+    /// `start / scheme, h = …: why`, for every run that stopped early.
+    stops: Vec<String>,
+}
+
+impl Tables {
+    /// The empty tables.
+    fn new() -> Self {
+        let names: Vec<String> = FIELDS
+            .iter()
+            .map(|(n, _)| format!("{n} at 1 s"))
+            .chain(FIELDS.iter().map(|(n, _)| format!("{n} max (0,1]")))
+            .collect();
+        let mut header = vec!["start", "scheme"];
+        header.extend(names.iter().map(String::as_str));
+        let orders = Table::new(
+            format!(
+                "Fitted orders, pendulum g₀ = 10, h = {} … {} (cargo xtask convergence)",
+                HS[0],
+                HS[HS.len() - 1]
+            ),
+            &header,
+        );
+        let fine = Table::new(
+            "Fitted orders over the four smallest h only (cargo xtask convergence)",
+            &header,
+        );
+        let mut raw_header = vec!["start", "scheme", "h"];
+        raw_header.extend(names.iter().map(String::as_str));
+        raw_header.extend(["t of max λ err", "0-iteration steps"]);
+        let raw = Table::new(
+            "Errors (max-norm over coordinates) against RK4 (cargo xtask convergence)",
+            &raw_header,
+        );
+        Self {
+            orders,
+            fine,
+            raw,
+            stops: Vec::new(),
+        }
+    }
+
+    /// Adds one scheme's errors from the start `key`: its fitted orders, its
+    /// errors per h and why its runs stopped.
+    fn add(&mut self, key: &str, name: &str, e: &Errors) {
+        self.stops
+            .extend(e.failures.iter().map(|f| format!("{key} / {name}, {f}")));
+        let order_all = |v: &[f64]| order(&HS, v);
+        let order_fine = |v: &[f64]| order(&HS[2..], &v[2..]);
+        let mut row = vec![key.to_string(), name.to_string()];
+        let mut row_fine = row.clone();
+        for v in e.at_end.iter().chain(&e.max) {
+            row.push(order_all(v));
+            row_fine.push(order_fine(v));
+        }
+        self.orders.row(row);
+        self.fine.row(row_fine);
+        for (i, h) in HS.iter().enumerate() {
+            let mut r = vec![key.to_string(), name.to_string(), format!("{h}")];
+            r.extend(e.at_end.iter().chain(&e.max).map(|v| sci(v[i])));
+            r.push(format!("{:.4}", e.worst_at[i]));
+            r.push(e.zero_iterations[i].to_string());
+            self.raw.row(r);
+        }
+    }
+
+    /// Prints the errors, why runs stopped and the order tables, and writes
+    /// them as `errors.csv`, `orders.csv` and `orders_fine.csv`.
+    fn report(&self, out: &Path) -> Result<()> {
+        self.raw.print();
+        self.raw.write_csv(&out.join("errors.csv"))?;
+        for s in &self.stops {
+            println!("{s}");
+        }
+        println!("(* in the order tables: fitted without the runs that stopped early)");
+        println!();
+        self.orders.print();
+        self.orders.write_csv(&out.join("orders.csv"))?;
+        self.fine.print();
+        self.fine.write_csv(&out.join("orders_fine.csv"))?;
+        Ok(())
+    }
 }
 
 /// The fitted order over the finite errors, marked `*` when runs that stopped

@@ -9,6 +9,7 @@
 //! [0, 1000] s, the least-squares drift rate and where a run stopped.
 
 use std::f64::consts::FRAC_PI_2;
+use std::path::Path;
 
 use anyhow::Result;
 use mstar::{ChainOracle, PendulumChain, Sample};
@@ -93,21 +94,22 @@ fn energy_points(samples: &[Sample]) -> Vec<(f64, f64)> {
 /// I/O and drawing errors.
 pub fn run() -> Result<()> {
     let out = crate::study_dir(STUDY)?;
+    let histories = histories();
+    let table = summary_table(&histories);
+    table.print();
+    table.write_csv(&out.join("summary.csv"))?;
+    write_histories(&out, &histories)?;
+    println!();
+    draw_figures(STUDY, &out, &figures(&histories))?;
+    Ok(())
+}
+
+/// Integrates the pendulum with RK4 and the three Newmark-family schemes and
+/// keeps their energy errors.
+fn histories() -> Vec<History> {
     let sys = PendulumChain::paper(1.0, 1.0, 10.0);
     let init = Initial::one(FRAC_PI_2, 0.0);
-
-    // RK4 at h exactly: a hair above h so that 0.1 s is always 10 steps.
-    let mut oracle = ChainOracle::new(&sys);
-    oracle.max_step = H * (1.0 + 1e-9);
-    let times: Vec<f64> = (0..=(T_END / (KEEP as f64 * H)).round() as usize)
-        .map(|k| k as f64 * KEEP as f64 * H)
-        .collect();
-    let rk4 = oracle.solve(&init.theta, &init.omega, &times);
-    let mut histories = vec![History {
-        name: "RK4 (minimal coordinate), h = 0.01".to_string(),
-        points: energy_points(&rk4),
-        stopped: None,
-    }];
+    let mut histories = vec![rk4_history(&sys, &init)];
     for (name, config) in [
         ("trapezoidal, consistent start", trapezoidal(H)),
         ("gen.-α ρ∞ = 0.9", generalized_alpha(H, 0.9)),
@@ -120,7 +122,29 @@ pub fn run() -> Result<()> {
             stopped: case.result.is_err().then(|| case.outcome()),
         });
     }
+    histories
+}
 
+/// The energy history of classic RK4 on the minimal coordinate at the same
+/// step h, sampled every 0.1 s: the reference the others are judged by.
+fn rk4_history(sys: &PendulumChain, init: &Initial) -> History {
+    // RK4 at h exactly: a hair above h so that 0.1 s is always 10 steps.
+    let mut oracle = ChainOracle::new(sys);
+    oracle.max_step = H * (1.0 + 1e-9);
+    let times: Vec<f64> = (0..=(T_END / (KEEP as f64 * H)).round() as usize)
+        .map(|k| k as f64 * KEEP as f64 * H)
+        .collect();
+    let rk4 = oracle.solve(&init.theta, &init.omega, &times);
+    History {
+        name: "RK4 (minimal coordinate), h = 0.01".to_string(),
+        points: energy_points(&rk4),
+        stopped: None,
+    }
+}
+
+/// The summary table: max and mean energy error over windows, the drift rate
+/// and where each run got to.
+fn summary_table(histories: &[History]) -> Table {
     let mut table = Table::new(
         "Pendulum energy error, g₀ = 10, θ₀ = π/2, h = 0.01, E₀ = 0 J (cargo xtask energy)",
         &[
@@ -134,7 +158,7 @@ pub fn run() -> Result<()> {
             "t reached",
         ],
     );
-    for hst in &histories {
+    for hst in histories {
         table.row(vec![
             hst.name.clone(),
             sci(hst.max_until(10.0)),
@@ -146,9 +170,12 @@ pub fn run() -> Result<()> {
             format!("{:.2}", hst.t_reached()),
         ]);
     }
-    table.print();
-    table.write_csv(&out.join("summary.csv"))?;
-    for hst in &histories {
+    table
+}
+
+/// Prints why a run stopped and writes each history as `<name>.csv`.
+fn write_histories(out: &Path, histories: &[History]) -> Result<()> {
+    for hst in histories {
         if let Some(why) = &hst.stopped {
             println!("{}: {why}", hst.name);
         }
@@ -156,8 +183,12 @@ pub fn run() -> Result<()> {
         let rows: Vec<Vec<f64>> = hst.points.iter().map(|p| vec![p.0, p.1]).collect();
         write_columns(&file, &["t", "E_minus_E0"], &rows)?;
     }
-    println!();
+    Ok(())
+}
 
+/// The figures: |E − E₀| on a log scale, and E − E₀ linear over the whole
+/// run and over the first 10 s.
+fn figures(histories: &[History]) -> Vec<(String, Vec<Panel>)> {
     let mut log = Panel::new(
         "Pendulum: energy error |E − E₀|, h = 0.01 (every 0.1 s)",
         "t (s)",
@@ -166,30 +197,7 @@ pub fn run() -> Result<()> {
     .scale(Scale::LogY)
     .x_range(0.0, T_END)
     .legend(Legend::UpperRight);
-    // The linear panel's range: the runs that finish (a blow-up would flatten
-    // the others).
-    let bound = histories
-        .iter()
-        .filter(|h| h.stopped.is_none())
-        .map(|h| h.max_until(T_END))
-        .fold(0.0, f64::max)
-        * 1.3;
-    let mut lin = Panel::new(
-        "Pendulum: energy error E − E₀ (runs that stop early are clipped)",
-        "t (s)",
-        "E − E₀ (J)",
-    )
-    .x_range(0.0, T_END)
-    .y_range(-bound, 0.4 * bound)
-    .legend(Legend::LowerLeft);
-    let mut zoom = Panel::new(
-        "Pendulum: energy error E − E₀, first 10 s",
-        "t (s)",
-        "E − E₀ (J)",
-    )
-    .x_range(0.0, 10.0)
-    .y_range(-0.05, 0.05)
-    .legend(Legend::LowerLeft);
+    let (mut lin, mut zoom) = linear_panels(histories);
     for (k, hst) in histories.iter().enumerate() {
         let style = Style::solid(color(k)).width(1);
         let abs: Vec<(f64, f64)> = hst.points.iter().map(|p| (p.0, p.1.abs())).collect();
@@ -199,13 +207,36 @@ pub fn run() -> Result<()> {
         zoom.series
             .push(Series::new(hst.name.clone(), hst.points.clone(), style));
     }
-    draw_figures(
-        STUDY,
-        &out,
-        &[
-            ("energy_log.png".to_string(), vec![log]),
-            ("energy_linear.png".to_string(), vec![lin, zoom]),
-        ],
-    )?;
-    Ok(())
+    vec![
+        ("energy_log.png".to_string(), vec![log]),
+        ("energy_linear.png".to_string(), vec![lin, zoom]),
+    ]
+}
+
+/// The empty linear panels: the whole run, on the range of the runs that
+/// finish (a blow-up would flatten the others), and the first 10 s.
+fn linear_panels(histories: &[History]) -> (Panel, Panel) {
+    let bound = histories
+        .iter()
+        .filter(|h| h.stopped.is_none())
+        .map(|h| h.max_until(T_END))
+        .fold(0.0, f64::max)
+        * 1.3;
+    let lin = Panel::new(
+        "Pendulum: energy error E − E₀ (runs that stop early are clipped)",
+        "t (s)",
+        "E − E₀ (J)",
+    )
+    .x_range(0.0, T_END)
+    .y_range(-bound, 0.4 * bound)
+    .legend(Legend::LowerLeft);
+    let zoom = Panel::new(
+        "Pendulum: energy error E − E₀, first 10 s",
+        "t (s)",
+        "E − E₀ (J)",
+    )
+    .x_range(0.0, 10.0)
+    .y_range(-0.05, 0.05)
+    .legend(Legend::LowerLeft);
+    (lin, zoom)
 }

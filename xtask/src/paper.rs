@@ -20,6 +20,7 @@ use anyhow::{Context as _, Result};
 use mstar::pendulum::PendulumRun;
 use mstar::{Config, IntegrationError, RunStats, Sample, Start};
 
+use crate::common::{sci, width};
 use crate::plot::{self, Legend, Panel, Scale, Series, Style};
 
 /// Where the figures are copied for the docs, relative to the project root.
@@ -234,79 +235,143 @@ fn oscillating(
     ]
 }
 
+/// A figure: its file name and its panels.
+type Figure = (String, Vec<Panel>);
+
 /// The figures, paper numbering (Figs. 4-13), as `(file name, panels)`.
-fn figures(
-    paper: &Run,
-    cured: &Run,
-    others: &[&Run],
-    full: &[Sample],
-    t_end: f64,
-) -> Vec<(String, Vec<Panel>)> {
-    let stop = match &paper.result {
+fn figures(paper: &Run, cured: &Run, others: &[&Run], full: &[Sample], t_end: f64) -> Vec<Figure> {
+    let stop = stop_note(paper);
+    let mut figs = vec![
+        fig04_theta(paper, full, t_end),
+        fig05_position(paper, full, t_end),
+        fig06_velocity(paper, full, t_end),
+        fig07_energy(paper, cured, full, t_end),
+        fig08_theta_ddot_rk4(full, t_end),
+    ];
+    figs.extend(figs09_13_oscillating(paper, cured, full, t_end, &stop));
+    figs.push(lambda_error_figure(paper, cured, others, t_end));
+    figs
+}
+
+/// The title suffix saying where the paper run stopped (empty if it
+/// finished), so that the whole-run panels explain their end.
+fn stop_note(paper: &Run) -> String {
+    match &paper.result {
         Ok(_) => String::new(),
         Err(_) => format!(" (paper run stopped at t = {:.2} s)", paper.t_reached()),
-    };
-    // Figs. 4-7 are on the oracle's scale: once the paper run has diverged its
-    // curves leave the frame (they are clipped, not rescaled).
-    let clipped = |title: &str, y: &str, fs: &[Get]| {
-        let (lo, hi) = reference_range(full, t_end, fs);
-        Panel::new(format!("{title}, axis at the RK4 range"), T, y)
-            .x_range(0.0, t_end)
-            .y_range(lo, hi)
-    };
-    let solid = Style::solid(plot::BLUE);
-    let second = Style::solid(plot::ORANGE);
-    let mut figs = Vec::new();
+    }
+}
 
+/// A panel over the whole run on the oracle's scale of `fs`: Figs. 4-7, where
+/// the diverged paper run's curves leave the frame (clipped, not rescaled).
+fn clipped(full: &[Sample], t_end: f64, title: &str, y_label: &str, fs: &[Get]) -> Panel {
+    let (lo, hi) = reference_range(full, t_end, fs);
+    Panel::new(format!("{title}, axis at the RK4 range"), T, y_label)
+        .x_range(0.0, t_end)
+        .y_range(lo, hi)
+}
+
+/// A clipped panel of one or two quantities `(name, f)` of the paper run
+/// (blue, then orange) and the oracle's curves of all of them as one series
+/// named `oracle_name`: the pattern of Figs. 4-6.
+fn against_oracle(
+    paper: &Run,
+    full: &[Sample],
+    t_end: f64,
+    (title, y_label): (&str, &str),
+    quantities: &[(&str, Get)],
+    oracle_name: &str,
+) -> Panel {
+    let fs: Vec<Get> = quantities.iter().map(|(_, f)| *f).collect();
+    let styles = [Style::solid(plot::BLUE), Style::solid(plot::ORANGE)];
+    let mut panel = clipped(full, t_end, title, y_label, &fs);
+    for ((what, f), style) in quantities.iter().zip(styles) {
+        panel = panel.series_from(ours(paper, what, style, f));
+    }
+    panel.series_from(oracle(full, oracle_name, &fs))
+}
+
+/// Fig. 4: the angle θ and the angular velocity dθ/dt.
+fn fig04_theta(paper: &Run, full: &[Sample], t_end: f64) -> Figure {
     let th: Get = |s| s.u[2];
     let om: Get = |s| s.v[2];
-    let theta = clipped("Fig. 4a — angle θ", "θ (rad)", &[th])
-        .legend(Legend::LowerLeft)
-        .series_from(ours(paper, "θ", solid, th))
-        .series_from(oracle(full, "θ", &[th]));
-    let omega = clipped("Fig. 4b — angular velocity dθ/dt", "dθ/dt (rad/s)", &[om])
-        .legend(Legend::LowerRight)
-        .series_from(ours(paper, "dθ/dt", solid, om))
-        .series_from(oracle(full, "dθ/dt", &[om]));
-    figs.push(("fig04_theta.png".to_string(), vec![theta, omega]));
-
-    let (x, y): (Get, Get) = (|s| s.u[0], |s| s.u[1]);
-    let pos = clipped("Fig. 5 — displacements x, y", "x, y (m)", &[x, y])
-        .series_from(ours(paper, "x", solid, x))
-        .series_from(ours(paper, "y", second, y))
-        .series_from(oracle(full, "x and y", &[x, y]));
-    figs.push(("fig05_position.png".to_string(), vec![pos]));
-
-    let (vx, vy): (Get, Get) = (|s| s.v[0], |s| s.v[1]);
-    let vel = clipped(
-        "Fig. 6 — velocities dx/dt, dy/dt",
-        "dx/dt, dy/dt (m/s)",
-        &[vx, vy],
+    let theta = against_oracle(
+        paper,
+        full,
+        t_end,
+        ("Fig. 4a — angle θ", "θ (rad)"),
+        &[("θ", th)],
+        "θ",
     )
-    .series_from(ours(paper, "dx/dt", solid, vx))
-    .series_from(ours(paper, "dy/dt", second, vy))
-    .series_from(oracle(full, "dx/dt and dy/dt", &[vx, vy]));
-    figs.push(("fig06_velocity.png".to_string(), vec![vel]));
+    .legend(Legend::LowerLeft);
+    let omega = against_oracle(
+        paper,
+        full,
+        t_end,
+        ("Fig. 4b — angular velocity dθ/dt", "dθ/dt (rad/s)"),
+        &[("dθ/dt", om)],
+        "dθ/dt",
+    )
+    .legend(Legend::LowerRight);
+    ("fig04_theta.png".to_string(), vec![theta, omega])
+}
 
+/// Fig. 5: the displacements x and y.
+fn fig05_position(paper: &Run, full: &[Sample], t_end: f64) -> Figure {
+    let (x, y): (Get, Get) = (|s| s.u[0], |s| s.u[1]);
+    let pos = against_oracle(
+        paper,
+        full,
+        t_end,
+        ("Fig. 5 — displacements x, y", "x, y (m)"),
+        &[("x", x), ("y", y)],
+        "x and y",
+    );
+    ("fig05_position.png".to_string(), vec![pos])
+}
+
+/// Fig. 6: the velocities dx/dt and dy/dt.
+fn fig06_velocity(paper: &Run, full: &[Sample], t_end: f64) -> Figure {
+    let (vx, vy): (Get, Get) = (|s| s.v[0], |s| s.v[1]);
+    let vel = against_oracle(
+        paper,
+        full,
+        t_end,
+        ("Fig. 6 — velocities dx/dt, dy/dt", "dx/dt, dy/dt (m/s)"),
+        &[("dx/dt", vx), ("dy/dt", vy)],
+        "dx/dt and dy/dt",
+    );
+    ("fig06_velocity.png".to_string(), vec![vel])
+}
+
+/// Fig. 7: kinetic, potential and total energy over the whole run, and a
+/// detail of the total energy error E − E₀ of the paper and default runs.
+fn fig07_energy(paper: &Run, cured: &Run, full: &[Sample], t_end: f64) -> Figure {
     let (kin, pot): (Get, Get) = (|s| s.kinetic, |s| s.potential);
     let energy = clipped(
+        full,
+        t_end,
         "Fig. 7 — kinetic, potential, total energy",
         "energy (J)",
         &[kin, pot],
     )
     .legend(Legend::LowerRight)
-    .series("kinetic K, paper algorithm", paper.curve(kin), solid)
-    .series("potential P, paper algorithm", paper.curve(pot), second)
+    .series(
+        "kinetic K, paper algorithm",
+        paper.curve(kin),
+        Style::solid(plot::BLUE),
+    )
+    .series(
+        "potential P, paper algorithm",
+        paper.curve(pot),
+        Style::solid(plot::ORANGE),
+    )
     .series(
         "total E = K + P, paper algorithm",
         paper.curve(Sample::energy),
         Style::solid(plot::RED),
     )
     .series_from(oracle(full, "K and P", &[kin, pot]));
-    let drift = |r: &Run| {
-        let e0 = r.samples.first().map_or(0.0, Sample::energy);
-        r.curve(|s| s.energy() - e0)
-    };
     let detail = Panel::new(
         format!("Fig. 7, detail — total energy error E − E₀, first {ZOOM} s"),
         T,
@@ -316,12 +381,21 @@ fn figures(
     .legend(Legend::UpperLeft)
     .series(
         "paper algorithm",
-        drift(paper),
+        energy_drift(paper),
         Style::solid(plot::RED).width(1),
     )
-    .series(cured.name, drift(cured), Style::solid(plot::GREEN));
-    figs.push(("fig07_energy.png".to_string(), vec![energy, detail]));
+    .series(cured.name, energy_drift(cured), Style::solid(plot::GREEN));
+    ("fig07_energy.png".to_string(), vec![energy, detail])
+}
 
+/// `(t, E − E₀)` of a run: the energy error of Fig. 7's detail.
+fn energy_drift(run: &Run) -> Vec<(f64, f64)> {
+    let e0 = run.samples.first().map_or(0.0, Sample::energy);
+    run.curve(|s| s.energy() - e0)
+}
+
+/// Fig. 8: the oracle's angular acceleration d²θ/dt² alone.
+fn fig08_theta_ddot_rk4(full: &[Sample], t_end: f64) -> Figure {
     let tdd: Get = |s| s.a[2];
     let (lo, hi) = reference_range(full, t_end, &[tdd]);
     let rk4_acc = Panel::new(
@@ -332,11 +406,19 @@ fn figures(
     .x_range(0.0, t_end)
     .y_range(lo, hi)
     .series("d²θ/dt², RK4", curve(full, tdd), Style::solid(plot::BLACK));
-    figs.push(("fig08_theta_ddot_rk4.png".to_string(), vec![rk4_acc]));
+    ("fig08_theta_ddot_rk4.png".to_string(), vec![rk4_acc])
+}
 
-    // Figs. 9-13: the raw curve thin, its two-sample mean, (for λ) the
-    // default integrator, and the oracle.
-    let (xdd, ydd): (Get, Get) = (|s| s.a[0], |s| s.a[1]);
+/// Figs. 9-13: the accelerations ü and the multipliers λ, which oscillate
+/// with period 2h in the paper run, as [`oscillating`] panels.
+fn figs09_13_oscillating(
+    paper: &Run,
+    cured: &Run,
+    full: &[Sample],
+    t_end: f64,
+    stop: &str,
+) -> Vec<Figure> {
+    let (tdd, xdd, ydd): (Get, Get, Get) = (|s| s.a[2], |s| s.a[0], |s| s.a[1]);
     let (l1, l2): (Get, Get) = (|s| s.lambda[0], |s| s.lambda[1]);
     let accelerations: [(&str, &str, &str, &str, Get); 5] = [
         ("fig09_theta_ddot.png", "Fig. 9", "d²θ/dt²", "rad/s²", tdd),
@@ -345,57 +427,60 @@ fn figures(
         ("fig12_lambda1.png", "Fig. 12", "λ₁", "N", l1),
         ("fig13_lambda2.png", "Fig. 13", "λ₂", "N", l2),
     ];
-    for (file, fig, what, unit, f) in accelerations {
-        let raw = paper.curve(f);
-        let mut series = vec![
-            Series::new(
-                format!("{what}, paper algorithm"),
-                raw.clone(),
-                Style::solid(plot::BLUE).width(1),
-            ),
-            Series::new(
-                format!("{what}, paper algorithm, 2-sample mean"),
-                mean2(&raw),
-                second,
-            ),
-        ];
-        if what.starts_with('λ') {
-            series.push(Series::new(
-                format!("{what}, {}", cured.name),
-                cured.curve(f),
-                Style::solid(plot::GREEN),
-            ));
-        }
-        series.push(oracle(full, what, &[f]));
-        let range = reference_range(full, ZOOM, &[f]);
-        let title = format!("{fig} — {what}");
-        figs.push((
-            file.to_string(),
-            oscillating(
-                &title,
+    accelerations
+        .into_iter()
+        .map(|(file, fig, what, unit, f)| {
+            let series = oscillating_series(paper, cured, full, what, f);
+            let range = reference_range(full, ZOOM, &[f]);
+            let panels = oscillating(
+                &format!("{fig} — {what}"),
                 &format!("{what} ({unit})"),
                 t_end,
-                &stop,
+                stop,
                 range,
                 &series,
-            ),
+            );
+            (file.to_string(), panels)
+        })
+        .collect()
+}
+
+/// The series of one of Figs. 9-13: the raw curve thin, its two-sample mean,
+/// (for λ) the default integrator, and the oracle.
+fn oscillating_series(
+    paper: &Run,
+    cured: &Run,
+    full: &[Sample],
+    what: &str,
+    f: Get,
+) -> Vec<Series> {
+    let raw = paper.curve(f);
+    let mut series = vec![
+        Series::new(
+            format!("{what}, paper algorithm"),
+            raw.clone(),
+            Style::solid(plot::BLUE).width(1),
+        ),
+        Series::new(
+            format!("{what}, paper algorithm, 2-sample mean"),
+            mean2(&raw),
+            Style::solid(plot::ORANGE),
+        ),
+    ];
+    if what.starts_with('λ') {
+        series.push(Series::new(
+            format!("{what}, {}", cured.name),
+            cured.curve(f),
+            Style::solid(plot::GREEN),
         ));
     }
+    series.push(oracle(full, what, &[f]));
+    series
+}
 
-    // Beyond the paper: how fast the multiplier error grows, on a log scale.
-    let lam_err = |run: &Run| -> Vec<(f64, f64)> {
-        run.samples
-            .iter()
-            .zip(&run.oracle)
-            .skip(1)
-            .map(|(s, r)| {
-                let e = (s.lambda[0] - r.lambda[0])
-                    .abs()
-                    .max((s.lambda[1] - r.lambda[1]).abs());
-                (s.t, e)
-            })
-            .collect()
-    };
+/// Beyond the paper: how fast the multiplier error grows, on a log scale, for
+/// every run.
+fn lambda_error_figure(paper: &Run, cured: &Run, others: &[&Run], t_end: f64) -> Figure {
     let mut growth = Panel::new(
         "Multiplier error max(|λ₁ − λ₁,RK4|, |λ₂ − λ₂,RK4|), t > 0",
         T,
@@ -415,12 +500,26 @@ fn figures(
     {
         growth.series.push(Series::new(
             run.name,
-            lam_err(run),
+            lambda_error(run),
             Style::solid(color).width(1),
         ));
     }
-    figs.push(("lambda_error.png".to_string(), vec![growth]));
-    figs
+    ("lambda_error.png".to_string(), vec![growth])
+}
+
+/// `(t, max(|λ₁ − λ₁,ref|, |λ₂ − λ₂,ref|))` for every sample with `t > 0`.
+fn lambda_error(run: &Run) -> Vec<(f64, f64)> {
+    run.samples
+        .iter()
+        .zip(&run.oracle)
+        .skip(1)
+        .map(|(s, r)| {
+            let e = (s.lambda[0] - r.lambda[0])
+                .abs()
+                .max((s.lambda[1] - r.lambda[1]).abs());
+            (s.t, e)
+        })
+        .collect()
 }
 
 /// Mean and largest Newton iterations per accepted step.
@@ -432,110 +531,159 @@ fn iterations(samples: &[Sample]) -> (f64, usize) {
     (total as f64 / n as f64, max)
 }
 
-/// Display width of a table cell: characters without combining marks.
-fn width(s: &str) -> usize {
-    s.chars()
-        .filter(|c| !('\u{300}'..='\u{36f}').contains(c))
-        .count()
+/// A row of the summary table: label and one cell per run.
+type Row = (String, Vec<String>);
+
+/// A row with the cell `f(run)` for each run.
+fn row(runs: &[&Run], label: &str, f: impl Fn(&Run) -> String) -> Row {
+    (label.to_string(), runs.iter().map(|r| f(r)).collect())
 }
 
 /// Prints the comparison table, one column per run, and why a run stopped.
 fn print_summary(runs: &[&Run]) {
-    let mut rows: Vec<(String, Vec<String>)> = Vec::new();
-    let mut row = |label: &str, f: &dyn Fn(&Run) -> String| {
-        rows.push((label.to_string(), runs.iter().map(|r| f(r)).collect()));
-    };
-    let e = |x: f64| format!("{x:.3e}");
-    let all = f64::INFINITY;
-    row("max |θ − θ_RK4| (rad)", &|r| {
-        e(r.max_err(-1.0, all, |s| s.u[2]))
-    });
-    row("max |θ − θ_RK4|, t ≤ 2 s (rad)", &|r| {
-        e(r.max_err(-1.0, ZOOM, |s| s.u[2]))
-    });
-    row("max |θ̇ − θ̇_RK4| (rad/s)", &|r| {
-        e(r.max_err(-1.0, all, |s| s.v[2]))
-    });
-    row("max |θ̇ − θ̇_RK4|, t ≤ 2 s (rad/s)", &|r| {
-        e(r.max_err(-1.0, ZOOM, |s| s.v[2]))
-    });
-    row("max |(x,y) − RK4| (m)", &|r| {
-        e(r.max_err(-1.0, all, |s| s.u[0])
-            .max(r.max_err(-1.0, all, |s| s.u[1])))
-    });
-    row("max |(ẋ,ẏ) − RK4| (m/s)", &|r| {
-        e(r.max_err(-1.0, all, |s| s.v[0])
-            .max(r.max_err(-1.0, all, |s| s.v[1])))
-    });
-    row("max |ẍ,ÿ − RK4|, 0 < t ≤ 2 s (m/s²)", &|r| {
-        e(r.max_err(0.0, ZOOM, |s| s.a[0])
-            .max(r.max_err(0.0, ZOOM, |s| s.a[1])))
-    });
-    row("max |λ − λ_RK4|, t > 0 (N)", &|r| e(r.lambda_err(all)));
-    row("max |λ − λ_RK4|, 0 < t ≤ 2 s (N)", &|r| {
-        e(r.lambda_err(ZOOM))
-    });
-    for hi in [1.0, ZOOM] {
-        row(
-            &format!("max |2-sample mean of λ − RK4 mean|, t ≤ {hi} s (N)"),
-            &|r| {
-                let m = |v: &[Sample], i: usize| mean2(&curve(v, |s| s.lambda[i]));
-                let mut err = 0.0_f64;
-                for i in 0..2 {
-                    // Skip the first mean: it contains the given λ₀.
-                    for (a, b) in m(&r.samples, i).iter().zip(&m(&r.oracle, i)).skip(1) {
-                        if a.0 <= hi {
-                            err = err.max((a.1 - b.1).abs());
-                        }
-                    }
-                }
-                e(err)
-            },
-        );
-    }
-    row("solution lost (|θ − θ_RK4| > 0.1 rad) at t (s)", &|r| {
-        r.samples
-            .iter()
-            .zip(&r.oracle)
-            .find(|(s, o)| (s.u[2] - o.u[2]).abs() > 0.1)
-            .map_or("never".to_string(), |(s, _)| format!("{:.2}", s.t))
-    });
-    row("energy drift max |E − E₀| (J)", &|r| {
-        let e0 = r.samples.first().map_or(0.0, Sample::energy);
-        e(r.samples
-            .iter()
-            .map(|s| (s.energy() - e0).abs())
-            .fold(0.0, f64::max))
-    });
-    row("initial ü₀ = (ẍ, ÿ, θ̈)", &|r| {
-        r.samples.first().map_or(String::new(), |s| {
-            format!("({:.3}, {:.3}, {:.3})", s.a[0], s.a[1], s.a[2])
-        })
-    });
-    row("initial λ₀ (N)", &|r| {
-        r.samples.first().map_or(String::new(), |s| {
-            format!("({:.3}, {:.3})", s.lambda[0], s.lambda[1])
-        })
-    });
-    row("Newton iterations/step, mean", &|r| {
-        format!("{:.2}", iterations(&r.samples).0)
-    });
-    row("Newton iterations/step, max", &|r| {
-        iterations(&r.samples).1.to_string()
-    });
-    row("accepted steps", &|r| {
-        (r.samples.len().saturating_sub(1)).to_string()
-    });
-    row("t reached (s)", &|r| format!("{:.2}", r.t_reached()));
-    row("finished", &|r| {
-        if r.result.is_ok() {
-            "yes"
-        } else {
-            "no, stopped early"
-        }
-        .to_string()
-    });
+    let mut rows = error_rows(runs);
+    rows.extend(mean_lambda_rows(runs));
+    rows.extend(state_rows(runs));
+    rows.extend(run_rows(runs));
+    print_table(runs, &rows);
+    print_stops(runs);
+}
 
+/// The largest errors against the oracle in θ, θ̇, (x, y), (ẋ, ẏ), (ẍ, ÿ) and
+/// λ, over the whole run and over the first [`ZOOM`] seconds.
+fn error_rows(runs: &[&Run]) -> Vec<Row> {
+    let all = f64::INFINITY;
+    vec![
+        row(runs, "max |θ − θ_RK4| (rad)", |r| {
+            sci(r.max_err(-1.0, all, |s| s.u[2]))
+        }),
+        row(runs, "max |θ − θ_RK4|, t ≤ 2 s (rad)", |r| {
+            sci(r.max_err(-1.0, ZOOM, |s| s.u[2]))
+        }),
+        row(runs, "max |θ̇ − θ̇_RK4| (rad/s)", |r| {
+            sci(r.max_err(-1.0, all, |s| s.v[2]))
+        }),
+        row(runs, "max |θ̇ − θ̇_RK4|, t ≤ 2 s (rad/s)", |r| {
+            sci(r.max_err(-1.0, ZOOM, |s| s.v[2]))
+        }),
+        row(runs, "max |(x,y) − RK4| (m)", |r| {
+            sci(r
+                .max_err(-1.0, all, |s| s.u[0])
+                .max(r.max_err(-1.0, all, |s| s.u[1])))
+        }),
+        row(runs, "max |(ẋ,ẏ) − RK4| (m/s)", |r| {
+            sci(r
+                .max_err(-1.0, all, |s| s.v[0])
+                .max(r.max_err(-1.0, all, |s| s.v[1])))
+        }),
+        row(runs, "max |ẍ,ÿ − RK4|, 0 < t ≤ 2 s (m/s²)", |r| {
+            sci(r
+                .max_err(0.0, ZOOM, |s| s.a[0])
+                .max(r.max_err(0.0, ZOOM, |s| s.a[1])))
+        }),
+        row(runs, "max |λ − λ_RK4|, t > 0 (N)", |r| {
+            sci(r.lambda_err(all))
+        }),
+        row(runs, "max |λ − λ_RK4|, 0 < t ≤ 2 s (N)", |r| {
+            sci(r.lambda_err(ZOOM))
+        }),
+    ]
+}
+
+/// The error of the two-sample mean of λ (the paper's filtering) against the
+/// oracle's, up to 1 s and up to [`ZOOM`] s.
+fn mean_lambda_rows(runs: &[&Run]) -> Vec<Row> {
+    [1.0, ZOOM]
+        .into_iter()
+        .map(|hi| {
+            row(
+                runs,
+                &format!("max |2-sample mean of λ − RK4 mean|, t ≤ {hi} s (N)"),
+                |r| sci(mean_lambda_err(r, hi)),
+            )
+        })
+        .collect()
+}
+
+/// Largest `|mean2(λᵢ) − mean2(λᵢ,ref)|` over both multipliers at the
+/// midpoints `t ≤ hi`.
+fn mean_lambda_err(r: &Run, hi: f64) -> f64 {
+    let m = |v: &[Sample], i: usize| mean2(&curve(v, |s| s.lambda[i]));
+    let mut err = 0.0_f64;
+    for i in 0..2 {
+        // Skip the first mean: it contains the given λ₀.
+        for (a, b) in m(&r.samples, i).iter().zip(&m(&r.oracle, i)).skip(1) {
+            if a.0 <= hi {
+                err = err.max((a.1 - b.1).abs());
+            }
+        }
+    }
+    err
+}
+
+/// When the solution is lost, the energy drift, and the start's ü₀ and λ₀.
+fn state_rows(runs: &[&Run]) -> Vec<Row> {
+    vec![
+        row(
+            runs,
+            "solution lost (|θ − θ_RK4| > 0.1 rad) at t (s)",
+            |r| {
+                r.samples
+                    .iter()
+                    .zip(&r.oracle)
+                    .find(|(s, o)| (s.u[2] - o.u[2]).abs() > 0.1)
+                    .map_or("never".to_string(), |(s, _)| format!("{:.2}", s.t))
+            },
+        ),
+        row(runs, "energy drift max |E − E₀| (J)", |r| {
+            let e0 = r.samples.first().map_or(0.0, Sample::energy);
+            sci(r
+                .samples
+                .iter()
+                .map(|s| (s.energy() - e0).abs())
+                .fold(0.0, f64::max))
+        }),
+        row(runs, "initial ü₀ = (ẍ, ÿ, θ̈)", |r| {
+            r.samples.first().map_or(String::new(), |s| {
+                format!("({:.3}, {:.3}, {:.3})", s.a[0], s.a[1], s.a[2])
+            })
+        }),
+        row(runs, "initial λ₀ (N)", |r| {
+            r.samples.first().map_or(String::new(), |s| {
+                format!("({:.3}, {:.3})", s.lambda[0], s.lambda[1])
+            })
+        }),
+    ]
+}
+
+/// The Newton iterations, the accepted steps, how far each run got and
+/// whether it finished.
+fn run_rows(runs: &[&Run]) -> Vec<Row> {
+    vec![
+        row(runs, "Newton iterations/step, mean", |r| {
+            format!("{:.2}", iterations(&r.samples).0)
+        }),
+        row(runs, "Newton iterations/step, max", |r| {
+            iterations(&r.samples).1.to_string()
+        }),
+        row(runs, "accepted steps", |r| {
+            (r.samples.len().saturating_sub(1)).to_string()
+        }),
+        row(runs, "t reached (s)", |r| format!("{:.2}", r.t_reached())),
+        row(runs, "finished", |r| {
+            if r.result.is_ok() {
+                "yes"
+            } else {
+                "no, stopped early"
+            }
+            .to_string()
+        }),
+    ]
+}
+
+/// Prints the title and the rows as a plain-text table, one padded column per
+/// run headed by its name.
+fn print_table(runs: &[&Run], rows: &[Row]) {
     let w0 = rows.iter().map(|(l, _)| width(l)).max().unwrap_or(0);
     let widths: Vec<usize> = (0..runs.len())
         .map(|j| {
@@ -556,7 +704,7 @@ fn print_summary(runs: &[&Run]) {
     println!();
     println!("{}", line.trim_end());
     println!("{}", "-".repeat(width(&line)));
-    for (label, cells) in &rows {
+    for (label, cells) in rows {
         let mut line = pad(label, w0);
         for (c, w) in cells.iter().zip(&widths) {
             line.push_str(" | ");
@@ -564,6 +712,10 @@ fn print_summary(runs: &[&Run]) {
         }
         println!("{}", line.trim_end());
     }
+}
+
+/// Prints why each run that stopped early stopped (a result, not a failure).
+fn print_stops(runs: &[&Run]) {
     for r in runs {
         if let Err(err) = &r.result {
             println!();

@@ -12,6 +12,7 @@
 //! iteration matrix with and without scaling (`docs/stability.md`).
 
 use std::f64::consts::FRAC_PI_2;
+use std::path::Path;
 
 use anyhow::{Context as _, Result};
 use mstar::analysis::{fitted_order, nyquist_amplitude};
@@ -169,7 +170,75 @@ fn lambda_error_curve(case: &Case, every: usize) -> Vec<(f64, f64)> {
 pub fn run() -> Result<()> {
     let out = crate::study_dir(STUDY)?;
     let mut figures = Vec::new();
-    let mut table = Table::new(
+    let mut table = summary_table();
+    let mut stops = Vec::new();
+    for p in problems() {
+        let cases: Vec<Case> = configs(&p.lambda0)
+            .into_iter()
+            .map(|(name, config)| Case::run(name, &p.sys, config, &p.init, T_END, 1, true))
+            .collect();
+        let amps: Vec<Amplitudes> = cases.iter().map(Amplitudes::new).collect();
+        for (c, a) in cases.iter().zip(&amps) {
+            table.row(summary_row(&p, c, a));
+            if c.result.is_err() {
+                stops.push(format!("{} / {}: {}", p.label, c.name, c.outcome()));
+            }
+        }
+        write_nyquist_csv(&out, &p, &cases, &amps)?;
+        for c in &cases {
+            let file = format!("{}_{}.csv", p.key, crate::common::slug(&c.name));
+            mstar::csv::write_csv(&out.join(&file), &p.sys, &c.samples)
+                .with_context(|| format!("could not write {file}"))?;
+        }
+        figures.push((
+            format!("{}_nyquist.png", p.key),
+            nyquist_panels(&p, &cases, &amps),
+        ));
+        figures.push((
+            format!("{}_energy_lambda.png", p.key),
+            energy_lambda_panels(&p, &cases),
+        ));
+    }
+    table.print();
+    table.write_csv(&out.join("summary.csv"))?;
+    for s in &stops {
+        println!("{s}");
+    }
+    println!();
+    print_side_tables(&out)?;
+    draw_figures(STUDY, &out, &figures)?;
+    Ok(())
+}
+
+/// The period-2h amplitudes of one run's errors per 1-s window
+/// ([`amplitude_per_second`]): `(end of window, amplitude)`.
+struct Amplitudes {
+    /// A₂ of `λ − λ_ref`.
+    lambda2: Vec<(f64, f64)>,
+    /// A₄ of `λ − λ_ref`.
+    lambda4: Vec<(f64, f64)>,
+    /// A₂ of `ü − ü_ref`.
+    a2: Vec<(f64, f64)>,
+    /// A₄ of `ü − ü_ref`.
+    a4: Vec<(f64, f64)>,
+}
+
+impl Amplitudes {
+    /// Measures the four amplitudes of `case` (once: the table, the CSV and
+    /// the figures share them).
+    fn new(case: &Case) -> Self {
+        Self {
+            lambda2: amplitude_per_second(case, Filter::Second, |s| &s.lambda),
+            lambda4: amplitude_per_second(case, Filter::Fourth, |s| &s.lambda),
+            a2: amplitude_per_second(case, Filter::Second, |s| &s.a),
+            a4: amplitude_per_second(case, Filter::Fourth, |s| &s.a),
+        }
+    }
+}
+
+/// The empty summary table, one row per problem and run to come.
+fn summary_table() -> Table {
+    Table::new(
         format!("Stability over {T_END} s, h = {H} (cargo xtask stability)"),
         &[
             "problem",
@@ -187,134 +256,144 @@ pub fn run() -> Result<()> {
             "θ off by 0.1 at t",
             "t reached",
         ],
-    );
-    let mut stops = Vec::new();
-    for p in problems() {
-        let cases: Vec<Case> = configs(&p.lambda0)
-            .into_iter()
-            .map(|(name, config)| Case::run(name, &p.sys, config, &p.init, T_END, 1, true))
-            .collect();
-        let window = "end of window t (s)";
-        let log = |title: String, x: &str, y: &str, legend| {
-            Panel::new(format!("{}: {title}", p.label), x, y)
-                .scale(Scale::LogY)
-                .legend(legend)
-        };
-        let upper = Legend::UpperRight;
-        let mut amp_l2 = log(
-            "A₂ = nyquist_amplitude(λ − λ_RK4) per 1-s window".into(),
-            window,
-            "amplitude (N)",
-            upper,
-        );
-        let mut amp_l = log(
-            "period-2h amplitude A₄ of λ − λ_RK4 per 1-s window".into(),
-            window,
-            "amplitude (N)",
-            upper,
-        );
-        let mut amp_a = log(
-            "period-2h amplitude A₄ of ü − ü_RK4 per 1-s window".into(),
-            window,
-            "amplitude (m/s², rad/s²)",
-            upper,
-        );
-        let mut energy = log(
-            "energy error |E − E₀|".into(),
-            "t (s)",
-            "|E − E₀| (J)",
-            Legend::LowerRight,
-        );
-        let mut lam = log(
-            "multiplier error ‖λ − λ_RK4‖∞".into(),
-            "t (s)",
-            "error (N)",
-            Legend::LowerRight,
-        );
-        let mut columns: Vec<Vec<f64>> = (1..=T_END as usize).map(|k| vec![k as f64]).collect();
-        let mut header = vec!["t_end_of_window".to_string()];
-        for (k, c) in cases.iter().enumerate() {
-            let nl2 = amplitude_per_second(c, Filter::Second, |s| &s.lambda);
-            let nl = amplitude_per_second(c, Filter::Fourth, |s| &s.lambda);
-            let na2 = amplitude_per_second(c, Filter::Second, |s| &s.a);
-            let na = amplitude_per_second(c, Filter::Fourth, |s| &s.a);
-            for (curve, what) in [
-                (&nl2, "A2_lambda"),
-                (&nl, "A4_lambda"),
-                (&na2, "A2_a"),
-                (&na, "A4_a"),
-            ] {
-                header.push(format!("{}:{what}", crate::common::slug(&c.name)));
-                for (j, row) in columns.iter_mut().enumerate() {
-                    row.push(curve.get(j).map_or(f64::NAN, |p| p.1));
-                }
-            }
-            let style = Style::solid(color(k));
-            let first = |v: &[(f64, f64)]| v.first().map_or(f64::NAN, |p| p.1);
-            let last = |v: &[(f64, f64)]| v.last().map_or(f64::NAN, |p| p.1);
-            let max_de = c
-                .energy_error()
-                .iter()
-                .map(|p| p.1.abs())
-                .fold(0.0, f64::max);
-            table.row(vec![
-                p.label.to_string(),
-                c.name.clone(),
-                sci(c.max_err(0.0, 1.0, |s| &s.lambda)),
-                sci(c.max_err(0.0, 10.0, |s| &s.lambda)),
-                sci(c.max_err(0.0, 100.0, |s| &s.lambda)),
-                sci(first(&nl2)),
-                sci(last(&nl2)),
-                sci(first(&nl)),
-                sci(last(&nl)),
-                sci(first(&na)),
-                sci(last(&na)),
-                sci(max_de),
-                lost_at(c),
-                format!("{:.2}", c.t_reached()),
-            ]);
-            if c.result.is_err() {
-                stops.push(format!("{} / {}: {}", p.label, c.name, c.outcome()));
-            }
-            amp_l.series.push(Series::new(c.name.clone(), nl, style));
-            amp_l2.series.push(Series::new(c.name.clone(), nl2, style));
-            amp_a.series.push(Series::new(c.name.clone(), na, style));
-            let de: Vec<(f64, f64)> = c
-                .energy_error()
-                .into_iter()
-                .step_by(10)
-                .map(|(t, e)| (t, e.abs()))
-                .collect();
-            energy
-                .series
-                .push(Series::new(c.name.clone(), de, style.width(1)));
-            lam.series.push(Series::new(
-                c.name.clone(),
-                lambda_error_curve(c, 10),
-                style.width(1),
-            ));
-        }
-        let header: Vec<&str> = header.iter().map(String::as_str).collect();
-        write_columns(
-            &out.join(format!("{}_nyquist.csv", p.key)),
-            &header,
-            &columns,
-        )?;
-        for c in &cases {
-            let file = format!("{}_{}.csv", p.key, crate::common::slug(&c.name));
-            mstar::csv::write_csv(&out.join(&file), &p.sys, &c.samples)
-                .with_context(|| format!("could not write {file}"))?;
-        }
-        figures.push((format!("{}_nyquist.png", p.key), vec![amp_l, amp_a, amp_l2]));
-        figures.push((format!("{}_energy_lambda.png", p.key), vec![lam, energy]));
-    }
-    table.print();
-    table.write_csv(&out.join("summary.csv"))?;
-    for s in &stops {
-        println!("{s}");
-    }
-    println!();
+    )
+}
 
+/// One run's summary row: λ errors in growing windows, the amplitudes in the
+/// first and last window, the energy error and where the run got to.
+fn summary_row(p: &Problem, c: &Case, amps: &Amplitudes) -> Vec<String> {
+    let first = |v: &[(f64, f64)]| v.first().map_or(f64::NAN, |p| p.1);
+    let last = |v: &[(f64, f64)]| v.last().map_or(f64::NAN, |p| p.1);
+    let max_de = c
+        .energy_error()
+        .iter()
+        .map(|p| p.1.abs())
+        .fold(0.0, f64::max);
+    vec![
+        p.label.to_string(),
+        c.name.clone(),
+        sci(c.max_err(0.0, 1.0, |s| &s.lambda)),
+        sci(c.max_err(0.0, 10.0, |s| &s.lambda)),
+        sci(c.max_err(0.0, 100.0, |s| &s.lambda)),
+        sci(first(&amps.lambda2)),
+        sci(last(&amps.lambda2)),
+        sci(first(&amps.lambda4)),
+        sci(last(&amps.lambda4)),
+        sci(first(&amps.a4)),
+        sci(last(&amps.a4)),
+        sci(max_de),
+        lost_at(c),
+        format!("{:.2}", c.t_reached()),
+    ]
+}
+
+/// Writes `<problem>_nyquist.csv`: per 1-s window, the four amplitudes of
+/// every run (NaN after a run stopped).
+fn write_nyquist_csv(out: &Path, p: &Problem, cases: &[Case], amps: &[Amplitudes]) -> Result<()> {
+    let mut columns: Vec<Vec<f64>> = (1..=T_END as usize).map(|k| vec![k as f64]).collect();
+    let mut header = vec!["t_end_of_window".to_string()];
+    for (c, a) in cases.iter().zip(amps) {
+        for (curve, what) in [
+            (&a.lambda2, "A2_lambda"),
+            (&a.lambda4, "A4_lambda"),
+            (&a.a2, "A2_a"),
+            (&a.a4, "A4_a"),
+        ] {
+            header.push(format!("{}:{what}", crate::common::slug(&c.name)));
+            for (j, row) in columns.iter_mut().enumerate() {
+                row.push(curve.get(j).map_or(f64::NAN, |p| p.1));
+            }
+        }
+    }
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    write_columns(
+        &out.join(format!("{}_nyquist.csv", p.key)),
+        &header,
+        &columns,
+    )
+}
+
+/// A log-y panel titled after the problem.
+fn log_panel(p: &Problem, title: &str, x: &str, y: &str, legend: Legend) -> Panel {
+    Panel::new(format!("{}: {title}", p.label), x, y)
+        .scale(Scale::LogY)
+        .legend(legend)
+}
+
+/// The amplitude figure's panels: A₄ of Δλ, A₄ of Δü and A₂ of Δλ per 1-s
+/// window, one series per run.
+fn nyquist_panels(p: &Problem, cases: &[Case], amps: &[Amplitudes]) -> Vec<Panel> {
+    let window = "end of window t (s)";
+    let upper = Legend::UpperRight;
+    let mut amp_l2 = log_panel(
+        p,
+        "A₂ = nyquist_amplitude(λ − λ_RK4) per 1-s window",
+        window,
+        "amplitude (N)",
+        upper,
+    );
+    let mut amp_l = log_panel(
+        p,
+        "period-2h amplitude A₄ of λ − λ_RK4 per 1-s window",
+        window,
+        "amplitude (N)",
+        upper,
+    );
+    let mut amp_a = log_panel(
+        p,
+        "period-2h amplitude A₄ of ü − ü_RK4 per 1-s window",
+        window,
+        "amplitude (m/s², rad/s²)",
+        upper,
+    );
+    for (k, (c, a)) in cases.iter().zip(amps).enumerate() {
+        let style = Style::solid(color(k));
+        let series = |points: &Vec<(f64, f64)>| Series::new(c.name.clone(), points.clone(), style);
+        amp_l.series.push(series(&a.lambda4));
+        amp_l2.series.push(series(&a.lambda2));
+        amp_a.series.push(series(&a.a4));
+    }
+    vec![amp_l, amp_a, amp_l2]
+}
+
+/// The error figure's panels: ‖λ − λ_ref‖∞ and |E − E₀| against t, every
+/// tenth sample, one series per run.
+fn energy_lambda_panels(p: &Problem, cases: &[Case]) -> Vec<Panel> {
+    let mut energy = log_panel(
+        p,
+        "energy error |E − E₀|",
+        "t (s)",
+        "|E − E₀| (J)",
+        Legend::LowerRight,
+    );
+    let mut lam = log_panel(
+        p,
+        "multiplier error ‖λ − λ_RK4‖∞",
+        "t (s)",
+        "error (N)",
+        Legend::LowerRight,
+    );
+    for (k, c) in cases.iter().enumerate() {
+        let style = Style::solid(color(k)).width(1);
+        let de: Vec<(f64, f64)> = c
+            .energy_error()
+            .into_iter()
+            .step_by(10)
+            .map(|(t, e)| (t, e.abs()))
+            .collect();
+        energy.series.push(Series::new(c.name.clone(), de, style));
+        lam.series.push(Series::new(
+            c.name.clone(),
+            lambda_error_curve(c, 10),
+            style,
+        ));
+    }
+    vec![lam, energy]
+}
+
+/// Prints and writes the three tables beside the runs: the trapezoidal
+/// growth, the start correction and the conditioning.
+fn print_side_tables(out: &Path) -> Result<()> {
     let growth = growth_table();
     growth.print();
     growth.write_csv(&out.join("trapezoidal_growth.csv"))?;
@@ -324,7 +403,6 @@ pub fn run() -> Result<()> {
     let cond = condition_table()?;
     cond.print();
     cond.write_csv(&out.join("condition.csv"))?;
-    draw_figures(STUDY, &out, &figures)?;
     Ok(())
 }
 

@@ -135,6 +135,18 @@ impl KktOptions {
     /// refuses a structure whose `S` is not block-diagonal with small blocks,
     /// LDLᵀ one that is not symmetric; a caller that knows its matrix is not
     /// symmetric skips both), else sparse LU.
+    ///
+    /// ```
+    /// use mstar_kkt::{Backend, KktOptions};
+    ///
+    /// let auto = KktOptions::default();
+    /// assert_eq!(auto.candidates(20), [Backend::DENSE]);
+    /// assert_eq!(auto.candidates(50), [Backend::SPARSE_LU]);
+    /// let kkt = KktOptions { n_primal: Some(30), ..auto };
+    /// assert_eq!(kkt.candidates(50), [Backend::SCHUR, Backend::SPARSE_LDLT, Backend::SPARSE_LU]);
+    /// let chosen = KktOptions { backend: Backend::SPARSE_LDLT, ..kkt };
+    /// assert_eq!(chosen.candidates(50), [Backend::SPARSE_LDLT]);
+    /// ```
     #[must_use]
     pub fn candidates(&self, dim: usize) -> Vec<Backend> {
         if self.backend != Backend::AUTO {

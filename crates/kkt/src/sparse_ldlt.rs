@@ -416,22 +416,38 @@ pub(crate) fn kkt_ordering(
             "n_primal = {n_primal} exceeds the dimension {n}"
         )));
     }
-    let np = n_primal;
-    // Primal rows of column c (sorted): for a multiplier, its constraint row.
-    let primal_rows = |c: usize| {
-        let col = &a.row_idx[a.col_ptr[c]..a.col_ptr[c + 1]];
-        &col[..col.partition_point(|&i| i < np)]
-    };
-    for c in np..n {
-        if primal_rows(c).is_empty() {
+    for c in n_primal..n {
+        if primal_rows(a, n_primal, c).is_empty() {
             return Err(KktError::Structure(format!(
                 "constraint {} (unknown {c}) touches no primal unknown",
-                c - np
+                c - n_primal
             )));
         }
     }
-    let dense = (control.dense * (np as f64).sqrt()).max(16.0);
+    let (p_fwd, p_inv) = primal_order(a, n_primal, control)?;
+    let fwd = with_multipliers(a, n_primal, &p_fwd, &p_inv);
+    let mut inv = vec![0usize; n];
+    for (k, &u) in fwd.iter().enumerate() {
+        inv[u] = k;
+    }
+    Ok((fwd, inv))
+}
 
+/// The primal rows of column `c` (sorted): for a multiplier, its
+/// constraint row.
+fn primal_rows(a: &Csc, n_primal: usize, c: usize) -> &[usize] {
+    let col = a.column(c);
+    &col[..col.partition_point(|&i| i < n_primal)]
+}
+
+/// AMD on the pattern of `S + BᵀB`; returns the forward and inverse
+/// permutations of the primal unknowns.
+fn primal_order(
+    a: &Csc,
+    np: usize,
+    control: amd::Control,
+) -> Result<(Vec<usize>, Vec<usize>), KktError> {
+    let dense = (control.dense * (np as f64).sqrt()).max(16.0);
     // Pattern of S + BᵀB, sorted columns.
     let mut col_ptr = Vec::with_capacity(np + 1);
     let mut row_idx = Vec::new();
@@ -445,12 +461,11 @@ pub(crate) fn kkt_ordering(
                 row_idx.push(i);
             }
         };
-        let col = &a.row_idx[a.col_ptr[j]..a.col_ptr[j + 1]];
-        for &i in col {
+        for &i in a.column(j) {
             if i < np {
                 push(i, &mut row_idx);
             } else {
-                let rows = primal_rows(i);
+                let rows = primal_rows(a, np, i);
                 if (rows.len() as f64) <= dense {
                     for &r in rows {
                         push(r, &mut row_idx);
@@ -470,12 +485,22 @@ pub(crate) fn kkt_ordering(
         amd::order(&mut p_fwd, &mut p_inv, g, control, MemStack::new(&mut mem))
             .map_err(|e| KktError::Backend(format!("AMD ordering failed: {e:?}")))?;
     }
+    Ok((p_fwd, p_inv))
+}
 
+/// The whole elimination order: the primal unknowns in the order `p_fwd`,
+/// each multiplier right after the last primal unknown its row touches.
+fn with_multipliers(a: &Csc, np: usize, p_fwd: &[usize], p_inv: &[usize]) -> Vec<usize> {
+    let n = a.n;
     // Bucket the multipliers by the position of the last primal they touch.
     let mut count = vec![0usize; np + 1];
     let mut last = vec![0usize; n - np];
     for c in np..n {
-        let l = primal_rows(c).iter().map(|&r| p_inv[r]).max().unwrap_or(0);
+        let l = primal_rows(a, np, c)
+            .iter()
+            .map(|&r| p_inv[r])
+            .max()
+            .unwrap_or(0);
         last[c - np] = l;
         count[l + 1] += 1;
     }
@@ -485,23 +510,17 @@ pub(crate) fn kkt_ordering(
     // count[k] = number of multipliers placed before primal position k + 1's
     // bucket; fill buckets in multiplier order.
     let mut bucket = vec![0usize; n - np];
-    {
-        let mut next = count.clone();
-        for (i, &l) in last.iter().enumerate() {
-            bucket[next[l]] = np + i;
-            next[l] += 1;
-        }
+    let mut next = count.clone();
+    for (i, &l) in last.iter().enumerate() {
+        bucket[next[l]] = np + i;
+        next[l] += 1;
     }
     let mut fwd = Vec::with_capacity(n);
     for k in 0..np {
         fwd.push(p_fwd[k]);
         fwd.extend_from_slice(&bucket[count[k]..count[k + 1]]);
     }
-    let mut inv = vec![0usize; n];
-    for (k, &u) in fwd.iter().enumerate() {
-        inv[u] = k;
-    }
-    Ok((fwd, inv))
+    fwd
 }
 
 #[cfg(test)]

@@ -205,14 +205,8 @@ fn each_corruption_is_caught(inner: &dyn System, u: &[f64], targets: &[Target]) 
         for how in [How::Nan, How::WrongSign] {
             let sys = Corrupt { inner, target, how };
             let e = check_derivatives(&sys, 0.3, u, &v, &a, &lambda);
-            assert!(
-                fails(field(&e, target)),
-                "{target:?} {how:?} passed: {e:?}"
-            );
-            assert!(
-                fails(e.max()),
-                "{target:?} {how:?} passed max(): {e:?}"
-            );
+            assert!(fails(field(&e, target)), "{target:?} {how:?} passed: {e:?}");
+            assert!(fails(e.max()), "{target:?} {how:?} passed max(): {e:?}");
         }
     }
 }

@@ -101,7 +101,7 @@ enum NewtonArg {
 /// The `--kkt` values: `auto` and every registered backend, with its summary.
 fn kkt_values() -> clap::builder::PossibleValuesParser {
     let auto = clap::builder::PossibleValue::new("auto")
-        .help("chosen from the size and structure (the default, see --kkt)");
+        .help("chosen from the size and structure (the default, above)");
     clap::builder::PossibleValuesParser::new(
         std::iter::once(auto).chain(
             mstar::kkt::backends()
@@ -144,8 +144,9 @@ struct IntegratorArgs {
     /// Newton variant [default: modified; paper: full].
     #[arg(long, value_enum)]
     newton: Option<NewtonArg>,
-    /// KKT solver [default: auto: dense up to 24 unknowns, else Schur when the
-    /// bodies interact only through constraints and have mass, else LDLᵀ].
+    /// KKT solver [default: auto: dense LU up to 24 unknowns; above, Schur when
+    /// the bodies interact only through constraints, have mass and symmetric
+    /// force Jacobians, else LDLᵀ, else (unsymmetric) sparse LU].
     #[arg(long, value_parser = kkt_values())]
     kkt: Option<String>,
     /// Relative Newton tolerance on ‖r‖ and ‖Φ‖ [default: 1e-10].
@@ -607,16 +608,20 @@ impl Observer for Progress {
     }
 }
 
+/// `max |x|`, NaN-aware: a summary never reports a NaN as small.
+fn largest(values: impl Iterator<Item = f64>) -> f64 {
+    let mut m = mstar::kkt::MaxAbs::new();
+    values.for_each(|x| m.push(x));
+    m.value()
+}
+
 fn summary(samples: &[Sample]) {
     let (Some(first), Some(last)) = (samples.first(), samples.last()) else {
         return;
     };
     let e0 = first.energy();
-    let drift = samples
-        .iter()
-        .map(|s| (s.energy() - e0).abs())
-        .fold(0.0, f64::max);
-    let phi = samples.iter().map(|s| s.constraint).fold(0.0, f64::max);
+    let drift = largest(samples.iter().map(|s| s.energy() - e0));
+    let phi = largest(samples.iter().map(|s| s.constraint));
     println!(
         "t reached: {} s; θ = {:.9} rad, θ̇ = {:.9} rad/s, λ = [{:.6}, {:.6}]",
         last.t, last.u[2], last.v[2], last.lambda[0], last.lambda[1]
@@ -637,14 +642,12 @@ fn summary(samples: &[Sample]) {
                 })
                 .fold(0.0, f64::max)
         };
+        // (The amplitudes of finite samples: a NaN would have stopped the run.)
         let (early, late) = (
             amplitude(&samples[..per_second]),
             amplitude(&samples[samples.len() - per_second..]),
         );
-        let scale = samples
-            .iter()
-            .flat_map(|s| s.lambda.iter())
-            .fold(0.0f64, |m, x| m.max(x.abs()));
+        let scale = largest(samples.iter().flat_map(|s| s.lambda.iter().copied()));
         if late > 10.0 * early && late > 1e-3 * scale {
             println!(
                 "warning: the period-2h oscillation of λ grew from {early:.3e} in the first second to {late:.3e} in the last: \
@@ -671,6 +674,28 @@ mod tests {
         match cli.command {
             Command::Chain(a) => chain_config(&a),
             Command::Pendulum(_) => bail!("not a chain command"),
+        }
+    }
+
+    /// The help describes the program's options, not library items, and
+    /// offers every registered KKT backend with its summary.
+    #[test]
+    fn help_speaks_of_options_and_lists_every_backend() {
+        use clap::CommandFactory;
+        let mut cli = Cli::command();
+        for sub in ["pendulum", "chain"] {
+            let help = cli
+                .find_subcommand_mut(sub)
+                .map(|c| c.render_long_help().to_string())
+                .unwrap_or_default();
+            assert!(help.contains("--kkt"), "{sub}: {help}");
+            assert!(
+                !help.contains("library") && !help.contains("Newton::"),
+                "{sub}: {help}"
+            );
+            for r in mstar::kkt::backends() {
+                assert!(help.contains(r.summary), "{sub}: {}", r.backend);
+            }
         }
     }
 

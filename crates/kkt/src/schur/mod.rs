@@ -129,7 +129,7 @@ pub(crate) struct Schur {
     /// The `B` entries of the KKT matrix by primal column (column `j`'s are
     /// `b_col_ptr[j]..b_col_ptr[j + 1]`): the position of the row in C's
     /// order, and the position in the KKT values. Apart and on 32 bits: the
-    /// solve reads the rows only, and at 10⁵ bodies it streams them from memory.
+    /// solve reads the rows only, and on a long chain it streams them from memory.
     b_col_ptr: Vec<u32>,
     b_rows: Vec<u32>,
     b_pos: Vec<u32>,

@@ -56,6 +56,76 @@ fn theta_slot(slots: &Slots, side: usize) -> Option<usize> {
     (0..slots.len()).find(|&a| slots.side[a] == side && slots.kind[a] == Kind::Theta)
 }
 
+/// A constraint element's local patterns, built row group by row group.
+#[derive(Default)]
+struct LocalPatterns {
+    grad: Vec<(usize, usize)>,
+    hess: Vec<(usize, usize, usize)>,
+}
+
+impl LocalPatterns {
+    /// Rows `0, 1` of `p_A − p_B`: `±1` on the matching `x`/`y`, `±∂p/∂θ` on
+    /// each angle, whose second derivative is the only one.
+    fn revolute(&mut self, slots: &Slots) {
+        for k in 0..2 {
+            for a in 0..slots.len() {
+                let on = match slots.kind[a] {
+                    Kind::X => k == 0,
+                    Kind::Y => k == 1,
+                    Kind::Theta => true,
+                };
+                if on {
+                    self.grad.push((k, a));
+                }
+                if slots.kind[a] == Kind::Theta {
+                    self.hess.push((k, a, a));
+                }
+            }
+        }
+    }
+
+    /// Row `row` of `θ_B − θ_A − angle`: one entry per rigid side.
+    fn angle_row(&mut self, slots: &Slots, row: usize) {
+        for side in 0..2 {
+            if let Some(a) = theta_slot(slots, side) {
+                self.grad.push((row, a));
+            }
+        }
+    }
+
+    /// The one row of `½(|p_A − p_B|² − L²)`: every slot, and the Hessian's
+    /// products of `∂d/∂q` (no `x`·`y` pairs) and its `θθ` diagonal.
+    fn distance(&mut self, slots: &Slots) {
+        let n = slots.len();
+        for a in 0..n {
+            self.grad.push((0, a));
+            for b in 0..n {
+                let theta_diag = a == b && slots.kind[a] == Kind::Theta;
+                if slots.couples(a, b) || theta_diag {
+                    self.hess.push((0, a, b));
+                }
+            }
+        }
+    }
+
+    /// The line row of a prismatic joint, `n_A · (p_B − p_A)`: every slot,
+    /// the Hessian on `θ_A`'s row and column and on `θ_B`'s diagonal.
+    fn line(&mut self, slots: &Slots) {
+        let (ta, tb) = (theta_slot(slots, 0), theta_slot(slots, 1));
+        let n = slots.len();
+        for a in 0..n {
+            self.grad.push((0, a));
+            for b in 0..n {
+                let with_ta = Some(a) == ta || Some(b) == ta;
+                let tb_diag = a == b && Some(a) == tb;
+                if with_ta || tb_diag {
+                    self.hess.push((0, a, b));
+                }
+            }
+        }
+    }
+}
+
 impl Constraint {
     /// Builds the element and its local patterns.
     pub(crate) fn new(name: String, joint: Joint, anchors: [Anchor; 2], row0: usize) -> Self {
@@ -72,78 +142,33 @@ impl Constraint {
         } else {
             Slots::of(&anchors)
         };
-        let n = slots.len();
-        let mut grad = Vec::new();
-        let mut hess = Vec::new();
-        let revolute = |grad: &mut Vec<(usize, usize)>, hess: &mut Vec<(usize, usize, usize)>| {
-            for k in 0..2 {
-                for a in 0..n {
-                    let on = match slots.kind[a] {
-                        Kind::X => k == 0,
-                        Kind::Y => k == 1,
-                        Kind::Theta => true,
-                    };
-                    if on {
-                        grad.push((k, a));
-                    }
-                    if slots.kind[a] == Kind::Theta {
-                        hess.push((k, a, a));
-                    }
-                }
-            }
-        };
-        let (ta, tb) = (theta_slot(&slots, 0), theta_slot(&slots, 1));
-        let angle_row = |row: usize, grad: &mut Vec<(usize, usize)>| {
-            if let Some(a) = ta {
-                grad.push((row, a));
-            }
-            if let Some(b) = tb {
-                grad.push((row, b));
-            }
-        };
-        let (rows, row_names): (usize, Vec<&'static str>) = match &joint {
+        let mut p = LocalPatterns::default();
+        let row_names: Vec<&'static str> = match &joint {
             Joint::Revolute => {
-                revolute(&mut grad, &mut hess);
-                (2, vec![".x", ".y"])
+                p.revolute(&slots);
+                vec![".x", ".y"]
             }
             Joint::Weld { .. } => {
-                revolute(&mut grad, &mut hess);
-                angle_row(2, &mut grad);
-                (3, vec![".x", ".y", ".theta"])
+                p.revolute(&slots);
+                p.angle_row(&slots, 2);
+                vec![".x", ".y", ".theta"]
             }
             Joint::Distance { .. } => {
-                for a in 0..n {
-                    grad.push((0, a));
-                    for b in 0..n {
-                        let theta_diag = a == b && slots.kind[a] == Kind::Theta;
-                        if slots.couples(a, b) || theta_diag {
-                            hess.push((0, a, b));
-                        }
-                    }
-                }
-                (1, vec![""])
+                p.distance(&slots);
+                vec![""]
+            }
+            Joint::Prismatic { .. } if theta_slot(&slots, 1).is_some() => {
+                p.line(&slots);
+                p.angle_row(&slots, 1);
+                vec![".line", ".theta"]
             }
             Joint::Prismatic { .. } => {
-                for a in 0..n {
-                    grad.push((0, a));
-                    for b in 0..n {
-                        let with_ta = Some(a) == ta || Some(b) == ta;
-                        let tb_diag = a == b && Some(a) == tb;
-                        if with_ta || tb_diag {
-                            hess.push((0, a, b));
-                        }
-                    }
-                }
-                if tb.is_some() {
-                    angle_row(1, &mut grad);
-                    (2, vec![".line", ".theta"])
-                } else {
-                    (1, vec![".line"])
-                }
+                p.line(&slots);
+                vec![".line"]
             }
             Joint::Driver { .. } => {
-                grad.push((0, 0));
-                (1, vec![""])
+                p.grad.push((0, 0));
+                vec![""]
             }
         };
         Self {
@@ -151,10 +176,10 @@ impl Constraint {
             joint,
             anchors,
             slots,
-            rows,
+            rows: row_names.len(),
             row0,
-            grad,
-            hess,
+            grad: p.grad,
+            hess: p.hess,
             row_names,
         }
     }

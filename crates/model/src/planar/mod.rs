@@ -306,6 +306,35 @@ impl PlanarBuilder {
     /// non-finite values, a zero prismatic axis, a non-positive rod length, a
     /// driver of `θ` on a point mass, or an element attached to the ground twice.
     pub fn build(&self) -> Result<PlanarSystem, ModelError> {
+        self.check_names()?;
+        self.check_bodies()?;
+        let mut constraints = Vec::new();
+        let mut row = 0;
+        for (name, joint, [a, b]) in &self.joints {
+            let c = Constraint::new(
+                name.clone(),
+                joint.clone(),
+                self.joint_anchors(name, joint, [*a, *b])?,
+                row,
+            );
+            row += c.rows;
+            constraints.push(c);
+        }
+        for (name, body, coordinate, f) in &self.drivers {
+            let c = self.driver_constraint(name, *body, *coordinate, f, row)?;
+            row += c.rows;
+            constraints.push(c);
+        }
+        let forces = self
+            .forces
+            .iter()
+            .map(|(name, load, [a, b])| self.force_element(name, load, [*a, *b]))
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(PlanarSystem::assemble(self, constraints, forces, row))
+    }
+
+    /// Every body and element has its own name.
+    fn check_names(&self) -> Result<(), ModelError> {
         let mut names = std::collections::HashSet::new();
         let all_names = self
             .bodies
@@ -319,6 +348,11 @@ impl PlanarBuilder {
                 return Err(ModelError::DuplicateName(name.clone()));
             }
         }
+        Ok(())
+    }
+
+    /// Positive masses and inertias, finite poses and velocities.
+    fn check_bodies(&self) -> Result<(), ModelError> {
         for b in &self.bodies {
             let invalid = |what: &str| ModelError::Invalid {
                 element: b.name.clone(),
@@ -336,82 +370,92 @@ impl PlanarBuilder {
                 return Err(invalid("the initial pose and velocity must be finite"));
             }
         }
-        let mut constraints = Vec::new();
-        let mut row = 0;
-        for (name, joint, [a, b]) in &self.joints {
-            let invalid = |what: &str| ModelError::Invalid {
-                element: name.clone(),
-                what: what.to_string(),
-            };
-            let anchors = [self.anchor(name, *a)?, self.anchor(name, *b)?];
-            if matches!(anchors, [Anchor::Ground(_), Anchor::Ground(_)]) {
-                return Err(invalid("both ends are on the ground"));
-            }
-            match joint {
-                Joint::Distance { length } if !(*length > 0.0 && length.is_finite()) => {
-                    return Err(invalid("the rod length must be positive"));
-                }
-                Joint::Prismatic { normal, .. } if !normal.iter().all(|x| x.is_finite()) => {
-                    return Err(invalid("the prismatic axis must be a non-zero vector"));
-                }
-                Joint::Prismatic { .. } if matches!(anchors[1], Anchor::Ground(_)) => {
-                    return Err(invalid("the sliding side (b) must be a body"));
-                }
-                _ => {}
-            }
-            let c = Constraint::new(name.clone(), joint.clone(), anchors, row);
-            row += c.rows;
-            constraints.push(c);
+        Ok(())
+    }
+
+    /// A joint's anchors, checked with its parameters.
+    fn joint_anchors(
+        &self,
+        name: &str,
+        joint: &Joint,
+        at: [At; 2],
+    ) -> Result<[Anchor; 2], ModelError> {
+        let invalid = |what: &str| ModelError::Invalid {
+            element: name.to_string(),
+            what: what.to_string(),
+        };
+        let anchors = [self.anchor(name, at[0])?, self.anchor(name, at[1])?];
+        if matches!(anchors, [Anchor::Ground(_), Anchor::Ground(_)]) {
+            return Err(invalid("both ends are on the ground"));
         }
-        for (name, body, coordinate, f) in &self.drivers {
-            let invalid = |what: &str| ModelError::Invalid {
-                element: name.clone(),
-                what: what.to_string(),
-            };
-            let b = self
-                .bodies
-                .get(body.0)
-                .ok_or_else(|| invalid("unknown body"))?;
-            if !f.is_finite() {
-                return Err(invalid("the driver function must be finite"));
+        match joint {
+            Joint::Distance { length } if !(*length > 0.0 && length.is_finite()) => {
+                Err(invalid("the rod length must be positive"))
             }
-            let x = match (coordinate, b.inertia) {
-                (Coordinate::X, _) => b.x,
-                (Coordinate::Y, _) => b.x + 1,
-                (Coordinate::Theta, Some(_)) => b.x + 2,
-                (Coordinate::Theta, None) => {
-                    return Err(invalid("a point mass has no angle to drive"));
-                }
-            };
-            let c = Constraint::new(
-                name.clone(),
-                Joint::Driver { f: *f },
-                [Anchor::Point { x }, Anchor::Ground([0.0; 2])],
-                row,
-            );
-            row += c.rows;
-            constraints.push(c);
-        }
-        let mut forces = Vec::new();
-        for (name, load, [a, b]) in &self.forces {
-            let anchors = [self.anchor(name, *a)?, self.anchor(name, *b)?];
-            let finite = match load {
-                Load::PointForce { fx, fy } => fx.is_finite() && fy.is_finite(),
-                Load::Torque { tau } => tau.is_finite(),
-                Load::Spring { k, c, rest } => {
-                    k.is_finite() && c.is_finite() && rest.is_finite() && *rest >= 0.0
-                }
-                Load::RotationalSpring { k, c, .. } => k.is_finite() && c.is_finite(),
-            };
-            if !finite {
-                return Err(ModelError::Invalid {
-                    element: name.clone(),
-                    what: "parameters must be finite (and a rest length non-negative)".into(),
-                });
+            Joint::Prismatic { normal, .. } if !normal.iter().all(|x| x.is_finite()) => {
+                Err(invalid("the prismatic axis must be a non-zero vector"))
             }
-            forces.push(Force::new(load.clone(), anchors));
+            Joint::Prismatic { .. } if matches!(anchors[1], Anchor::Ground(_)) => {
+                Err(invalid("the sliding side (b) must be a body"))
+            }
+            _ => Ok(anchors),
         }
-        Ok(PlanarSystem::assemble(self, constraints, forces, row))
+    }
+
+    /// The constraint of a driver, `coordinate(body) = f(t)`, from row `row`.
+    fn driver_constraint(
+        &self,
+        name: &str,
+        body: BodyId,
+        coordinate: Coordinate,
+        f: &TimeFunction,
+        row: usize,
+    ) -> Result<Constraint, ModelError> {
+        let invalid = |what: &str| ModelError::Invalid {
+            element: name.to_string(),
+            what: what.to_string(),
+        };
+        let b = self
+            .bodies
+            .get(body.0)
+            .ok_or_else(|| invalid("unknown body"))?;
+        if !f.is_finite() {
+            return Err(invalid("the driver function must be finite"));
+        }
+        let x = match (coordinate, b.inertia) {
+            (Coordinate::X, _) => b.x,
+            (Coordinate::Y, _) => b.x + 1,
+            (Coordinate::Theta, Some(_)) => b.x + 2,
+            (Coordinate::Theta, None) => {
+                return Err(invalid("a point mass has no angle to drive"));
+            }
+        };
+        Ok(Constraint::new(
+            name.to_string(),
+            Joint::Driver { f: *f },
+            [Anchor::Point { x }, Anchor::Ground([0.0; 2])],
+            row,
+        ))
+    }
+
+    /// A force element, its parameters checked.
+    fn force_element(&self, name: &str, load: &Load, at: [At; 2]) -> Result<Force, ModelError> {
+        let anchors = [self.anchor(name, at[0])?, self.anchor(name, at[1])?];
+        let finite = match load {
+            Load::PointForce { fx, fy } => fx.is_finite() && fy.is_finite(),
+            Load::Torque { tau } => tau.is_finite(),
+            Load::Spring { k, c, rest } => {
+                k.is_finite() && c.is_finite() && rest.is_finite() && *rest >= 0.0
+            }
+            Load::RotationalSpring { k, c, .. } => k.is_finite() && c.is_finite(),
+        };
+        if !finite {
+            return Err(ModelError::Invalid {
+                element: name.to_string(),
+                what: "parameters must be finite (and a rest length non-negative)".into(),
+            });
+        }
+        Ok(Force::new(load.clone(), anchors))
     }
 }
 

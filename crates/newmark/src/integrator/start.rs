@@ -138,7 +138,11 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     }
 
     /// Solves the acceleration-level KKT system `[M Bᵀ; B 0][ü; λ] = [g; c]` at
-    /// `(t, u, u̇)` into `a` and `lambda`.
+    /// `(t, u, u̇)` into `a` and `lambda`. On the augmented structure it
+    /// solves `[M + BᵀB, Bᵀ; B, 0][ü; λ] = [g + Bᵀc; c]` instead, which has
+    /// the same solution (`B ü = c` makes the added `BᵀB ü` and `Bᵀc` equal)
+    /// and a positive definite `M + BᵀB` where `M` is singular (eq. 11, the
+    /// paper's pendulum): backends that factor without pivoting need it.
     fn consistent_acceleration(
         &mut self,
         t: f64,
@@ -151,17 +155,36 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         let (zeros_n, zeros_m) = (vec![0.0; n], vec![0.0; lambda.len()]);
         self.lin
             .eval_residual(self.sys, t, u, v, &zeros_n, &zeros_m);
-        self.lin.assemble(&Coefficients::acceleration());
         self.rhs[..n].copy_from_slice(self.lin.g());
         self.sys.accel_rhs_into(t, u, v, &mut self.rhs[n..]);
+        self.augment_acceleration_system();
         self.factor_and_solve("solving for consistent initial accelerations")?;
         a.copy_from_slice(&self.rhs[..n]);
         lambda.copy_from_slice(&self.rhs[n..]);
         Ok(())
     }
 
+    /// Assembles `[M Bᵀ; B 0]`, with `+BᵀB` and `+Bᵀc` (for the constraint
+    /// part `c` of `rhs`) on the augmented structure; see
+    /// [`consistent_acceleration`](Self::consistent_acceleration).
+    fn augment_acceleration_system(&mut self) {
+        let n = self.sys.n_coords();
+        let c_bb = if self.lin.augmented() { 1.0 } else { 0.0 };
+        self.lin.assemble(&Coefficients {
+            c_bb,
+            ..Coefficients::acceleration()
+        });
+        if c_bb != 0.0 {
+            let (primal, c) = self.rhs.split_at_mut(n);
+            self.lin
+                .b_pattern()
+                .mul_transpose_add(self.lin.b(), c, primal);
+        }
+    }
+
     /// The velocity perturbation `δu̇` with `[M Bᵀ; B 0][δu̇; μ] = [0; −k B u⃛₀]`:
-    /// the given normal component, no tangential (inertia-weighted) part.
+    /// the given normal component, no tangential (inertia-weighted) part
+    /// (augmented like the accelerations' system).
     fn velocity_start_correction(
         &mut self,
         u: &[f64],
@@ -172,7 +195,6 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         let (zeros_n, zeros_m) = (vec![0.0; n], vec![0.0; m]);
         self.lin
             .eval_residual(self.sys, self.t, u, &zeros_n, &zeros_n, &zeros_m);
-        self.lin.assemble(&Coefficients::acceleration());
         self.rhs.fill(0.0);
         self.lin
             .b_pattern()
@@ -180,6 +202,8 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         for x in &mut self.rhs[n..] {
             *x *= -k;
         }
+        // (With M + BᵀB on the augmented structure, as for the accelerations.)
+        self.augment_acceleration_system();
         self.factor_and_solve("computing the starting velocity correction")?;
         Ok(self.rhs[..n].to_vec())
     }
