@@ -206,7 +206,7 @@ fn every_element(p: &[f64]) -> mstar_model::planar::PlanarSystem {
         omega: 2.0,
         phase: p[40],
     };
-    b.driver("motor", r2, Coordinate::Theta, sine);
+    b.driver("motor", r2, Coordinate::Theta, sine.clone());
     b.driver(
         "lift",
         pm,
@@ -219,7 +219,7 @@ fn every_element(p: &[f64]) -> mstar_model::planar::PlanarSystem {
     b.force(
         "push",
         At::Body(r1, [p[42], p[43]]),
-        sine,
+        sine.clone(),
         TimeFunction::Constant(p[44]),
     );
     b.torque("twist", r3, sine);

@@ -21,6 +21,7 @@
 #![deny(missing_docs)]
 
 mod fd;
+pub mod file;
 mod fn_system;
 mod pattern;
 mod pendulum;

@@ -115,20 +115,27 @@ impl CsvStream {
     /// # Errors
     /// The first I/O error of the whole stream, with the path; the target is
     /// then untouched.
-    pub fn finish(mut self) -> std::io::Result<()> {
+    pub fn finish(self) -> std::io::Result<()> {
+        let path = self.path.clone();
+        self.finish_as(&path)
+    }
+
+    /// Flushes and renames the file to `path` instead of the target (e.g.
+    /// `<name>.partial.csv` when a run fails).
+    ///
+    /// # Errors
+    /// As [`finish`](Self::finish).
+    pub fn finish_as(mut self, path: &Path) -> std::io::Result<()> {
         let result = match (self.error.take(), self.file.take()) {
             (Some(e), _) => Err(e),
             (None, Some(mut f)) => f
                 .flush()
                 .and_then(|()| f.get_ref().sync_all())
-                .and_then(|()| std::fs::rename(&self.tmp, &self.path)),
+                .and_then(|()| std::fs::rename(&self.tmp, path)),
             (None, None) => Ok(()),
         };
         result.map_err(|e| {
-            std::io::Error::new(
-                e.kind(),
-                format!("could not write {}: {e}", self.path.display()),
-            )
+            std::io::Error::new(e.kind(), format!("could not write {}: {e}", path.display()))
         })
     }
 }

@@ -12,6 +12,8 @@
 //! - [`rk4`]: independent minimal-coordinate references ([`ChainOracle`]);
 //! - [`csv`]: the output format; [`pendulum`]: the paper's presets;
 //!   [`analysis`]: errors, fitted orders, the period-2h amplitude;
+//! - [`run`]: model files' settings as an integrator configuration, and
+//!   `mstar check`'s report;
 //! - [`testing`]: for model authors, the derivative checker;
 //!   [`catalogue`]: the test models with their independent references.
 //!
@@ -34,6 +36,7 @@ pub mod analysis;
 pub mod catalogue;
 pub mod csv;
 pub mod pendulum;
+pub mod run;
 pub mod testing;
 
 pub use mstar_kkt as kkt;

@@ -419,8 +419,8 @@ impl PlanarBuilder {
             .bodies
             .get(body.0)
             .ok_or_else(|| invalid("unknown body"))?;
-        if !f.is_finite() {
-            return Err(invalid("the driver function must be finite"));
+        if let Some(problem) = f.problem() {
+            return Err(invalid(&format!("the driver function: {problem}")));
         }
         let x = match (coordinate, b.inertia) {
             (Coordinate::X, _) => b.x,
@@ -432,7 +432,7 @@ impl PlanarBuilder {
         };
         Ok(Constraint::new(
             name.to_string(),
-            Joint::Driver { f: *f },
+            Joint::Driver { f: f.clone() },
             [Anchor::Point { x }, Anchor::Ground([0.0; 2])],
             row,
         ))
@@ -441,9 +441,19 @@ impl PlanarBuilder {
     /// A force element, its parameters checked.
     fn force_element(&self, name: &str, load: &Load, at: [At; 2]) -> Result<Force, ModelError> {
         let anchors = [self.anchor(name, at[0])?, self.anchor(name, at[1])?];
+        let function = match load {
+            Load::PointForce { fx, fy } => fx.problem().or_else(|| fy.problem()),
+            Load::Torque { tau } => tau.problem(),
+            _ => None,
+        };
+        if let Some(problem) = function {
+            return Err(ModelError::Invalid {
+                element: name.to_string(),
+                what: format!("the load function: {problem}"),
+            });
+        }
         let finite = match load {
-            Load::PointForce { fx, fy } => fx.is_finite() && fy.is_finite(),
-            Load::Torque { tau } => tau.is_finite(),
+            Load::PointForce { .. } | Load::Torque { .. } => true,
             Load::Spring { k, c, rest } => {
                 k.is_finite() && c.is_finite() && rest.is_finite() && *rest >= 0.0
             }
@@ -651,6 +661,16 @@ impl PlanarSystem {
     #[must_use]
     pub fn body_x(&self, name: &str) -> Option<usize> {
         self.bodies.iter().find(|b| b.name == name).map(|b| b.x)
+    }
+
+    /// The name of the joint or driver that owns constraint row `row`
+    /// (`None` past the last row).
+    #[must_use]
+    pub fn constraint_owner(&self, row: usize) -> Option<&str> {
+        self.constraints
+            .iter()
+            .find(|c| (c.row0..c.row0 + c.rows).contains(&row))
+            .map(|c| c.name.as_str())
     }
 }
 

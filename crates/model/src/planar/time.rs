@@ -1,7 +1,7 @@
 //! Prescribed functions of time for drivers, forces and torques.
 
 /// A function of time `f(t)` with its first two derivatives.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum TimeFunction {
     /// `f(t) = c`.
     Constant(f64),
@@ -23,6 +23,12 @@ pub enum TimeFunction {
         /// Phase, rad.
         phase: f64,
     },
+    /// Piecewise linear through the points `(tᵢ, vᵢ)` (times strictly
+    /// increasing), constant before the first and after the last. Its
+    /// derivative is the slope of the segment `t` is in (at a breakpoint, the
+    /// segment that starts there), its second derivative zero: a driver
+    /// following a table has velocity jumps at the breakpoints.
+    Table(Vec<(f64, f64)>),
 }
 
 impl TimeFunction {
@@ -30,6 +36,7 @@ impl TimeFunction {
     #[must_use]
     pub fn eval(&self, t: f64) -> (f64, f64, f64) {
         match *self {
+            Self::Table(ref points) => table(points, t),
             Self::Constant(c) => (c, 0.0, 0.0),
             Self::Linear { value, rate } => (value + rate * t, rate, 0.0),
             Self::Sine {
@@ -62,8 +69,51 @@ impl TimeFunction {
             } => [offset, amplitude, omega, phase]
                 .iter()
                 .all(|x| x.is_finite()),
+            Self::Table(ref points) => points.iter().all(|(t, v)| t.is_finite() && v.is_finite()),
         }
     }
+
+    /// Why the function cannot be used, if it cannot: a non-finite value, or
+    /// a table without points or with times that do not increase.
+    #[must_use]
+    pub fn problem(&self) -> Option<String> {
+        if !self.is_finite() {
+            return Some("every value of the function must be finite".to_string());
+        }
+        match self {
+            Self::Table(points) if points.is_empty() => {
+                Some("a table needs at least one point [t, value]".to_string())
+            }
+            Self::Table(points) => points.windows(2).position(|w| w[1].0 <= w[0].0).map(|k| {
+                format!(
+                    "the times of a table must increase: point {} (t = {}) is not after point {} (t = {})",
+                    k + 1,
+                    points[k + 1].0,
+                    k,
+                    points[k].0
+                )
+            }),
+            _ => None,
+        }
+    }
+}
+
+/// `(f, f', f'')` of the piecewise-linear table `points` at `t`.
+fn table(points: &[(f64, f64)], t: f64) -> (f64, f64, f64) {
+    let (Some(&(t0, v0)), Some(&(t1, v1))) = (points.first(), points.last()) else {
+        return (0.0, 0.0, 0.0);
+    };
+    if t < t0 {
+        return (v0, 0.0, 0.0);
+    }
+    if t >= t1 {
+        return (v1, 0.0, 0.0);
+    }
+    // The segment [t_k, t_{k+1}) that holds t.
+    let k = points.partition_point(|&(tk, _)| tk <= t) - 1;
+    let ((ta, va), (tb, vb)) = (points[k], points[k + 1]);
+    let slope = (vb - va) / (tb - ta);
+    (va + slope * (t - ta), slope, 0.0)
 }
 
 impl From<f64> for TimeFunction {
@@ -119,6 +169,25 @@ mod tests {
                 assert!(within(e), "{f:?} at t = {t}: {e:?}");
             }
         }
+    }
+
+    #[test]
+    fn a_table_interpolates_and_holds_its_ends() {
+        let f = TimeFunction::Table(vec![(0.0, 1.0), (1.0, 3.0), (3.0, -1.0)]);
+        assert_eq!(f.eval(-1.0), (1.0, 0.0, 0.0));
+        assert_eq!(f.eval(0.5), (2.0, 2.0, 0.0));
+        assert_eq!(f.eval(1.0), (3.0, -2.0, 0.0));
+        assert_eq!(f.eval(2.0), (1.0, -2.0, 0.0));
+        assert_eq!(f.eval(3.0), (-1.0, 0.0, 0.0));
+        assert_eq!(f.eval(7.0), (-1.0, 0.0, 0.0));
+        assert_eq!(f.problem(), None);
+        let single = TimeFunction::Table(vec![(0.5, 2.0)]);
+        assert_eq!(single.eval(0.0), (2.0, 0.0, 0.0));
+        assert_eq!(single.eval(9.0), (2.0, 0.0, 0.0));
+        assert!(TimeFunction::Table(vec![]).problem().is_some());
+        let backwards = TimeFunction::Table(vec![(0.0, 1.0), (0.0, 2.0)]);
+        assert!(backwards.problem().is_some_and(|p| p.contains("increase")));
+        assert!(TimeFunction::Constant(f64::NAN).problem().is_some());
     }
 
     #[test]

@@ -1,0 +1,279 @@
+//! Reading the keys of one table of a document: typed values, required and
+//! optional keys, and unknown keys reported with the closest known one.
+
+use std::ops::Range;
+
+use super::FileError;
+use super::node::{Entry, Node, Value};
+
+/// The document being read: its name and text, for the places of errors.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Doc<'a> {
+    pub(crate) origin: &'a str,
+    pub(crate) text: &'a str,
+}
+
+impl Doc<'_> {
+    /// An error at `span` (when known).
+    pub(crate) fn error(&self, span: Option<&Range<usize>>, message: String) -> FileError {
+        FileError::at(self.origin, self.text, span.map(|s| s.start), message)
+    }
+}
+
+/// The keys of one table, each read at most once; what is left at
+/// [`finish`](Self::finish) is an unknown key.
+pub(crate) struct Fields<'a> {
+    doc: Doc<'a>,
+    /// What the table is, for messages: `body 'crank'`, `[simulation]`.
+    pub(crate) what: String,
+    entries: &'a [Entry],
+    span: Option<Range<usize>>,
+    used: Vec<bool>,
+}
+
+impl<'a> Fields<'a> {
+    /// The table `node` (an error if it is not one), described as `what`.
+    pub(crate) fn of(doc: Doc<'a>, node: &'a Node, what: String) -> Result<Self, FileError> {
+        let Value::Table(entries) = &node.value else {
+            return Err(doc.error(
+                node.span.as_ref(),
+                format!("{what} must be a table, not {}", node.value.kind()),
+            ));
+        };
+        Ok(Self {
+            doc,
+            what,
+            entries,
+            span: node.span.clone(),
+            used: vec![false; entries.len()],
+        })
+    }
+
+    /// Where the table is.
+    pub(crate) fn span(&self) -> Option<&Range<usize>> {
+        self.span.as_ref()
+    }
+
+    /// The entry `key`, marked as read.
+    pub(crate) fn entry(&mut self, key: &str) -> Option<&'a Entry> {
+        let k = self.entries.iter().position(|e| e.key == key)?;
+        self.used[k] = true;
+        Some(&self.entries[k])
+    }
+
+    /// An error about the value of `key`.
+    pub(crate) fn bad(&self, entry: &Entry, why: impl std::fmt::Display) -> FileError {
+        let span = entry.node.span.as_ref().or(entry.key_span.as_ref());
+        self.doc
+            .error(span, format!("{}: {}: {why}", self.what, entry.key))
+    }
+
+    /// The value of `key` read by `parse`, if present.
+    pub(crate) fn optional<T>(
+        &mut self,
+        key: &str,
+        parse: impl FnOnce(&'a Node) -> Result<T, String>,
+    ) -> Result<Option<T>, FileError> {
+        match self.entry(key) {
+            Some(e) => parse(&e.node).map(Some).map_err(|why| self.bad(e, why)),
+            None => Ok(None),
+        }
+    }
+
+    /// The value of `key` read by `parse`; an error naming the key if absent.
+    pub(crate) fn required<T>(
+        &mut self,
+        key: &str,
+        parse: impl FnOnce(&'a Node) -> Result<T, String>,
+    ) -> Result<T, FileError> {
+        self.optional(key, parse)?.ok_or_else(|| self.missing(key))
+    }
+
+    /// The error for a missing key; when an unread key is a likely typo of
+    /// it, the error is about that one, where it is written.
+    pub(crate) fn missing(&self, key: &str) -> FileError {
+        let typo = self
+            .entries
+            .iter()
+            .zip(&self.used)
+            .find(|(e, used)| !**used && closest(&e.key, &[key]).is_some());
+        if let Some((e, _)) = typo {
+            return self.doc.error(
+                e.key_span.as_ref().or(e.node.span.as_ref()),
+                format!(
+                    "{}: unknown key '{}' (did you mean '{key}'?)",
+                    self.what, e.key
+                ),
+            );
+        }
+        self.doc.error(
+            self.span.as_ref(),
+            format!("{}: the key '{key}' is missing", self.what),
+        )
+    }
+
+    /// Checks that every key was read or is one of `known` (read by someone
+    /// else): an unknown key is an error naming the known ones (and the
+    /// closest, for a typo).
+    pub(crate) fn finish(&self, known: &[&str]) -> Result<(), FileError> {
+        let unknown = |(e, used): (&Entry, &bool)| !used && !known.contains(&e.key.as_str());
+        let Some(k) = self.entries.iter().zip(&self.used).position(unknown) else {
+            return Ok(());
+        };
+        let e = &self.entries[k];
+        let hint = closest(&e.key, known)
+            .map(|c| format!(" (did you mean '{c}'?)"))
+            .unwrap_or_default();
+        Err(self.doc.error(
+            e.key_span.as_ref().or(e.node.span.as_ref()),
+            format!(
+                "{}: unknown key '{}'{hint}; the keys here are: {}",
+                self.what,
+                e.key,
+                known.join(", ")
+            ),
+        ))
+    }
+}
+
+/// The known key closest to `key` by edit distance, if it is a likely typo.
+fn closest<'k>(key: &str, known: &[&'k str]) -> Option<&'k str> {
+    known
+        .iter()
+        .map(|&k| (edit_distance(key, k), k))
+        .filter(|&(d, k)| d <= 2.max(k.len() / 3))
+        .min()
+        .map(|(_, k)| k)
+}
+
+/// Levenshtein distance (characters).
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let substitution = diagonal + usize::from(ca != cb);
+            diagonal = row[j + 1];
+            row[j + 1] = substitution.min(row[j] + 1).min(row[j + 1] + 1);
+        }
+    }
+    row[b.len()]
+}
+
+/// A finite number.
+pub(crate) fn number(node: &Node) -> Result<f64, String> {
+    match node.value {
+        Value::Num { value, .. } if value.is_finite() => Ok(value),
+        Value::Num { value, .. } => Err(format!("must be a finite number, not {value}")),
+        ref v => Err(format!("expected a number, found {}", v.kind())),
+    }
+}
+
+/// A number checked by `ok`, which describes the range in `range`.
+pub(crate) fn number_in(
+    ok: impl Fn(f64) -> bool,
+    range: &str,
+) -> impl Fn(&Node) -> Result<f64, String> {
+    move |node| {
+        let x = number(node)?;
+        if ok(x) {
+            Ok(x)
+        } else {
+            Err(format!("must be {range} (got {x})"))
+        }
+    }
+}
+
+/// A whole number of at least `min`.
+pub(crate) fn count(min: usize) -> impl Fn(&Node) -> Result<usize, String> {
+    move |node| match node.value {
+        Value::Num {
+            value,
+            integer: true,
+        } if value >= min as f64 && value < 1e15 => Ok(value as usize),
+        Value::Num { value, .. } => Err(format!(
+            "must be a whole number of at least {min} (got {value})"
+        )),
+        ref v => Err(format!("expected a whole number, found {}", v.kind())),
+    }
+}
+
+/// A string.
+pub(crate) fn string(node: &Node) -> Result<&str, String> {
+    match &node.value {
+        Value::Str(s) => Ok(s),
+        v => Err(format!("expected a string, found {}", v.kind())),
+    }
+}
+
+/// One of the strings in `choices`.
+pub(crate) fn choice<'c>(choices: &'c [&'c str]) -> impl Fn(&Node) -> Result<&'c str, String> {
+    move |node| {
+        let s = string(node)?;
+        choices
+            .iter()
+            .find(|&&c| c == s)
+            .copied()
+            .ok_or_else(|| format!("'{s}' is not one of: {}", choices.join(", ")))
+    }
+}
+
+/// The items of an array.
+pub(crate) fn list(node: &Node) -> Result<&[Node], String> {
+    match &node.value {
+        Value::List(items) => Ok(items),
+        v => Err(format!("expected an array, found {}", v.kind())),
+    }
+}
+
+/// An array of `N` numbers.
+pub(crate) fn numbers<const N: usize>(node: &Node) -> Result<[f64; N], String> {
+    let items = list(node)?;
+    if items.len() != N {
+        return Err(format!("expected {N} numbers, found {}", items.len()));
+    }
+    let mut out = [0.0; N];
+    for (o, item) in out.iter_mut().zip(items) {
+        *o = number(item)?;
+    }
+    Ok(out)
+}
+
+/// Two points `[[x, y], [x, y]]`.
+pub(crate) fn two_points(node: &Node) -> Result<[[f64; 2]; 2], String> {
+    let items = list(node)?;
+    if items.len() != 2 {
+        return Err(format!(
+            "expected two points [[x, y], [x, y]], found {} items",
+            items.len()
+        ));
+    }
+    Ok([numbers::<2>(&items[0])?, numbers::<2>(&items[1])?])
+}
+
+/// Two names `["a", "b"]`.
+pub(crate) fn two_names(node: &Node) -> Result<[&str; 2], String> {
+    let items = list(node)?;
+    if items.len() != 2 {
+        return Err(format!(
+            "expected two names [\"a\", \"b\"], found {} items",
+            items.len()
+        ));
+    }
+    Ok([string(&items[0])?, string(&items[1])?])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_typo_suggests_the_closest_key() {
+        assert_eq!(edit_distance("mas", "mass"), 1);
+        assert_eq!(edit_distance("intertia", "inertia"), 1);
+        assert_eq!(closest("mas", &["name", "mass", "inertia"]), Some("mass"));
+        assert_eq!(closest("colour", &["name", "mass"]), None);
+    }
+}

@@ -1,0 +1,519 @@
+//! The `mstar.planar/1` schema: bodies, point masses, joints, drivers and
+//! forces read into a [`PlanarBuilder`], every value checked where it is
+//! written (`docs/model-format.md`).
+
+use std::collections::HashMap;
+use std::ops::Range;
+
+use super::FileError;
+use super::fields::{Doc, Fields, choice, list, number_in, numbers, string, two_names, two_points};
+use super::node::Node;
+use crate::planar::{At, BodyId, Coordinate, PlanarBuilder, PlanarSystem, TimeFunction};
+
+/// The one format version this reader knows.
+pub const FORMAT: &str = "mstar.planar/1";
+
+/// The reserved name of the fixed frame.
+const GROUND: &str = "ground";
+
+/// A named body of the model, as joints and forces refer to it.
+#[derive(Clone, Copy, Debug)]
+struct Placed {
+    id: BodyId,
+    rigid: bool,
+    pose: [f64; 3],
+}
+
+/// One side of a joint or force: the ground or a body.
+#[derive(Clone, Copy, Debug)]
+enum Side {
+    Ground,
+    Body(Placed),
+}
+
+/// The model being read.
+struct Model<'a> {
+    doc: Doc<'a>,
+    builder: PlanarBuilder,
+    bodies: HashMap<String, Placed>,
+    /// Every name with what carries it and where, for duplicates.
+    names: HashMap<String, (String, Option<Range<usize>>)>,
+}
+
+/// Reads a whole document.
+pub(crate) fn read<'a>(doc: Doc<'a>, root: &'a Node) -> Result<PlanarSystem, FileError> {
+    let mut top = Fields::of(doc, root, "the model".to_string())?;
+    let format = top.required("format", string)?;
+    if format != FORMAT {
+        let e = top.entry("format").map(|e| e.node.span.clone());
+        return Err(doc.error(
+            e.flatten().as_ref(),
+            format!("unknown format '{format}': this version of mstar reads '{FORMAT}'"),
+        ));
+    }
+    let gravity = top
+        .optional("gravity", numbers::<2>)?
+        .unwrap_or([0.0, -9.81]);
+    let mut m = Model {
+        doc,
+        builder: PlanarBuilder::new(),
+        bodies: HashMap::new(),
+        names: HashMap::new(),
+    };
+    m.builder.gravity(gravity[0], gravity[1]);
+    for (kind, add) in [
+        ("body", Model::body as Adder<'a>),
+        ("point_mass", Model::point_mass),
+        ("joint", Model::joint),
+        ("driver", Model::driver),
+        ("force", Model::force),
+    ] {
+        for (k, node) in top.optional(kind, list)?.unwrap_or(&[]).iter().enumerate() {
+            add(&mut m, node, format!("{kind} #{}", k + 1))?;
+        }
+    }
+    // ([simulation] and [output] are the caller's: settings, not the mechanism.)
+    top.finish(&[
+        "format",
+        "gravity",
+        "body",
+        "point_mass",
+        "joint",
+        "driver",
+        "force",
+        "simulation",
+        "output",
+    ])?;
+    m.builder.build().map_err(|e| m.located(e))
+}
+
+/// Reads one element into the model.
+type Adder<'a> = fn(&mut Model<'a>, &'a Node, String) -> Result<(), FileError>;
+
+impl<'a> Model<'a> {
+    /// The element's fields and its name (described as `what` until it is
+    /// known), the name claimed.
+    fn named(
+        &mut self,
+        node: &'a Node,
+        what: String,
+        kind: &str,
+    ) -> Result<(Fields<'a>, String), FileError> {
+        let mut f = Fields::of(self.doc, node, what)?;
+        let name = f.required("name", string)?.to_string();
+        let span = f.entry("name").and_then(|e| e.node.span.clone());
+        f.what = format!("{kind} '{name}'");
+        if name.is_empty() || name.chars().any(|c| c.is_control()) {
+            return Err(self.doc.error(
+                span.as_ref(),
+                format!(
+                    "{}: a name must be non-empty and without control characters",
+                    f.what
+                ),
+            ));
+        }
+        if let Some((other, at)) = self.names.get(&name) {
+            let line = at
+                .as_ref()
+                .map(|s| {
+                    format!(
+                        " (line {})",
+                        super::node::line_column(self.doc.text, s.start).0
+                    )
+                })
+                .unwrap_or_default();
+            return Err(self.doc.error(
+                span.as_ref(),
+                format!("the name '{name}' is used twice: by {other}{line} and by this {kind}"),
+            ));
+        }
+        self.names.insert(name.clone(), (f.what.clone(), span));
+        Ok((f, name))
+    }
+
+    /// A `[[body]]`: a rigid body.
+    fn body(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let (mut f, name) = self.named(node, what, "body")?;
+        if name == GROUND {
+            return Err(self.doc.error(
+                f.span(),
+                "a body may not be called 'ground': that is the fixed frame".to_string(),
+            ));
+        }
+        let mass = f.required("mass", number_in(|x| x > 0.0, "positive, in kg"))?;
+        let inertia = f.required("inertia", number_in(|x| x > 0.0, "positive, in kg m²"))?;
+        let pose = f.required("pose", numbers::<3>)?;
+        let velocity = f.optional("velocity", numbers::<3>)?.unwrap_or([0.0; 3]);
+        f.finish(&["name", "mass", "inertia", "pose", "velocity"])?;
+        let id = self.builder.rigid_body(&name, mass, inertia, pose);
+        self.builder.velocity(id, velocity);
+        self.bodies.insert(
+            name,
+            Placed {
+                id,
+                rigid: true,
+                pose,
+            },
+        );
+        Ok(())
+    }
+
+    /// A `[[point_mass]]`.
+    fn point_mass(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let (mut f, name) = self.named(node, what, "point mass")?;
+        if name == GROUND {
+            return Err(self.doc.error(
+                f.span(),
+                "a point mass may not be called 'ground': that is the fixed frame".to_string(),
+            ));
+        }
+        let mass = f.required("mass", number_in(|x| x > 0.0, "positive, in kg"))?;
+        let p = f.required("position", numbers::<2>)?;
+        let v = f.optional("velocity", numbers::<2>)?.unwrap_or([0.0; 2]);
+        f.finish(&["name", "mass", "position", "velocity"])?;
+        let id = self.builder.point_mass(&name, mass, p);
+        self.builder.velocity(id, [v[0], v[1], 0.0]);
+        let pose = [p[0], p[1], 0.0];
+        self.bodies.insert(
+            name,
+            Placed {
+                id,
+                rigid: false,
+                pose,
+            },
+        );
+        Ok(())
+    }
+
+    /// A `[[joint]]`: revolute, prismatic, distance or weld.
+    fn joint(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let (mut f, name) = self.named(node, what, "joint")?;
+        let kind = f.required(
+            "type",
+            choice(&["revolute", "prismatic", "distance", "weld"]),
+        )?;
+        let sides = self.sides(&mut f)?;
+        let at = self.anchors(&mut f, sides)?;
+        match kind {
+            "revolute" => {
+                f.finish(&["name", "type", "bodies", "points", "at"])?;
+                self.builder.revolute(&name, at[0], at[1]);
+            }
+            "weld" => {
+                f.finish(&["name", "type", "bodies", "points", "at"])?;
+                self.builder.weld(&name, at[0], at[1]);
+            }
+            "distance" => {
+                let initial = distance(self.global(sides[0], at[0]), self.global(sides[1], at[1]));
+                let length = f.optional("length", number_in(|x| x > 0.0, "positive, in m"))?;
+                f.finish(&["name", "type", "bodies", "points", "at", "length"])?;
+                let length = length.unwrap_or(initial);
+                if length.is_nan() || length <= 0.0 {
+                    return Err(self.doc.error(
+                        f.span(),
+                        format!(
+                            "{}: the two points coincide at the initial pose: give 'length'",
+                            f.what
+                        ),
+                    ));
+                }
+                self.builder.distance(&name, at[0], at[1], length);
+            }
+            _ => {
+                let axis = f.required("axis", numbers::<2>)?;
+                if axis == [0.0, 0.0] {
+                    let e = f.entry("axis").expect("read above");
+                    return Err(f.bad(e, "must not be zero: it is the sliding direction"));
+                }
+                if matches!(sides[1], Side::Ground) {
+                    return Err(self.doc.error(
+                        f.span(),
+                        format!(
+                            "{}: the sliding side (the second of 'bodies') must be a body",
+                            f.what
+                        ),
+                    ));
+                }
+                f.finish(&["name", "type", "bodies", "points", "at", "axis"])?;
+                self.builder.prismatic(&name, at[0], axis, at[1]);
+            }
+        }
+        Ok(())
+    }
+
+    /// A `[[driver]]`: a coordinate of a body prescribed in time.
+    fn driver(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let (mut f, name) = self.named(node, what, "driver")?;
+        let body = self.body_of(&mut f, "body")?;
+        let coordinate = f.required("coordinate", choice(&["x", "y", "theta"]))?;
+        if coordinate == "theta" && !body.rigid {
+            let e = f.entry("coordinate").expect("read above");
+            return Err(f.bad(e, "a point mass has no angle: drive x or y"));
+        }
+        let function = self
+            .function(&mut f, "function")?
+            .ok_or_else(|| f.missing("function"))?;
+        f.finish(&["name", "body", "coordinate", "function"])?;
+        let coordinate = match coordinate {
+            "x" => Coordinate::X,
+            "y" => Coordinate::Y,
+            _ => Coordinate::Theta,
+        };
+        self.builder.driver(&name, body.id, coordinate, function);
+        Ok(())
+    }
+
+    /// A `[[force]]`: spring-damper, rotational spring-damper, torque or force.
+    fn force(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let (mut f, name) = self.named(node, what, "force")?;
+        let kind = f.required(
+            "type",
+            choice(&[
+                "spring-damper",
+                "rotational-spring-damper",
+                "torque",
+                "force",
+            ]),
+        )?;
+        match kind {
+            "spring-damper" => self.spring(&mut f, &name)?,
+            "rotational-spring-damper" => self.rotational_spring(&mut f, &name)?,
+            "torque" => {
+                let body = self.body_of(&mut f, "body")?;
+                if !body.rigid {
+                    return Err(self.doc.error(
+                        f.span(),
+                        format!("{}: a torque needs a rigid body, not a point mass", f.what),
+                    ));
+                }
+                let tau = self
+                    .function(&mut f, "function")?
+                    .ok_or_else(|| f.missing("function"))?;
+                f.finish(&["name", "type", "body", "function"])?;
+                self.builder.torque(&name, body.id, tau);
+            }
+            _ => {
+                let body = self.body_of(&mut f, "body")?;
+                let point = f.optional("point", numbers::<2>)?.unwrap_or([0.0; 2]);
+                let fx = self
+                    .function(&mut f, "fx")?
+                    .unwrap_or(TimeFunction::Constant(0.0));
+                let fy = self
+                    .function(&mut f, "fy")?
+                    .unwrap_or(TimeFunction::Constant(0.0));
+                f.finish(&["name", "type", "body", "point", "fx", "fy"])?;
+                self.check_point(&f, Side::Body(body), point)?;
+                self.builder.force(&name, At::Body(body.id, point), fx, fy);
+            }
+        }
+        Ok(())
+    }
+
+    /// A linear spring-damper between two points.
+    fn spring(&mut self, f: &mut Fields<'a>, name: &str) -> Result<(), FileError> {
+        let sides = self.sides(f)?;
+        let points = f.required("points", two_points)?;
+        let at = [
+            self.side_at(f, sides[0], points[0])?,
+            self.side_at(f, sides[1], points[1])?,
+        ];
+        let stiffness = f.required("stiffness", number_in(|x| x >= 0.0, "non-negative, in N/m"))?;
+        let damping = f
+            .optional("damping", number_in(|x| x >= 0.0, "non-negative, in N s/m"))?
+            .unwrap_or(0.0);
+        let rest = f.optional("rest_length", number_in(|x| x >= 0.0, "non-negative, in m"))?;
+        f.finish(&[
+            "name",
+            "type",
+            "bodies",
+            "points",
+            "stiffness",
+            "damping",
+            "rest_length",
+        ])?;
+        let rest = rest.unwrap_or_else(|| {
+            distance(self.global(sides[0], at[0]), self.global(sides[1], at[1]))
+        });
+        self.builder
+            .spring(name, at[0], at[1], stiffness, damping, rest);
+        Ok(())
+    }
+
+    /// A rotational spring-damper between two bodies (or the ground and a
+    /// body), at rest at the initial relative angle.
+    fn rotational_spring(&mut self, f: &mut Fields<'a>, name: &str) -> Result<(), FileError> {
+        let sides = self.sides(f)?;
+        let stiffness = f.required(
+            "stiffness",
+            number_in(|x| x >= 0.0, "non-negative, in N m/rad"),
+        )?;
+        let damping = f
+            .optional(
+                "damping",
+                number_in(|x| x >= 0.0, "non-negative, in N m s/rad"),
+            )?
+            .unwrap_or(0.0);
+        f.finish(&["name", "type", "bodies", "stiffness", "damping"])?;
+        let rigid = |s: Side| match s {
+            Side::Ground => Ok(None),
+            Side::Body(b) if b.rigid => Ok(Some(b.id)),
+            Side::Body(_) => Err(()),
+        };
+        match (rigid(sides[0]), rigid(sides[1])) {
+            (Ok(a), Ok(Some(b))) => {
+                self.builder.rotational_spring(name, a, b, stiffness, damping);
+                Ok(())
+            }
+            _ => Err(self.doc.error(
+                f.span(),
+                format!("{}: a rotational spring joins two rigid bodies (the first may be 'ground'); point masses have no angle", f.what),
+            )),
+        }
+    }
+
+    /// The two sides of `bodies`.
+    fn sides(&self, f: &mut Fields<'a>) -> Result<[Side; 2], FileError> {
+        let names = f.required("bodies", two_names)?;
+        let e = f.entry("bodies").expect("read above");
+        let side = |name: &str| -> Result<Side, FileError> {
+            if name == GROUND {
+                return Ok(Side::Ground);
+            }
+            self.bodies
+                .get(name)
+                .map(|&b| Side::Body(b))
+                .ok_or_else(|| f.bad(e, self.unknown_body(name)))
+        };
+        let sides = [side(names[0])?, side(names[1])?];
+        if names[0] == names[1] {
+            return Err(f.bad(
+                e,
+                format!(
+                    "both sides are '{}': an element joins two different bodies",
+                    names[0]
+                ),
+            ));
+        }
+        Ok(sides)
+    }
+
+    /// The body named by `key` (not the ground).
+    fn body_of(&self, f: &mut Fields<'a>, key: &str) -> Result<Placed, FileError> {
+        let name = f.required(key, string)?;
+        let e = f.entry(key).expect("read above");
+        if name == GROUND {
+            return Err(f.bad(e, "the ground cannot move: name a body"));
+        }
+        self.bodies
+            .get(name)
+            .copied()
+            .ok_or_else(|| f.bad(e, self.unknown_body(name)))
+    }
+
+    fn unknown_body(&self, name: &str) -> String {
+        let mut known: Vec<&str> = self.bodies.keys().map(String::as_str).collect();
+        known.sort_unstable();
+        format!(
+            "no body or point mass is called '{name}' (known: ground{}{})",
+            if known.is_empty() { "" } else { ", " },
+            known.join(", ")
+        )
+    }
+
+    /// The attachment points from `points` (local) or `at` (one global point
+    /// at the initial pose).
+    fn anchors(&self, f: &mut Fields<'a>, sides: [Side; 2]) -> Result<[At; 2], FileError> {
+        let points = f.optional("points", two_points)?;
+        let at = f.optional("at", numbers::<2>)?;
+        match (points, at) {
+            (Some(p), None) => Ok([
+                self.side_at(f, sides[0], p[0])?,
+                self.side_at(f, sides[1], p[1])?,
+            ]),
+            (None, Some(g)) => Ok([local_at(sides[0], g), local_at(sides[1], g)]),
+            (Some(_), Some(_)) => Err(self.doc.error(
+                f.span(),
+                format!("{}: give 'points' or 'at', not both", f.what),
+            )),
+            (None, None) => Err(self.doc.error(
+                f.span(),
+                format!("{}: the key 'points' (or 'at') is missing", f.what),
+            )),
+        }
+    }
+
+    /// The point `local` of a side (global for the ground).
+    fn side_at(&self, f: &Fields<'a>, side: Side, local: [f64; 2]) -> Result<At, FileError> {
+        self.check_point(f, side, local)?;
+        Ok(match side {
+            Side::Ground => At::Ground(local),
+            Side::Body(b) => At::Body(b.id, local),
+        })
+    }
+
+    /// A point mass has no extent: its point is `[0, 0]`.
+    fn check_point(&self, f: &Fields<'a>, side: Side, local: [f64; 2]) -> Result<(), FileError> {
+        match side {
+            Side::Body(b) if !b.rigid && local != [0.0, 0.0] => Err(self.doc.error(
+                f.span(),
+                format!(
+                    "{}: a point mass has no extent: its point must be [0, 0], not {local:?}",
+                    f.what
+                ),
+            )),
+            _ => Ok(()),
+        }
+    }
+
+    /// The global position of an attachment at the initial pose.
+    fn global(&self, side: Side, at: At) -> [f64; 2] {
+        match (side, at) {
+            (Side::Body(b), At::Body(_, s)) => {
+                let (sn, cs) = b.pose[2].sin_cos();
+                [
+                    b.pose[0] + cs * s[0] - sn * s[1],
+                    b.pose[1] + sn * s[0] + cs * s[1],
+                ]
+            }
+            (_, At::Ground(p)) | (Side::Ground, At::Body(_, p)) => p,
+        }
+    }
+
+    /// The time function of `key`, if present.
+    fn function(&self, f: &mut Fields<'a>, key: &str) -> Result<Option<TimeFunction>, FileError> {
+        let Some(e) = f.entry(key) else {
+            return Ok(None);
+        };
+        let what = format!("{}: {key}", f.what);
+        super::functions::read(self.doc, &e.node, what).map(Some)
+    }
+
+    /// A builder error, placed at the element it names when it can be.
+    fn located(&self, e: crate::planar::ModelError) -> FileError {
+        let (element, message) = match &e {
+            crate::planar::ModelError::Invalid { element, what } => (element.clone(), what.clone()),
+            crate::planar::ModelError::DuplicateName(name) => (name.clone(), e.to_string()),
+        };
+        match self.names.get(&element) {
+            Some((what, span)) => self.doc.error(span.as_ref(), format!("{what}: {message}")),
+            None => self.doc.error(None, message),
+        }
+    }
+}
+
+/// The local point of a side for the global point `g` at the initial pose.
+fn local_at(side: Side, g: [f64; 2]) -> At {
+    match side {
+        Side::Ground => At::Ground(g),
+        Side::Body(b) if !b.rigid => At::Body(b.id, [0.0, 0.0]),
+        Side::Body(b) => {
+            let (sn, cs) = b.pose[2].sin_cos();
+            let d = [g[0] - b.pose[0], g[1] - b.pose[1]];
+            At::Body(b.id, [cs * d[0] + sn * d[1], -sn * d[0] + cs * d[1]])
+        }
+    }
+}
+
+fn distance(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}

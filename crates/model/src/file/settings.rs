@@ -1,0 +1,266 @@
+//! `[simulation]` and `[output]`: how to integrate a model and what to write,
+//! every key optional and checked where it is written, and the command
+//! line's overrides of them.
+
+use super::FileError;
+use super::fields::{Doc, Fields, choice, count, number_in, string};
+use super::node::{Entry, Node, Value};
+
+/// The integration scheme of `[simulation] integrator`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IntegratorChoice {
+    /// `"generalized-alpha"` (default): generalized-α with `rho`.
+    GeneralizedAlpha,
+    /// `"hht"`: Hilber-Hughes-Taylor with `alpha`.
+    Hht,
+    /// `"newmark"`: Newmark with `beta`, `gamma` (the paper's scheme).
+    Newmark,
+}
+
+/// The Newton variant of `[simulation] newton`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NewtonChoice {
+    /// `"modified"` (default): reuse the factorization while it contracts.
+    Modified,
+    /// `"full"`: refactor at every iteration.
+    Full,
+}
+
+/// `[simulation]`: every key optional (defaults in `docs/model-format.md`,
+/// applied by the program that runs the model).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Simulation {
+    /// `t_end`, s (> 0).
+    pub t_end: Option<f64>,
+    /// `h`, the step size, s (> 0).
+    pub h: Option<f64>,
+    /// `h_min`, the smallest step size step control may take, s (in (0, h]).
+    pub h_min: Option<f64>,
+    /// `integrator`.
+    pub integrator: Option<IntegratorChoice>,
+    /// `rho`, generalized-α's spectral radius at infinite frequency, in [0, 1].
+    pub rho: Option<f64>,
+    /// `alpha`, HHT's α, in [−1/3, 0].
+    pub alpha: Option<f64>,
+    /// `beta`, Newmark's β (> 0).
+    pub beta: Option<f64>,
+    /// `gamma`, Newmark's γ (≥ ½).
+    pub gamma: Option<f64>,
+    /// `tol`, the relative Newton tolerance, in (0, 1).
+    pub tol: Option<f64>,
+    /// `max_iterations`, Newton iterations per step attempt (≥ 1).
+    pub max_iterations: Option<usize>,
+    /// `newton`.
+    pub newton: Option<NewtonChoice>,
+    /// `kkt`, the KKT solver by name (`auto`, `dense`, `lu`, `ldlt`, `schur`;
+    /// checked by the program that runs the model).
+    pub kkt: Option<String>,
+}
+
+/// `[output]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Output {
+    /// `every`: write every n-th step (≥ 1; default 1).
+    pub every: usize,
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Self { every: 1 }
+    }
+}
+
+/// The keys of `[simulation]`.
+const SIMULATION_KEYS: [&str; 12] = [
+    "t_end",
+    "h",
+    "h_min",
+    "integrator",
+    "rho",
+    "alpha",
+    "beta",
+    "gamma",
+    "tol",
+    "max_iterations",
+    "newton",
+    "kkt",
+];
+
+/// Reads `[simulation]` and `[output]` of the document `root`.
+pub(crate) fn read(doc: Doc<'_>, root: &Node) -> Result<(Simulation, Output), FileError> {
+    let Value::Table(entries) = &root.value else {
+        return Ok((Simulation::default(), Output::default()));
+    };
+    let find = |key: &str| entries.iter().find(|e| e.key == key);
+    let simulation = match find("simulation") {
+        Some(e) => simulation(Fields::of(doc, &e.node, "[simulation]".to_string())?)?,
+        None => Simulation::default(),
+    };
+    let output = match find("output") {
+        Some(e) => {
+            let mut f = Fields::of(doc, &e.node, "[output]".to_string())?;
+            let every = f.optional("every", count(1))?.unwrap_or(1);
+            f.finish(&["every"])?;
+            Output { every }
+        }
+        None => Output::default(),
+    };
+    Ok((simulation, output))
+}
+
+fn simulation(mut f: Fields<'_>) -> Result<Simulation, FileError> {
+    let positive = |unit: &'static str| number_in(|x| x > 0.0, unit);
+    let s = Simulation {
+        t_end: f.optional("t_end", positive("positive, in s"))?,
+        h: f.optional("h", positive("positive, in s"))?,
+        h_min: f.optional("h_min", positive("positive, in s"))?,
+        integrator: f
+            .optional(
+                "integrator",
+                choice(&["generalized-alpha", "hht", "newmark"]),
+            )?
+            .map(|c| match c {
+                "hht" => IntegratorChoice::Hht,
+                "newmark" => IntegratorChoice::Newmark,
+                _ => IntegratorChoice::GeneralizedAlpha,
+            }),
+        rho: f.optional("rho", number_in(|x| (0.0..=1.0).contains(&x), "in [0, 1]"))?,
+        alpha: f.optional(
+            "alpha",
+            number_in(|x| (-1.0 / 3.0..=0.0).contains(&x), "in [−1/3, 0]"),
+        )?,
+        beta: f.optional("beta", positive("positive"))?,
+        gamma: f.optional(
+            "gamma",
+            number_in(|x| x >= 0.5, "at least 1/2 (below, Newmark is unstable)"),
+        )?,
+        tol: f.optional("tol", number_in(|x| x > 0.0 && x < 1.0, "in (0, 1)"))?,
+        max_iterations: f.optional("max_iterations", count(1))?,
+        newton: f
+            .optional("newton", choice(&["modified", "full"]))?
+            .map(|c| match c {
+                "full" => NewtonChoice::Full,
+                _ => NewtonChoice::Modified,
+            }),
+        kkt: f.optional("kkt", string)?.map(str::to_string),
+    };
+    consistent(&mut f, &s)?;
+    f.finish(&SIMULATION_KEYS)?;
+    Ok(s)
+}
+
+/// The scheme's parameters belong to the scheme chosen, and `h_min ≤ h`.
+fn consistent(f: &mut Fields<'_>, s: &Simulation) -> Result<(), FileError> {
+    let integrator = s.integrator.unwrap_or(IntegratorChoice::GeneralizedAlpha);
+    let belongs = [
+        (
+            "rho",
+            s.rho.is_some(),
+            IntegratorChoice::GeneralizedAlpha,
+            "generalized-alpha",
+        ),
+        ("alpha", s.alpha.is_some(), IntegratorChoice::Hht, "hht"),
+        (
+            "beta",
+            s.beta.is_some(),
+            IntegratorChoice::Newmark,
+            "newmark",
+        ),
+        (
+            "gamma",
+            s.gamma.is_some(),
+            IntegratorChoice::Newmark,
+            "newmark",
+        ),
+    ];
+    for (key, given, owner, name) in belongs {
+        if given && integrator != owner {
+            let e: &Entry = f.entry(key).expect("given");
+            return Err(f.bad(
+                e,
+                format!("applies to integrator = \"{name}\", and this model uses another"),
+            ));
+        }
+    }
+    if let (Some(h_min), Some(h)) = (s.h_min, s.h)
+        && h_min > h
+    {
+        let e: &Entry = f.entry("h_min").expect("given");
+        return Err(f.bad(e, format!("must not exceed h = {h}")));
+    }
+    Ok(())
+}
+
+/// Applies the override `path=value` to the document `root` (a dotted path
+/// of table keys; the value in TOML syntax, or a bare word as a string).
+pub(crate) fn apply_override(root: &mut Node, assignment: &str) -> Result<(), String> {
+    let (path, text) = assignment
+        .split_once('=')
+        .ok_or("expected key=value, e.g. simulation.h=1e-4")?;
+    let keys: Vec<&str> = path.trim().split('.').collect();
+    if keys.iter().any(|k| k.is_empty()) {
+        return Err(format!("'{path}' is not a dotted path of keys"));
+    }
+    let value = override_value(text.trim());
+    let mut node = root;
+    for (k, key) in keys.iter().enumerate() {
+        let Value::Table(entries) = &mut node.value else {
+            return Err(format!("'{}' is not a table", keys[..k].join(".")));
+        };
+        let at = match entries.iter().position(|e| e.key == *key) {
+            Some(at) => at,
+            None => {
+                let empty = Node {
+                    value: Value::Table(Vec::new()),
+                    span: None,
+                };
+                entries.push(Entry {
+                    key: (*key).to_string(),
+                    key_span: None,
+                    node: empty,
+                });
+                entries.len() - 1
+            }
+        };
+        node = &mut entries[at].node;
+    }
+    *node = value;
+    Ok(())
+}
+
+/// A value written on the command line: TOML syntax, or else a string.
+fn override_value(text: &str) -> Node {
+    let parsed = super::node::parse_toml(&format!("v = {text}"), "--set").ok();
+    let value = parsed.and_then(|n| match n.value {
+        Value::Table(mut e) if e.len() == 1 => e.pop().map(|e| e.node.value),
+        _ => None,
+    });
+    Node {
+        value: value.unwrap_or_else(|| Value::Str(text.to_string())),
+        span: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn overrides_set_and_create_keys() {
+        let mut root =
+            super::super::node::parse_toml("[simulation]\nh = 0.01\n", "m").expect("valid");
+        apply_override(&mut root, "simulation.h=1e-4").expect("set");
+        apply_override(&mut root, "simulation.integrator=hht").expect("a bare word");
+        apply_override(&mut root, "output.every=5").expect("a new table");
+        let doc = Doc {
+            origin: "m",
+            text: "",
+        };
+        let (s, o) = read(doc, &root).expect("valid");
+        assert_eq!(s.h, Some(1e-4));
+        assert_eq!(s.integrator, Some(IntegratorChoice::Hht));
+        assert_eq!(o.every, 5);
+        assert!(apply_override(&mut root, "simulation.h").is_err());
+        assert!(apply_override(&mut root, "simulation.h.x=1").is_err());
+    }
+}

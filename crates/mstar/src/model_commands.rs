@@ -1,0 +1,326 @@
+//! `mstar run` and `mstar check`: model files on the command line.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use mstar::model::file::{ModelFile, Simulation};
+use mstar::pendulum::PendulumRun;
+use mstar::{IntegrationError, Integrator, Observer, SampleRef, System, csv};
+
+/// Arguments of `mstar run`.
+#[derive(clap::Args, Debug)]
+pub struct RunArgs {
+    /// The model file (TOML, or JSON by its `.json` extension); see
+    /// docs/model-format.md.
+    #[arg(required_unless_present = "builtin", conflicts_with = "builtin")]
+    model: Option<PathBuf>,
+    /// A built-in model instead of a file: the paper's pendulum (released
+    /// horizontally; h = 0.01 s, t_end = 10 s) or a 10-bar chain (h = 1e-3 s,
+    /// t_end = 1 s).
+    #[arg(long, value_enum)]
+    builtin: Option<Builtin>,
+    /// Write the samples to this CSV file (streamed; complete, or on a failure
+    /// the samples so far in <name>.partial.csv).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// End time, s (overrides [simulation] t_end).
+    #[arg(long)]
+    t_end: Option<f64>,
+    /// Step size, s (overrides [simulation] h).
+    #[arg(long)]
+    h: Option<f64>,
+    /// Override a key of the file, e.g. --set simulation.rho=0.8 or
+    /// --set output.every=10 (repeatable; values in TOML syntax).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+/// The built-in models of `mstar run --builtin`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Builtin {
+    /// The paper's pendulum in u = [x, y, θ] (`mstar pendulum` runs it too).
+    Pendulum,
+    /// Ten slender bars on revolute joints (`mstar chain --links 10`).
+    Chain,
+}
+
+/// Arguments of `mstar check`.
+#[derive(clap::Args, Debug)]
+pub struct CheckArgs {
+    /// The model file.
+    model: PathBuf,
+    /// Override a key of the file (as for `mstar run`).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+/// A model to run: the system, its start and its settings.
+struct Loaded {
+    label: String,
+    system: Box<dyn System>,
+    u0: Vec<f64>,
+    v0: Vec<f64>,
+    simulation: Simulation,
+    every: usize,
+}
+
+/// `mstar run`.
+pub fn run(args: &RunArgs) -> Result<()> {
+    let model = load(args)?;
+    let (config, t_end) = mstar::run::config(&model.simulation).map_err(anyhow::Error::msg)?;
+    let sys = model.system.as_ref();
+    println!(
+        "{}: {} coordinates, {} constraints; h = {} s, t_end = {} s",
+        model.label,
+        sys.n_coords(),
+        sys.n_constraints(),
+        config.h,
+        t_end
+    );
+    let mut integ = Integrator::new(sys, config, 0.0, &model.u0, &model.v0)?;
+    println!(
+        "KKT solver: {}; Newton: {:?}",
+        integ.backend(),
+        integ.newton()
+    );
+    let stream = args
+        .out
+        .as_deref()
+        .map(|p| csv::CsvStream::create(p, sys))
+        .transpose()?;
+    let mut output = RunOutput::new(stream, model.every, t_end);
+    let clock = Instant::now();
+    let result = integ.run(t_end, &mut output);
+    let wall = clock.elapsed().as_secs_f64();
+    output.progress.finish_and_clear();
+    print_summary(&integ, &output, wall);
+    finish(output, args.out.as_deref(), result)
+}
+
+/// Keeps the samples on success, or in `<name>.partial.csv` on a failure.
+fn finish(
+    output: RunOutput,
+    out: Option<&Path>,
+    result: Result<mstar::RunStats, IntegrationError>,
+) -> Result<()> {
+    let (Some(stream), Some(out)) = (output.stream, out) else {
+        result?;
+        return Ok(());
+    };
+    match result {
+        Ok(_) => {
+            stream.finish()?;
+            println!("wrote {} ({} rows)", out.display(), output.written);
+            Ok(())
+        }
+        Err(e) => {
+            let partial = crate::partial_path(out);
+            stream.finish_as(&partial)?;
+            eprintln!(
+                "note: {} was not written; the {} samples up to the failure are in {}",
+                out.display(),
+                output.written,
+                partial.display()
+            );
+            Err(e.into())
+        }
+    }
+}
+
+/// The model of `mstar run`: a file or a built-in.
+fn load(args: &RunArgs) -> Result<Loaded> {
+    let mut set = args.set.clone();
+    for (key, value) in [("t_end", args.t_end), ("h", args.h)] {
+        if let Some(v) = value {
+            set.push(format!("simulation.{key}={v:e}"));
+        }
+    }
+    if let Some(builtin) = args.builtin {
+        return builtin_model(builtin, &set);
+    }
+    let path = args.model.as_deref().context("a model file or --builtin")?;
+    let file = ModelFile::load_with(path, &set)?;
+    Ok(Loaded {
+        label: path.display().to_string(),
+        u0: file.system.initial_position(),
+        v0: file.system.initial_velocity(),
+        every: file.output.every,
+        simulation: file.simulation,
+        system: Box::new(file.system),
+    })
+}
+
+/// A built-in model with its defaults, `--t-end`/`--h` (as overrides of
+/// `simulation.t_end`/`simulation.h`) applied; other overrides are refused.
+fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
+    let mut simulation = Simulation::default();
+    for assignment in set {
+        let (key, value) = assignment.split_once('=').unwrap_or((assignment, ""));
+        let value: f64 = value
+            .parse()
+            .ok()
+            .filter(|v: &f64| v.is_finite() && *v > 0.0)
+            .with_context(|| format!("{key}: expected a positive number, got '{value}'"))?;
+        match key {
+            "simulation.t_end" => simulation.t_end = Some(value),
+            "simulation.h" => simulation.h = Some(value),
+            _ => bail!("--set {assignment}: a built-in model takes --t-end and --h only"),
+        }
+    }
+    Ok(match builtin {
+        Builtin::Pendulum => {
+            let run = PendulumRun::standard();
+            let sys = run.system();
+            simulation.t_end = simulation.t_end.or(Some(run.t_end));
+            simulation.h = simulation.h.or(Some(run.config.h));
+            Loaded {
+                label: "built-in pendulum".to_string(),
+                u0: sys.position(&[run.theta0]),
+                v0: sys.velocity(&[run.theta0], &[run.omega0]),
+                system: Box::new(sys),
+                simulation,
+                every: 1,
+            }
+        }
+        Builtin::Chain => {
+            let sys = mstar::planar::bar_chain(10);
+            Loaded {
+                label: "built-in 10-bar chain".to_string(),
+                u0: sys.initial_position(),
+                v0: sys.initial_velocity(),
+                system: Box::new(sys),
+                simulation,
+                every: 1,
+            }
+        }
+    })
+}
+
+/// What `mstar run` does with every sample: the CSV file (every n-th step
+/// and the last), the progress bar, and the figures of the summary.
+struct RunOutput {
+    stream: Option<csv::CsvStream>,
+    every: usize,
+    seen: usize,
+    written: usize,
+    t_end: f64,
+    progress: ProgressBar,
+    shown: bool,
+    start: Instant,
+    energy0: Option<f64>,
+    drift: f64,
+    max_constraint: f64,
+}
+
+impl RunOutput {
+    fn new(stream: Option<csv::CsvStream>, every: usize, t_end: f64) -> Self {
+        let progress = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::hidden());
+        progress.set_style(
+            ProgressStyle::with_template("{bar:40} t = {msg} s [{elapsed_precise}, {eta} left]")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        Self {
+            stream,
+            every: every.max(1),
+            seen: 0,
+            written: 0,
+            t_end,
+            progress,
+            shown: false,
+            start: Instant::now(),
+            energy0: None,
+            drift: 0.0,
+            max_constraint: 0.0,
+        }
+    }
+}
+
+impl Observer for RunOutput {
+    fn observe(&mut self, s: &SampleRef<'_>) {
+        let last = s.t >= self.t_end * (1.0 - 1e-12);
+        if let Some(stream) = self.stream.as_mut()
+            && (self.seen.is_multiple_of(self.every) || last)
+        {
+            stream.observe(s);
+            self.written += 1;
+        }
+        self.seen += 1;
+        let e = s.energy();
+        let e0 = *self.energy0.get_or_insert(e);
+        self.drift = if (e - e0).abs() > self.drift || e.is_nan() {
+            (e - e0).abs()
+        } else {
+            self.drift
+        };
+        self.max_constraint = self.max_constraint.max(s.constraint);
+        // A bar on standard error for runs longer than a second (indicatif
+        // draws nothing when it is not a terminal).
+        if !self.shown && self.start.elapsed().as_secs_f64() > 1.0 {
+            self.progress.set_draw_target(ProgressDrawTarget::stderr());
+            self.shown = true;
+        }
+        if self.shown {
+            self.progress
+                .set_position((1000.0 * s.t / self.t_end) as u64);
+            self.progress.set_message(format!("{:.4}", s.t));
+        }
+    }
+}
+
+fn print_summary(integ: &Integrator<'_, dyn System>, out: &RunOutput, wall: f64) {
+    let st = integ.stats();
+    let steps = st.steps.max(1) as f64;
+    println!("t reached: {} s", integ.time());
+    println!(
+        "steps: {} accepted, {} rejected; Newton iterations: {} ({:.2} per step, {} max); factorizations: {}",
+        st.steps,
+        st.rejected,
+        st.iterations,
+        st.iterations as f64 / steps,
+        st.max_iterations,
+        st.factorizations
+    );
+    println!(
+        "max ‖Φ‖∞ = {:.3e}; energy drift max |E − E₀| = {:.3e} J",
+        out.max_constraint, out.drift
+    );
+    println!(
+        "wall time: {wall:.3} s ({:.2} µs per step)",
+        wall * 1e6 / steps
+    );
+}
+
+/// `mstar check`: exit 0 when the model can run as written, 1 when it
+/// cannot, 2 when the file cannot be read.
+pub fn check(args: &CheckArgs) -> ExitCode {
+    let file = match ModelFile::load_with(&args.model, &args.set) {
+        Ok(file) => file,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let config = match mstar::run::config(&file.simulation) {
+        Ok((config, _)) => config,
+        Err(e) => {
+            eprintln!("error: {}: {e}", args.model.display());
+            return ExitCode::from(1);
+        }
+    };
+    let report = mstar::run::check(&file.system, &config);
+    print!("{report}");
+    if report.can_run() {
+        ExitCode::SUCCESS
+    } else {
+        if !report.redundant.is_empty() {
+            eprintln!(
+                "error: the constraints of {} are redundant (their equations are linearly dependent): remove or loosen one",
+                report.redundant.join(", ")
+            );
+        }
+        ExitCode::from(1)
+    }
+}

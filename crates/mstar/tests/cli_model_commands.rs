@@ -1,0 +1,140 @@
+//! `mstar run` and `mstar check` as a user meets them: the exit codes
+//! `check` promises (0 runnable, 1 not runnable, 2 unreadable), errors with
+//! the file's line and column, a CSV file written completely, and the samples
+//! of a failed run kept in `<name>.partial.csv`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn mstar(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mstar"))
+        .args(args)
+        .output()
+        .expect("the mstar program runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn model(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// A fresh directory for one test's files.
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mstar-cli-{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("a scratch directory");
+    dir
+}
+
+#[test]
+fn check_exits_with_what_it_found() {
+    let ok = mstar(&["check", &model("four-bar.toml")]);
+    assert_eq!(ok.status.code(), Some(0), "{}", text(&ok.stderr));
+    let out = text(&ok.stdout);
+    for line in [
+        "coordinates: 9",
+        "constraints: 9",
+        "degrees of freedom: 0",
+        "redundant constraints: none",
+    ] {
+        assert!(out.contains(line), "{out}");
+    }
+    let dir = scratch("check");
+    let bad = dir.join("bad.toml");
+    std::fs::write(&bad, "format = \"mstar.planar/1\"\n\n[[body]]\nname = \"b\"\nmass = 1.0\ninertia = -1.0\npose = [0.0, 0.0, 0.0]\n").expect("write");
+    let unreadable = mstar(&["check", &bad.display().to_string()]);
+    assert_eq!(unreadable.status.code(), Some(2));
+    let e = text(&unreadable.stderr);
+    assert!(
+        e.contains("bad.toml:6:11: body 'b': inertia: must be positive"),
+        "{e}"
+    );
+    // Two pins where one does: the second is redundant, the model cannot run.
+    let redundant = dir.join("redundant.toml");
+    std::fs::write(
+        &redundant,
+        "format = \"mstar.planar/1\"\n[[body]]\nname = \"bar\"\nmass = 1.0\ninertia = 0.1\npose = [0.5, 0.0, 0.0]\n\
+         [[joint]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"bar\"]\nat = [0.0, 0.0]\n\
+         [[joint]]\nname = \"again\"\ntype = \"revolute\"\nbodies = [\"ground\", \"bar\"]\nat = [0.0, 0.0]\n",
+    )
+    .expect("write");
+    let refused = mstar(&["check", &redundant.display().to_string()]);
+    assert_eq!(refused.status.code(), Some(1));
+    assert!(
+        text(&refused.stdout).contains("redundant constraints: again"),
+        "{}",
+        text(&refused.stdout)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn run_writes_the_csv_and_keeps_a_failed_run_s_samples() {
+    let dir = scratch("run");
+    let out = dir.join("slider.csv");
+    let ok = mstar(&[
+        "run",
+        &model("slider-crank.toml"),
+        "--t-end",
+        "0.05",
+        "--set",
+        "output.every=10",
+        "--out",
+        &out.display().to_string(),
+    ]);
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+    let csv = std::fs::read_to_string(&out).expect("written");
+    let header = csv.lines().next().expect("a header");
+    assert!(
+        header.starts_with("t,u:crank.x,u:crank.y,u:crank.theta,u:rod.x"),
+        "{header}"
+    );
+    // t = 0, every 10th of 50 steps, and the last: 6 rows after the header.
+    assert_eq!(csv.lines().count(), 7, "{csv}");
+    // A step size Newton cannot follow, without step control: it fails after
+    // some steps, and those are kept.
+    let failing = dir.join("fast.csv");
+    let failed = mstar(&[
+        "run",
+        &model("slider-crank.toml"),
+        "--h",
+        "0.05",
+        "--set",
+        "simulation.h_min=0.05",
+        "--set",
+        "simulation.max_iterations=2",
+        "--out",
+        &failing.display().to_string(),
+    ]);
+    assert_eq!(failed.status.code(), Some(1), "{}", text(&failed.stdout));
+    assert!(!failing.exists());
+    let partial = dir.join("fast.partial.csv");
+    let kept = std::fs::read_to_string(&partial).expect("the partial file");
+    assert!(kept.lines().count() >= 2, "{kept}");
+    assert!(
+        text(&failed.stderr).contains("fast.partial.csv"),
+        "{}",
+        text(&failed.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn run_takes_built_in_models() {
+    let ok = mstar(&["run", "--builtin", "pendulum", "--t-end", "0.5"]);
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+    assert!(
+        text(&ok.stdout).contains("steps: 50 accepted"),
+        "{}",
+        text(&ok.stdout)
+    );
+    let refused = mstar(&["run", "--builtin", "chain", "--set", "simulation.rho=0.5"]);
+    assert_eq!(refused.status.code(), Some(1));
+}

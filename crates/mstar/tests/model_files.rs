@@ -1,0 +1,504 @@
+//! Model files (`docs/model-format.md`) describe mechanisms that must move as
+//! their physics says. Every file in `models/` loads and runs with the
+//! constraints held; the driven mechanisms follow their closed-form or
+//! loop-closure kinematics to the Newton tolerance; the double pendulum
+//! agrees with RK4 on its joint-angle equations at second order; the same
+//! model in JSON is the same model. And every kind of bad input is an error
+//! that names the file, the line and column, the element and the key.
+
+use std::path::{Path, PathBuf};
+
+use mstar::model::file::{Format, ModelFile};
+use mstar::rk4::{AngleChain, AngleLink};
+use mstar::{Integrator, SampleRef, System};
+
+fn models() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models")
+}
+
+/// Runs `path` with the overrides, returning `(t, u)` of every sample and
+/// the largest `‖Φ‖∞` relative to the Newton tolerance's scale.
+fn run(path: &Path, set: &[&str]) -> (Vec<(f64, Vec<f64>)>, f64) {
+    let set: Vec<String> = set.iter().map(|s| (*s).to_string()).collect();
+    let model = ModelFile::load_with(path, &set).unwrap_or_else(|e| panic!("{e}"));
+    let (config, t_end) = mstar::run::config(&model.simulation).expect("valid settings");
+    let sys = &model.system;
+    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+    let tol = config.tol;
+    let mut integ = Integrator::new(sys, config, 0.0, &u0, &v0).expect("a start");
+    let (mut samples, mut worst) = (Vec::new(), 0.0f64);
+    let mut phi = vec![0.0; sys.n_constraints()];
+    integ
+        .run(t_end, &mut |s: &SampleRef<'_>| {
+            sys.phi_into(s.t, s.u, &mut phi);
+            let eta = tol * s.u.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+            let r = mstar::kkt::max_abs(&phi) / eta;
+            worst = if r.is_nan() || r > worst { r } else { worst };
+            samples.push((s.t, s.u.to_vec()));
+        })
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    (samples, worst)
+}
+
+#[test]
+fn every_model_runs_with_its_constraints_held() {
+    let mut count = 0;
+    for entry in std::fs::read_dir(models()).expect("models/") {
+        let path = entry.expect("entry").path();
+        if !matches!(
+            path.extension().and_then(|e| e.to_str()),
+            Some("toml" | "json")
+        ) {
+            continue;
+        }
+        let (samples, worst) = run(&path, &["simulation.t_end=0.1"]);
+        assert!(
+            worst <= 1.0,
+            "{}: ‖Φ‖∞ reached {worst:.2} η",
+            path.display()
+        );
+        let last = samples.last().expect("samples");
+        assert!((last.0 - 0.1).abs() < 1e-12, "{}", path.display());
+        count += 1;
+    }
+    assert!(count >= 5, "{count} models");
+}
+
+#[test]
+fn the_json_double_pendulum_is_the_toml_one() {
+    let (toml, _) = run(
+        &models().join("double-pendulum.toml"),
+        &["simulation.t_end=0.2"],
+    );
+    let (json, _) = run(
+        &models().join("double-pendulum.json"),
+        &["simulation.t_end=0.2"],
+    );
+    assert_eq!(toml, json);
+}
+
+#[test]
+fn the_slider_crank_follows_its_closed_form() {
+    // θ = 0.3 + 10 t, x = r cos θ + √(L² − r² sin² θ), r = 0.1, L = 0.3.
+    let path = models().join("slider-crank.toml");
+    let model = ModelFile::load(&path).expect("valid");
+    let slider = model.system.body_x("slider").expect("slider");
+    let (samples, _) = run(&path, &["simulation.tol=1e-12"]);
+    let (r, l) = (0.1f64, 0.3f64);
+    let worst = samples
+        .iter()
+        .map(|(t, u)| {
+            let th = 0.3 + 10.0 * t;
+            let x = r * th.cos() + (l * l - (r * th.sin()).powi(2)).sqrt();
+            (u[slider] - x).abs().max(u[slider + 1].abs())
+        })
+        .fold(0.0, f64::max);
+    assert!(worst <= 1e-10, "slider off its closed form by {worst:e} m");
+}
+
+/// The four-bar's coupler and rocker angles for the crank angle `t2`, by
+/// Newton on the loop closure `a e(t2) + b e(t3) = d eₓ + c e(t4)` from
+/// `(t3, t4)`.
+fn loop_closure(t2: f64, (mut t3, mut t4): (f64, f64)) -> (f64, f64) {
+    let (a, b, c, d) = (0.2, 0.6, 0.5, 0.6);
+    for _ in 0..50 {
+        let f = [
+            a * t2.cos() + b * t3.cos() - d - c * t4.cos(),
+            a * t2.sin() + b * t3.sin() - c * t4.sin(),
+        ];
+        // ∂f/∂(t3, t4).
+        let j = [[-b * t3.sin(), c * t4.sin()], [b * t3.cos(), -c * t4.cos()]];
+        let det = j[0][0] * j[1][1] - j[0][1] * j[1][0];
+        t3 -= (f[0] * j[1][1] - f[1] * j[0][1]) / det;
+        t4 -= (j[0][0] * f[1] - j[1][0] * f[0]) / det;
+        if f[0].abs().max(f[1].abs()) < 1e-15 {
+            break;
+        }
+    }
+    (t3, t4)
+}
+
+#[test]
+fn the_four_bar_follows_its_loop_closure() {
+    let path = models().join("four-bar.toml");
+    let model = ModelFile::load(&path).expect("valid");
+    let sys = &model.system;
+    let (coupler, rocker) = (
+        sys.body_x("coupler").expect("coupler") + 2,
+        sys.body_x("rocker").expect("rocker") + 2,
+    );
+    let (samples, _) = run(&path, &["simulation.tol=1e-12"]);
+    let mut angles = (0.7381223365325295, 1.5320736152650125);
+    let mut worst = 0.0f64;
+    for (t, u) in &samples {
+        angles = loop_closure(0.5 + 2.0 * t, angles);
+        worst = worst
+            .max((u[coupler] - angles.0).abs())
+            .max((u[rocker] - angles.1).abs());
+    }
+    assert!(worst <= 1e-10, "off the loop closure by {worst:e} rad");
+    // It turned the crank through 4 rad: past the rocker's extreme positions.
+    assert!(samples.len() > 2000);
+}
+
+#[test]
+fn the_double_pendulum_converges_to_rk4_at_second_order() {
+    let path = models().join("double-pendulum.toml");
+    let chain = AngleChain::new(
+        vec![
+            AngleLink {
+                m: 1.0,
+                j: 1.0 / 12.0,
+                l: 1.0,
+                c: 0.5,
+            },
+            AngleLink {
+                m: 0.6,
+                j: 0.032,
+                l: 0.8,
+                c: 0.4,
+            },
+        ],
+        9.81,
+    );
+    let (phi, _) = chain.solve(&[0.4, -0.3], &[0.0, 0.0], &[1.0]).remove(0);
+    let want = chain.centres(&phi)[1];
+    let lower = ModelFile::load(&path)
+        .expect("valid")
+        .system
+        .body_x("lower")
+        .expect("lower");
+    let error = |h: &str| {
+        let (samples, _) = run(&path, &[&format!("simulation.h={h}")]);
+        let u = &samples.last().expect("samples").1;
+        (u[lower] - want[0]).hypot(u[lower + 1] - want[1])
+    };
+    let (coarse, fine) = (error("2e-3"), error("1e-3"));
+    let order = (coarse / fine).log2();
+    assert!(
+        (order - 2.0).abs() <= 0.1,
+        "{coarse:e}, {fine:e}: order {order:.2}"
+    );
+}
+
+/// The error of reading `text` (TOML), as a string.
+fn error(text: &str) -> String {
+    match ModelFile::parse(text, "m.toml", Format::Toml) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+const BAR: &str = r#"format = "mstar.planar/1"
+
+[[body]]
+name = "bar"
+mass = 1.0
+inertia = 0.1
+pose = [0.5, 0.0, 0.0]
+
+[[joint]]
+name = "hinge"
+type = "revolute"
+bodies = ["ground", "bar"]
+at = [0.0, 0.0]
+"#;
+
+#[test]
+fn a_valid_model_is_the_base_of_the_error_cases() {
+    let m = ModelFile::parse(BAR, "m.toml", Format::Toml).expect("valid");
+    assert_eq!((m.system.n_coords(), m.system.n_constraints()), (3, 2));
+}
+
+#[test]
+fn each_bad_input_names_the_place_the_element_and_the_key() {
+    let cases: [(&str, &str, &[&str]); 12] = [
+        (
+            "mass = 1.0",
+            "mas = 1.0",
+            &[
+                "m.toml:5:1:",
+                "body 'bar'",
+                "unknown key 'mas'",
+                "did you mean 'mass'",
+            ],
+        ),
+        (
+            "mass = 1.0",
+            "mass = \"heavy\"",
+            &[
+                "m.toml:5:8:",
+                "body 'bar': mass",
+                "expected a number, found a string",
+            ],
+        ),
+        (
+            "mass = 1.0",
+            "mass = -1.0",
+            &["m.toml:5:8:", "body 'bar': mass", "must be positive"],
+        ),
+        (
+            "inertia = 0.1",
+            "inertia = 0.0",
+            &["m.toml:6:11:", "body 'bar': inertia", "must be positive"],
+        ),
+        (
+            "[\"ground\", \"bar\"]",
+            "[\"ground\", \"baz\"]",
+            &[
+                "m.toml:12:",
+                "joint 'hinge': bodies",
+                "no body or point mass is called 'baz'",
+            ],
+        ),
+        (
+            "name = \"hinge\"",
+            "name = \"bar\"",
+            &[
+                "m.toml:10:8:",
+                "the name 'bar' is used twice",
+                "body 'bar' (line 4)",
+            ],
+        ),
+        (
+            "type = \"revolute\"",
+            "type = \"hinge\"",
+            &[
+                "m.toml:11:8:",
+                "joint 'hinge': type",
+                "'hinge' is not one of: revolute, prismatic, distance, weld",
+            ],
+        ),
+        (
+            "mstar.planar/1",
+            "mstar.planar/9",
+            &["m.toml:1:10:", "unknown format 'mstar.planar/9'"],
+        ),
+        (
+            "pose = [0.5, 0.0, 0.0]",
+            "pose = [0.5, 0.0]",
+            &[
+                "m.toml:7:8:",
+                "body 'bar': pose",
+                "expected 3 numbers, found 2",
+            ],
+        ),
+        (
+            "at = [0.0, 0.0]",
+            "at = [0.0, 0.0]\npoints = [[0.0, 0.0], [0.0, 0.0]]",
+            &[
+                "m.toml:9:",
+                "joint 'hinge'",
+                "give 'points' or 'at', not both",
+            ],
+        ),
+        ("mass = 1.0", "mass = = 1.0", &["m.toml:5:", "TOML syntax"]),
+        (
+            "format = \"mstar.planar/1\"",
+            "",
+            &["m.toml", "the model: the key 'format' is missing"],
+        ),
+    ];
+    for (from, to, want) in cases {
+        let text = BAR.replacen(from, to, 1);
+        let e = error(&text);
+        for w in want {
+            assert!(e.contains(w), "{to:?}: {e:?} lacks {w:?}");
+        }
+    }
+}
+
+#[test]
+fn settings_are_checked_where_they_are_written() {
+    let cases: [(&str, &[&str]); 6] = [
+        (
+            "h = 0.0",
+            &["m.toml:16:5:", "[simulation]: h", "must be positive"],
+        ),
+        (
+            "rho = 1.5",
+            &["m.toml:16:7:", "[simulation]: rho", "in [0, 1]"],
+        ),
+        (
+            "integrator = \"hht\"\nrho = 0.5",
+            &[
+                "m.toml:17:7:",
+                "[simulation]: rho",
+                "applies to integrator = \"generalized-alpha\"",
+            ],
+        ),
+        (
+            "gamma = 0.4\nintegrator = \"newmark\"",
+            &["[simulation]: gamma", "at least 1/2"],
+        ),
+        ("tol = 2.0", &["[simulation]: tol", "in (0, 1)"]),
+        (
+            "t-end = 1.0",
+            &["unknown key 't-end'", "did you mean 't_end'"],
+        ),
+    ];
+    for (setting, want) in cases {
+        let text = format!("{BAR}\n[simulation]\n{setting}\n");
+        let e = error(&text);
+        for w in want {
+            assert!(e.contains(w), "{setting:?}: {e:?} lacks {w:?}");
+        }
+    }
+    let e = error(&format!("{BAR}\n[output]\nevery = 0\n"));
+    assert!(
+        e.contains("[output]: every") && e.contains("at least 1"),
+        "{e}"
+    );
+}
+
+#[test]
+fn elements_are_checked_with_their_physics() {
+    let spring = r#"
+[[force]]
+name = "spring"
+type = "spring-damper"
+bodies = ["bar", "ground"]
+points = [[0.5, 0.0], [2.0, 0.0]]
+stiffness = -5.0
+"#;
+    let e = error(&format!("{BAR}{spring}"));
+    assert!(
+        e.contains("force 'spring': stiffness") && e.contains("non-negative"),
+        "{e}"
+    );
+    let slider = r#"
+[[joint]]
+name = "slide"
+type = "prismatic"
+bodies = ["ground", "bar"]
+at = [1.0, 0.0]
+axis = [0.0, 0.0]
+"#;
+    let e = error(&format!("{BAR}{slider}"));
+    assert!(
+        e.contains("joint 'slide': axis") && e.contains("must not be zero"),
+        "{e}"
+    );
+    let driver = r#"
+[[driver]]
+name = "motor"
+body = "bar"
+coordinate = "theta"
+function = { table = [[0.0, 1.0], [0.0, 2.0]] }
+"#;
+    let e = error(&format!("{BAR}{driver}"));
+    assert!(
+        e.contains("driver 'motor': function") && e.contains("must increase"),
+        "{e}"
+    );
+    let e = error(&format!(
+        "{BAR}{}",
+        driver.replace("table = [[0.0, 1.0], [0.0, 2.0]]", "sine = 1.0")
+    ));
+    assert!(e.contains("unknown function 'sine'"), "{e}");
+}
+
+#[test]
+fn json_reads_the_same_keys_and_reports_its_syntax_errors_with_a_line() {
+    let text = std::fs::read_to_string(models().join("double-pendulum.json")).expect("file");
+    let bad = text.replacen("\"mass\": 1.0", "\"mass\": -1.0", 1);
+    let e = ModelFile::parse(&bad, "m.json", Format::Json)
+        .expect_err("negative mass")
+        .to_string();
+    assert!(
+        e.contains("body 'upper': mass") && e.contains("must be positive"),
+        "{e}"
+    );
+    let broken = text.replacen("\"mass\": 1.0,", "\"mass\": 1.0", 1);
+    let e = ModelFile::parse(&broken, "m.json", Format::Json)
+        .expect_err("syntax")
+        .to_string();
+    assert!(
+        e.starts_with("m.json:5:") && e.contains("JSON syntax"),
+        "{e}"
+    );
+}
+
+#[test]
+fn check_reports_degrees_of_freedom_and_redundant_joints_by_name() {
+    // A parallelogram (ground link 1 m, two 0.5 m cranks, a 1 m coupler) with
+    // a third crank in the middle: its joints repeat what the parallelogram
+    // already imposes.
+    let parallelogram = r#"format = "mstar.planar/1"
+[[body]]
+name = "left"
+mass = 1.0
+inertia = 0.02
+pose = [0.0, 0.25, 1.5707963267948966]
+[[body]]
+name = "right"
+mass = 1.0
+inertia = 0.02
+pose = [1.0, 0.25, 1.5707963267948966]
+[[body]]
+name = "middle"
+mass = 1.0
+inertia = 0.02
+pose = [0.5, 0.25, 1.5707963267948966]
+[[body]]
+name = "coupler"
+mass = 2.0
+inertia = 0.2
+pose = [0.5, 0.5, 0.0]
+[[joint]]
+name = "left-ground"
+type = "revolute"
+bodies = ["ground", "left"]
+at = [0.0, 0.0]
+[[joint]]
+name = "left-top"
+type = "revolute"
+bodies = ["left", "coupler"]
+at = [0.0, 0.5]
+[[joint]]
+name = "right-ground"
+type = "revolute"
+bodies = ["ground", "right"]
+at = [1.0, 0.0]
+[[joint]]
+name = "right-top"
+type = "revolute"
+bodies = ["right", "coupler"]
+at = [1.0, 0.5]
+[[joint]]
+name = "middle-ground"
+type = "revolute"
+bodies = ["ground", "middle"]
+at = [0.5, 0.0]
+[[joint]]
+name = "middle-top"
+type = "revolute"
+bodies = ["middle", "coupler"]
+at = [0.5, 0.5]
+"#;
+    let model = ModelFile::parse(parallelogram, "p.toml", Format::Toml).expect("valid");
+    let (config, _) = mstar::run::config(&model.simulation).expect("defaults");
+    let report = mstar::run::check(&model.system, &config);
+    assert_eq!((report.coordinates, report.constraints), (12, 12));
+    assert_eq!(report.degrees_of_freedom(), Some(1));
+    assert_eq!(report.redundant, vec!["middle-top".to_string()]);
+    assert!(!report.can_run());
+    // Without the third crank's top joint: one degree of freedom, no
+    // redundancy, and it starts.
+    let plain = parallelogram.replace("name = \"middle-top\"", "name = \"middle-top\"\n# removed").replace(
+        "[[joint]]\nname = \"middle-top\"\n# removed\ntype = \"revolute\"\nbodies = [\"middle\", \"coupler\"]\nat = [0.5, 0.5]\n",
+        "",
+    );
+    let model = ModelFile::parse(&plain, "p.toml", Format::Toml).expect("valid");
+    let report = mstar::run::check(&model.system, &config);
+    assert_eq!(
+        (report.constraints, report.degrees_of_freedom()),
+        (10, Some(2))
+    );
+    assert!(report.redundant.is_empty() && report.can_run(), "{report}");
+    // The driven four-bar has none left.
+    let four_bar = ModelFile::load(&models().join("four-bar.toml")).expect("valid");
+    let report = mstar::run::check(&four_bar.system, &config);
+    assert_eq!(report.degrees_of_freedom(), Some(0));
+    assert!(report.can_run(), "{report}");
+}
