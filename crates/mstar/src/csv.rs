@@ -22,6 +22,27 @@ pub fn header<S: System + ?Sized>(sys: &S) -> Vec<String> {
     h
 }
 
+/// The header as one CSV line (without the newline): names from model files
+/// may hold commas or quotes, so such fields are quoted (RFC 4180: in double
+/// quotes, inner quotes doubled).
+#[must_use]
+pub fn header_line<S: System + ?Sized>(sys: &S) -> String {
+    header(sys)
+        .iter()
+        .map(|f| field(f))
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+/// One CSV field, quoted when it holds a comma, a quote or a line break.
+fn field(s: &str) -> std::borrow::Cow<'_, str> {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\"")).into()
+    } else {
+        s.into()
+    }
+}
+
 /// A number in shortest round-trip form: plain for `1e-4 ≤ |x| < 1e15` (and 0),
 /// exponent notation otherwise.
 fn number(out: &mut String, x: f64) {
@@ -52,7 +73,7 @@ fn row(out: &mut String, s: &SampleRef<'_>) {
 /// The samples as CSV text (header first), numbers in shortest round-trip form.
 #[must_use]
 pub fn to_csv<S: System + ?Sized>(sys: &S, samples: &[Sample]) -> String {
-    let mut out = header(sys).join(",");
+    let mut out = header_line(sys);
     out.push('\n');
     for s in samples {
         row(&mut out, &s.view());
@@ -84,7 +105,7 @@ impl CsvStream {
             std::io::Error::new(e.kind(), format!("could not write {}: {e}", path.display()))
         };
         let mut file = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(with_path)?);
-        let mut line = header(sys).join(",");
+        let mut line = header_line(sys);
         line.push('\n');
         file.write_all(line.as_bytes()).map_err(with_path)?;
         Ok(Self {
@@ -229,6 +250,34 @@ mod tests {
         let text = to_csv(&sys, &[s]);
         let row = text.lines().nth(1).expect("one row");
         assert_eq!(row, "0.5,1,2,3,0,0,0,0,0,0,-10,0.25,3,3,1e-12,0");
+    }
+
+    #[test]
+    fn names_with_commas_and_quotes_are_quoted() {
+        let sys = mstar_model::FnSystem::new(
+            vec![1.0, 1.0],
+            1,
+            |_, u, p| p[0] = u[0],
+            |_, _, b| b.copy_from_slice(&[1.0, 0.0]),
+        )
+        .with_names(&["a,b", "say \"hi\""], &["c"])
+        .expect("names");
+        let line = header_line(&sys);
+        assert!(
+            line.starts_with("t,\"u:a,b\",\"u:say \"\"hi\"\"\",\"v:a,b\""),
+            "{line}"
+        );
+        // Nine fields once the quoted ones are taken whole.
+        let mut fields = 0;
+        let mut quoted = false;
+        for c in line.chars() {
+            match c {
+                '"' => quoted = !quoted,
+                ',' if !quoted => fields += 1,
+                _ => {}
+            }
+        }
+        assert_eq!(fields + 1, header(&sys).len());
     }
 
     #[test]
