@@ -7,7 +7,7 @@
 //! as zero error.)
 
 use mstar_linearize::{DerivativeErrors, check_derivatives};
-use mstar_model::planar::{At, Coordinate, PlanarBuilder, TimeFunction};
+use mstar_model::planar::{At, Coordinate, PlanarBuilder, RigidBody, SpringDamper, TimeFunction};
 use mstar_model::{FnSystem, Pattern, System};
 
 /// A correct system's errors are below this (central differences: see
@@ -127,8 +127,24 @@ impl System for Corrupt<'_> {
 /// every planar derivative is non-zero.
 fn linkage() -> impl System {
     let mut b = PlanarBuilder::new();
-    let crank = b.rigid_body("crank", 1.0, 0.1, [0.3, 0.1, 0.4]);
-    let rocker = b.rigid_body("rocker", 2.0, 0.3, [0.9, -0.4, -0.7]);
+    let crank = b.rigid_body(
+        "crank",
+        RigidBody {
+            mass: 1.0,
+            inertia: 0.1,
+            pose: [0.3, 0.1, 0.4],
+            velocity: [0.0; 3],
+        },
+    );
+    let rocker = b.rigid_body(
+        "rocker",
+        RigidBody {
+            mass: 2.0,
+            inertia: 0.3,
+            pose: [0.9, -0.4, -0.7],
+            velocity: [0.0; 3],
+        },
+    );
     b.revolute(
         "pivot",
         At::Ground([0.0, 0.0]),
@@ -144,9 +160,11 @@ fn linkage() -> impl System {
         "spring",
         At::Body(rocker, [0.3, 0.0]),
         At::Ground([1.5, 0.5]),
-        50.0,
-        3.0,
-        0.4,
+        SpringDamper {
+            stiffness: 50.0,
+            damping: 3.0,
+            rest_length: 0.4,
+        },
     );
     let motor = TimeFunction::Sine {
         offset: 0.5,

@@ -154,13 +154,32 @@ fn kkt_matrix_is_eq_16_with_m_star() {
 
 /// A model with every planar element, at random parameters.
 fn every_element(p: &[f64]) -> mstar_model::planar::PlanarSystem {
-    use mstar_model::planar::{At, Coordinate, PlanarBuilder, TimeFunction};
+    use mstar_model::planar::{
+        At, Coordinate, PlanarBuilder, PointMass, RigidBody, RotationalSpringDamper, SpringDamper,
+        TimeFunction,
+    };
+    let rigid = |mass, inertia, pose| RigidBody {
+        mass,
+        inertia,
+        pose,
+        velocity: [0.0; 3],
+    };
     let mut b = PlanarBuilder::new();
     b.gravity(p[0], p[1]);
-    let r1 = b.rigid_body("r1", 1.0 + p[2].abs(), 0.1 + p[3].abs(), [p[4], p[5], p[6]]);
-    let r2 = b.rigid_body("r2", 2.0, 0.3, [p[7], p[8], p[9]]);
-    let r3 = b.rigid_body("r3", 0.5, 0.05, [p[10], p[11], p[12]]);
-    let pm = b.point_mass("pm", 0.7, [p[13], p[14]]);
+    let r1 = b.rigid_body(
+        "r1",
+        rigid(1.0 + p[2].abs(), 0.1 + p[3].abs(), [p[4], p[5], p[6]]),
+    );
+    let r2 = b.rigid_body("r2", rigid(2.0, 0.3, [p[7], p[8], p[9]]));
+    let r3 = b.rigid_body("r3", rigid(0.5, 0.05, [p[10], p[11], p[12]]));
+    let pm = b.point_mass(
+        "pm",
+        PointMass {
+            mass: 0.7,
+            position: [p[13], p[14]],
+            velocity: [0.0; 2],
+        },
+    );
     b.revolute(
         "hinge",
         At::Ground([p[15], p[16]]),
@@ -227,20 +246,40 @@ fn every_element(p: &[f64]) -> mstar_model::planar::PlanarSystem {
         "spring",
         At::Body(r1, [p[45], 0.2]),
         At::Body(pm, [0.0, 0.0]),
-        50.0,
-        3.0,
-        0.5,
+        SpringDamper {
+            stiffness: 50.0,
+            damping: 3.0,
+            rest_length: 0.5,
+        },
     );
     b.spring(
         "anchor",
         At::Ground([1.0, 1.0]),
         At::Body(r2, [0.1, p[46]]),
-        20.0,
-        1.0,
-        0.0,
+        SpringDamper {
+            stiffness: 20.0,
+            damping: 1.0,
+            rest_length: 0.0,
+        },
     );
-    b.rotational_spring("torsion", Some(r1), r2, 10.0, 0.5);
-    b.rotational_spring("ground torsion", None, r3, 4.0, 0.2);
+    b.rotational_spring(
+        "torsion",
+        Some(r1),
+        r2,
+        RotationalSpringDamper {
+            stiffness: 10.0,
+            damping: 0.5,
+        },
+    );
+    b.rotational_spring(
+        "ground torsion",
+        None,
+        r3,
+        RotationalSpringDamper {
+            stiffness: 4.0,
+            damping: 0.2,
+        },
+    );
     b.build().expect("valid model")
 }
 
@@ -264,6 +303,30 @@ proptest! {
         let lambda = &state[3 * n..3 * n + m];
         let e = check_derivatives(&sys, t, u, v, a, lambda);
         prop_assert!(e.max() < FD_TOL, "{e:?}");
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig {
+        cases: 64,
+        failure_persistence: Some(Box::new(FileFailurePersistence::WithSource("regressions"))),
+        ..ProptestConfig::default()
+    })]
+    /// Every registered joint, driver and load, between every pair of
+    /// anchors it accepts (the model crate's registry, no hand-kept list).
+    #[test]
+    fn every_registered_element_derivatives(
+        params in prop::collection::vec(-1.0f64..1.0, 24),
+        state in prop::collection::vec(-2.0f64..2.0, 21),
+        t in 0.0f64..2.0,
+    ) {
+        for (what, sys) in mstar_model::planar::element_examples(&params) {
+            let (n, m) = (sys.n_coords(), sys.n_constraints());
+            let (u, v, a) = (&state[..n], &state[6..6 + n], &state[12..12 + n]);
+            let lambda = &state[18..18 + m];
+            let e = check_derivatives(&sys, t, u, v, a, lambda);
+            prop_assert!(e.max() < FD_TOL, "{what}: {e:?}");
+        }
     }
 }
 

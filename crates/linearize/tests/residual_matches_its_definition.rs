@@ -6,7 +6,7 @@
 //! `eval_kkt_rhs` the same right-hand side and norms bit for bit.
 
 use mstar_linearize::{Linearization, max_abs};
-use mstar_model::planar::{At, PlanarBuilder, PlanarSystem, bar_chain};
+use mstar_model::planar::{At, PlanarBuilder, PlanarSystem, RigidBody, SpringDamper, bar_chain};
 use mstar_model::{Link, PendulumChain, System};
 use proptest::prelude::*;
 
@@ -37,17 +37,35 @@ fn definition<S: System>(sys: &S, t: f64, s: &[f64]) -> Vec<f64> {
 /// depend on `u` and `u̇` (not constant).
 fn sprung() -> PlanarSystem {
     let mut b = PlanarBuilder::new();
-    let l1 = b.rigid_body("l1", 1.0, 0.1, [0.5, 0.0, 0.0]);
-    let l2 = b.rigid_body("l2", 2.0, 0.3, [1.5, 0.0, 0.0]);
+    let l1 = b.rigid_body(
+        "l1",
+        RigidBody {
+            mass: 1.0,
+            inertia: 0.1,
+            pose: [0.5, 0.0, 0.0],
+            velocity: [0.0; 3],
+        },
+    );
+    let l2 = b.rigid_body(
+        "l2",
+        RigidBody {
+            mass: 2.0,
+            inertia: 0.3,
+            pose: [1.5, 0.0, 0.0],
+            velocity: [0.0; 3],
+        },
+    );
     b.revolute("j1", At::Ground([0.0, 0.0]), At::Body(l1, [-0.5, 0.0]));
     b.revolute("j2", At::Body(l1, [0.5, 0.0]), At::Body(l2, [-0.5, 0.0]));
     b.spring(
         "s",
         At::Ground([0.0, 1.0]),
         At::Body(l2, [0.5, 0.0]),
-        30.0,
-        2.0,
-        0.5,
+        SpringDamper {
+            stiffness: 30.0,
+            damping: 2.0,
+            rest_length: 0.5,
+        },
     );
     b.build().expect("valid")
 }

@@ -22,16 +22,26 @@ pub fn header<S: System + ?Sized>(sys: &S) -> Vec<String> {
     h
 }
 
+/// Columns a model adds after the standard ones (e.g. reactions by joint,
+/// see [`crate::run::ReactionColumns`]).
+pub trait Columns {
+    /// Their header names.
+    fn names(&self) -> Vec<String>;
+
+    /// Their values at a sample, appended to `out` (as many as `names`).
+    fn values(&self, s: &SampleRef<'_>, out: &mut Vec<f64>);
+}
+
 /// The header as one CSV line (without the newline): names from model files
 /// may hold commas or quotes, so such fields are quoted (RFC 4180: in double
 /// quotes, inner quotes doubled).
 #[must_use]
 pub fn header_line<S: System + ?Sized>(sys: &S) -> String {
-    header(sys)
-        .iter()
-        .map(|f| field(f))
-        .collect::<Vec<_>>()
-        .join(",")
+    join_fields(&header(sys))
+}
+
+fn join_fields(names: &[String]) -> String {
+    names.iter().map(|f| field(f)).collect::<Vec<_>>().join(",")
 }
 
 /// One CSV field, quoted when it holds a comma, a quote or a line break.
@@ -54,8 +64,8 @@ fn number(out: &mut String, x: f64) {
     }
 }
 
-/// Appends one sample as a CSV row.
-fn row(out: &mut String, s: &SampleRef<'_>) {
+/// Appends one sample as a CSV row, `extra` values after the standard ones.
+fn row(out: &mut String, s: &SampleRef<'_>, extra: &[f64]) {
     number(out, s.t);
     for &x in s.u.iter().chain(s.v).chain(s.a).chain(s.lambda) {
         out.push(',');
@@ -67,6 +77,10 @@ fn row(out: &mut String, s: &SampleRef<'_>) {
     number(out, s.residual);
     out.push(',');
     number(out, s.constraint);
+    for &x in extra {
+        out.push(',');
+        number(out, x);
+    }
     out.push('\n');
 }
 
@@ -76,7 +90,7 @@ pub fn to_csv<S: System + ?Sized>(sys: &S, samples: &[Sample]) -> String {
     let mut out = header_line(sys);
     out.push('\n');
     for s in samples {
-        row(&mut out, &s.view());
+        row(&mut out, &s.view(), &[]);
     }
     out
 }
@@ -100,12 +114,27 @@ impl CsvStream {
     /// # Errors
     /// Any I/O error, with the path in the message.
     pub fn create<S: System + ?Sized>(path: &Path, sys: &S) -> std::io::Result<Self> {
+        Self::create_with(path, sys, &[])
+    }
+
+    /// [`create`](Self::create) with `extra` column names after the standard
+    /// ones (their values go to [`push_with`](Self::push_with)).
+    ///
+    /// # Errors
+    /// Any I/O error, with the path in the message.
+    pub fn create_with<S: System + ?Sized>(
+        path: &Path,
+        sys: &S,
+        extra: &[String],
+    ) -> std::io::Result<Self> {
         let tmp = temporary_path(path);
         let with_path = |e: std::io::Error| {
             std::io::Error::new(e.kind(), format!("could not write {}: {e}", path.display()))
         };
         let mut file = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(with_path)?);
-        let mut line = header_line(sys);
+        let mut names = header(sys);
+        names.extend_from_slice(extra);
+        let mut line = join_fields(&names);
         line.push('\n');
         file.write_all(line.as_bytes()).map_err(with_path)?;
         Ok(Self {
@@ -119,11 +148,16 @@ impl CsvStream {
 
     /// Appends a sample (the first I/O error is kept and reported by `finish`).
     pub fn push(&mut self, s: &SampleRef<'_>) {
+        self.push_with(s, &[]);
+    }
+
+    /// Appends a sample and the values of the extra columns.
+    pub fn push_with(&mut self, s: &SampleRef<'_>, extra: &[f64]) {
         if self.error.is_some() {
             return;
         }
         self.line.clear();
-        row(&mut self.line, s);
+        row(&mut self.line, s, extra);
         if let Some(f) = self.file.as_mut()
             && let Err(e) = f.write_all(self.line.as_bytes())
         {

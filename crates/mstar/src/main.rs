@@ -544,7 +544,10 @@ fn chain(args: &ChainArgs) -> Result<()> {
         wall * 1e6 / steps / n as f64
     );
     let s = integ.sample();
-    let tip = sys.body_x(&format!("link{n}")).context("tip body")?;
+    let tip = sys
+        .body(&format!("link{n}"))
+        .map(|b| b.x)
+        .context("tip body")?;
     println!(
         "tip (link{n}) at t = {}: x = {:.9} m, y = {:.9} m; max ‖Φ‖∞ = {:.3e} m",
         s.t,

@@ -6,8 +6,11 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use mstar::csv::Columns;
 use mstar::model::file::{ModelFile, Simulation};
 use mstar::pendulum::PendulumRun;
+use mstar::planar::PlanarSystem;
+use mstar::run::ReactionColumns;
 use mstar::{IntegrationError, Integrator, Observer, SampleRef, System, csv};
 
 /// Arguments of `mstar run`.
@@ -60,18 +63,33 @@ pub struct CheckArgs {
 /// A model to run: the system, its start and its settings.
 struct Loaded {
     label: String,
-    system: Box<dyn System>,
+    system: Model,
     u0: Vec<f64>,
     v0: Vec<f64>,
     simulation: Simulation,
     every: usize,
 }
 
+/// A planar model (whose CSV has reaction columns) or another system.
+enum Model {
+    Planar(Box<PlanarSystem>),
+    Other(Box<dyn System>),
+}
+
+impl Model {
+    fn system(&self) -> &(dyn System + 'static) {
+        match self {
+            Self::Planar(sys) => sys.as_ref(),
+            Self::Other(sys) => sys.as_ref(),
+        }
+    }
+}
+
 /// `mstar run`.
 pub fn run(args: &RunArgs) -> Result<()> {
     let model = load(args)?;
     let (config, t_end) = mstar::run::config(&model.simulation).map_err(anyhow::Error::msg)?;
-    let sys = model.system.as_ref();
+    let sys = model.system.system();
     println!(
         "{}: {} coordinates, {} constraints; h = {} s, t_end = {} s",
         model.label,
@@ -86,12 +104,18 @@ pub fn run(args: &RunArgs) -> Result<()> {
         integ.backend(),
         integ.newton()
     );
+    let columns = match &model.system {
+        Model::Planar(sys) => Some(ReactionColumns::new(sys)),
+        Model::Other(_) => None,
+    };
+    let extra = columns.as_ref().map(Columns::names).unwrap_or_default();
     let stream = args
         .out
         .as_deref()
-        .map(|p| csv::CsvStream::create(p, sys))
+        .map(|p| csv::CsvStream::create_with(p, sys, &extra))
         .transpose()?;
-    let mut output = RunOutput::new(stream, model.every, t_end);
+    let columns = columns.as_ref().map(|c| c as &dyn Columns);
+    let mut output = RunOutput::new(stream, columns, model.every, t_end);
     let clock = Instant::now();
     let result = integ.run(t_end, &mut output);
     let wall = clock.elapsed().as_secs_f64();
@@ -149,7 +173,7 @@ fn load(args: &RunArgs) -> Result<Loaded> {
         v0: file.system.initial_velocity(),
         every: file.output.every,
         simulation: file.simulation,
-        system: Box::new(file.system),
+        system: Model::Planar(Box::new(file.system)),
     })
 }
 
@@ -180,7 +204,7 @@ fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
                 label: "built-in pendulum".to_string(),
                 u0: sys.position(&[run.theta0]),
                 v0: sys.velocity(&[run.theta0], &[run.omega0]),
-                system: Box::new(sys),
+                system: Model::Other(Box::new(sys)),
                 simulation,
                 every: 1,
             }
@@ -191,7 +215,7 @@ fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
                 label: "built-in 10-bar chain".to_string(),
                 u0: sys.initial_position(),
                 v0: sys.initial_velocity(),
-                system: Box::new(sys),
+                system: Model::Planar(Box::new(sys)),
                 simulation,
                 every: 1,
             }
@@ -201,8 +225,11 @@ fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
 
 /// What `mstar run` does with every sample: the CSV file (every n-th step
 /// and the last), the progress bar, and the figures of the summary.
-struct RunOutput {
+struct RunOutput<'a> {
     stream: Option<csv::CsvStream>,
+    /// The model's extra columns and a buffer for their values.
+    columns: Option<&'a dyn Columns>,
+    extra: Vec<f64>,
     every: usize,
     seen: usize,
     written: usize,
@@ -215,8 +242,13 @@ struct RunOutput {
     max_constraint: f64,
 }
 
-impl RunOutput {
-    fn new(stream: Option<csv::CsvStream>, every: usize, t_end: f64) -> Self {
+impl<'a> RunOutput<'a> {
+    fn new(
+        stream: Option<csv::CsvStream>,
+        columns: Option<&'a dyn Columns>,
+        every: usize,
+        t_end: f64,
+    ) -> Self {
         let progress = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::hidden());
         progress.set_style(
             ProgressStyle::with_template("{bar:40} t = {msg} s [{elapsed_precise}, {eta} left]")
@@ -224,6 +256,8 @@ impl RunOutput {
         );
         Self {
             stream,
+            columns,
+            extra: Vec::new(),
             every: every.max(1),
             seen: 0,
             written: 0,
@@ -238,13 +272,17 @@ impl RunOutput {
     }
 }
 
-impl Observer for RunOutput {
+impl Observer for RunOutput<'_> {
     fn observe(&mut self, s: &SampleRef<'_>) {
         let last = s.t >= self.t_end * (1.0 - 1e-12);
         if let Some(stream) = self.stream.as_mut()
             && (self.seen.is_multiple_of(self.every) || last)
         {
-            stream.observe(s);
+            self.extra.clear();
+            if let Some(columns) = self.columns {
+                columns.values(s, &mut self.extra);
+            }
+            stream.push_with(s, &self.extra);
             self.written += 1;
         }
         self.seen += 1;
@@ -270,7 +308,7 @@ impl Observer for RunOutput {
     }
 }
 
-fn print_summary(integ: &Integrator<'_, dyn System>, out: &RunOutput, wall: f64) {
+fn print_summary(integ: &Integrator<'_, dyn System + '_>, out: &RunOutput<'_>, wall: f64) {
     let st = integ.stats();
     let steps = st.steps.max(1) as f64;
     println!("t reached: {} s", integ.time());

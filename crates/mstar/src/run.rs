@@ -300,3 +300,62 @@ mod tests {
         assert_eq!(dependent_rows(&rows), (3, vec![2, 4]));
     }
 }
+
+/// The reaction and effort columns of a planar model's CSV
+/// (`docs/model-format.md`, "Output"): per joint and driver, in the order of
+/// the file, `reaction:<name>.fx`, `.fy`, `.tau` — the constraint force
+/// `−Bᵀλ` its rows put on its body ([`PlanarSystem::reaction`]) — then per
+/// driver `effort:<name>` = `−λ`, the force (N) or torque (N m) the driver
+/// applies along the coordinate it drives, positive in that coordinate's
+/// direction.
+#[derive(Debug)]
+pub struct ReactionColumns<'a> {
+    sys: &'a PlanarSystem,
+    /// `(joint index, first row)` of each driver.
+    drivers: Vec<(usize, usize)>,
+}
+
+impl<'a> ReactionColumns<'a> {
+    /// The columns of `sys`.
+    #[must_use]
+    pub fn new(sys: &'a PlanarSystem) -> Self {
+        let drivers = sys
+            .joint_names()
+            .enumerate()
+            .filter(|(_, name)| sys.is_driver(name) == Some(true))
+            .filter_map(|(i, name)| Some((i, sys.joint_rows(name)?.start)))
+            .collect();
+        Self { sys, drivers }
+    }
+}
+
+impl crate::csv::Columns for ReactionColumns<'_> {
+    fn names(&self) -> Vec<String> {
+        let mut names: Vec<String> = self
+            .sys
+            .joint_names()
+            .flat_map(|j| ["fx", "fy", "tau"].map(|c| format!("reaction:{j}.{c}")))
+            .collect();
+        let joints: Vec<&str> = self.sys.joint_names().collect();
+        names.extend(
+            self.drivers
+                .iter()
+                .map(|&(i, _)| format!("effort:{}", joints[i])),
+        );
+        names
+    }
+
+    fn values(&self, s: &mstar_model::SampleRef<'_>, out: &mut Vec<f64>) {
+        for i in 0..self.sys.joint_names().count() {
+            match self.sys.reaction_at(i, s.t, s.u, s.lambda) {
+                Some(r) => out.extend([r.force[0], r.force[1], r.moment]),
+                None => out.extend([f64::NAN; 3]),
+            }
+        }
+        out.extend(
+            self.drivers
+                .iter()
+                .map(|&(_, row)| s.lambda.get(row).map_or(f64::NAN, |l| -l)),
+        );
+    }
+}

@@ -23,7 +23,8 @@ fn dae_tip(sys: &PlanarSystem, h: f64, t_end: f64) -> [f64; 2] {
         .expect("integration");
     let u = last.expect("samples");
     let tip = sys
-        .body_x(&format!("link{}", sys.n_bodies()))
+        .body(&format!("link{}", sys.n_bodies()))
+        .map(|b| b.x)
         .expect("tip body");
     [u[tip], u[tip + 1]]
 }
@@ -103,7 +104,7 @@ fn every_kkt_backend_and_newton_variant_gives_the_same_motion() {
     use mstar::kkt::{Backend, KktOptions};
     let sys = bar_chain(10);
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
-    let tip = sys.body_x("link10").expect("tip body");
+    let tip = sys.body("link10").map(|b| b.x).expect("tip body");
     let run = |backend: Backend, newton: Newton| {
         let config = Config {
             h: 1e-3,

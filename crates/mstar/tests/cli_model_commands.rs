@@ -126,6 +126,68 @@ fn run_writes_the_csv_and_keeps_a_failed_run_s_samples() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The columns of a CSV file without quoted fields, by name.
+fn columns(csv: &str) -> std::collections::HashMap<String, Vec<f64>> {
+    let mut lines = csv.lines();
+    let names: Vec<&str> = lines.next().expect("a header").split(',').collect();
+    let mut out: std::collections::HashMap<String, Vec<f64>> = std::collections::HashMap::new();
+    for line in lines {
+        for (name, value) in names.iter().zip(line.split(',')) {
+            let value = value.parse().expect("a number");
+            out.entry((*name).to_string()).or_default().push(value);
+        }
+    }
+    out
+}
+
+#[test]
+fn reactions_and_efforts_balance_the_slider() {
+    // On the slider (1 kg, no friction, gravity −9.81 along y) only the
+    // wrist pin and the guide act: m a = their reactions plus m g. The motor
+    // is the last constraint row: its effort is −λ of that row.
+    let dir = scratch("reactions");
+    let out = dir.join("slider.csv");
+    let ok = mstar(&[
+        "run",
+        &model("slider-crank.toml"),
+        "--t-end",
+        "0.2",
+        "--out",
+        &out.display().to_string(),
+    ]);
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+    let csv = std::fs::read_to_string(&out).expect("written");
+    let header = csv.lines().next().expect("a header");
+    assert!(
+        header.ends_with("constraint,reaction:pivot.fx,reaction:pivot.fy,reaction:pivot.tau,reaction:crank-pin.fx,reaction:crank-pin.fy,reaction:crank-pin.tau,reaction:wrist-pin.fx,reaction:wrist-pin.fy,reaction:wrist-pin.tau,reaction:guide.fx,reaction:guide.fy,reaction:guide.tau,reaction:motor.fx,reaction:motor.fy,reaction:motor.tau,effort:motor"),
+        "{header}"
+    );
+    let c = columns(&csv);
+    let col = |name: &str| c.get(name).unwrap_or_else(|| panic!("no column {name}"));
+    let last_lambda = (0..)
+        .take_while(|i| c.contains_key(&format!("lambda:{i}")))
+        .last();
+    let lambda_motor = col(&format!("lambda:{}", last_lambda.expect("multipliers")));
+    let (ax, ay) = (col("a:slider.x"), col("a:slider.y"));
+    let (fx, fy) = (col("reaction:wrist-pin.fx"), col("reaction:wrist-pin.fy"));
+    let (gx, gy) = (col("reaction:guide.fx"), col("reaction:guide.fy"));
+    let effort = col("effort:motor");
+    assert!(col("t").len() > 100);
+    for k in 0..col("t").len() {
+        assert!((fx[k] + gx[k] - ax[k]).abs() < 1e-6, "x at row {k}");
+        assert!((fy[k] + gy[k] - 9.81 - ay[k]).abs() < 1e-6, "y at row {k}");
+        assert_eq!(effort[k], -lambda_motor[k]);
+        assert_eq!(
+            col("reaction:motor.tau")[k],
+            effort[k],
+            "the effort is the moment"
+        );
+    }
+    // The crank turns at constant speed against the rod's push: the motor works.
+    assert!(effort.iter().any(|e| e.abs() > 0.1), "{effort:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn run_takes_built_in_models() {
     let ok = mstar(&["run", "--builtin", "pendulum", "--t-end", "0.5"]);

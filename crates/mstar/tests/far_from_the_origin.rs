@@ -4,7 +4,7 @@
 //! difference of such numbers; Newton must still converge (to the same
 //! tolerance, relative to the forces) without iterating on that noise.
 
-use mstar::planar::{At, PlanarBuilder, PlanarSystem};
+use mstar::planar::{At, PlanarBuilder, PlanarSystem, RigidBody};
 use mstar::{Config, Integrator, SampleRef};
 
 /// A 10-bar chain (1 kg, 1 m), horizontal at rest, hinged at `(x0, 0)`.
@@ -14,9 +14,12 @@ fn chain(x0: f64) -> PlanarSystem {
     for k in 1..=10 {
         let body = b.rigid_body(
             &format!("link{k}"),
-            1.0,
-            1.0 / 12.0,
-            [x0 + k as f64 - 0.5, 0.0, 0.0],
+            RigidBody {
+                mass: 1.0,
+                inertia: 1.0 / 12.0,
+                pose: [x0 + k as f64 - 0.5, 0.0, 0.0],
+                velocity: [0.0; 3],
+            },
         );
         b.revolute(&format!("joint{k}"), previous, At::Body(body, [-0.5, 0.0]));
         previous = At::Body(body, [0.5, 0.0]);
@@ -40,7 +43,7 @@ fn tip(x0: f64, t_end: f64) -> ([f64; 2], usize) {
         .run(t_end, &mut |s: &SampleRef<'_>| last = Some(s.u.to_vec()))
         .unwrap_or_else(|e| panic!("hinge at x = {x0}: {e}"));
     let u = last.expect("samples");
-    let i = sys.body_x("link10").expect("tip");
+    let i = sys.body("link10").map(|b| b.x).expect("tip");
     ([u[i] - x0, u[i + 1]], integ.stats().iterations)
 }
 

@@ -9,7 +9,7 @@
 
 use mstar::catalogue::{JointFrameBar, JointFrameChain};
 use mstar::kkt::{Backend, KktOptions};
-use mstar::planar::{At, PlanarBuilder, bar_chain};
+use mstar::planar::{At, PlanarBuilder, RigidBody, SpringDamper, bar_chain};
 use mstar::{Config, IntegrationError, Integrator, Link, Pattern, PendulumChain, System};
 
 fn start(
@@ -44,7 +44,15 @@ fn damped() -> mstar::planar::PlanarSystem {
     let mut previous = At::Ground([0.0, 0.0]);
     let mut last = None;
     for k in 0..12 {
-        let bar = b.rigid_body(&format!("bar{k}"), 1.0, 0.1, [k as f64 + 0.5, 0.0, 0.0]);
+        let bar = b.rigid_body(
+            &format!("bar{k}"),
+            RigidBody {
+                mass: 1.0,
+                inertia: 0.1,
+                pose: [k as f64 + 0.5, 0.0, 0.0],
+                velocity: [0.0; 3],
+            },
+        );
         b.revolute(&format!("joint{k}"), previous, At::Body(bar, [-0.5, 0.0]));
         previous = At::Body(bar, [0.5, 0.0]);
         last = Some(bar);
@@ -54,9 +62,11 @@ fn damped() -> mstar::planar::PlanarSystem {
             "spring",
             At::Body(bar, [0.5, 0.0]),
             At::Ground([12.0, 1.0]),
-            10.0,
-            2.0,
-            0.5,
+            SpringDamper {
+                stiffness: 10.0,
+                damping: 2.0,
+                rest_length: 0.5,
+            },
         );
     }
     b.build().expect("valid")

@@ -82,7 +82,7 @@ fn the_slider_crank_follows_its_closed_form() {
     // θ = 0.3 + 10 t, x = r cos θ + √(L² − r² sin² θ), r = 0.1, L = 0.3.
     let path = models().join("slider-crank.toml");
     let model = ModelFile::load(&path).expect("valid");
-    let slider = model.system.body_x("slider").expect("slider");
+    let slider = model.system.body("slider").map(|b| b.x).expect("slider");
     let (samples, _) = run(&path, &["simulation.tol=1e-12"]);
     let (r, l) = (0.1f64, 0.3f64);
     let worst = samples
@@ -124,8 +124,8 @@ fn the_four_bar_follows_its_loop_closure() {
     let model = ModelFile::load(&path).expect("valid");
     let sys = &model.system;
     let (coupler, rocker) = (
-        sys.body_x("coupler").expect("coupler") + 2,
-        sys.body_x("rocker").expect("rocker") + 2,
+        sys.body("coupler").map(|b| b.x).expect("coupler") + 2,
+        sys.body("rocker").map(|b| b.x).expect("rocker") + 2,
     );
     let (samples, _) = run(&path, &["simulation.tol=1e-12"]);
     let mut angles = (0.7381223365325295, 1.5320736152650125);
@@ -166,7 +166,8 @@ fn the_double_pendulum_converges_to_rk4_at_second_order() {
     let lower = ModelFile::load(&path)
         .expect("valid")
         .system
-        .body_x("lower")
+        .body("lower")
+        .map(|b| b.x)
         .expect("lower");
     let error = |h: &str| {
         let (samples, _) = run(&path, &[&format!("simulation.h={h}")]);

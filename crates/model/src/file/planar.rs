@@ -8,7 +8,10 @@ use std::ops::Range;
 use super::FileError;
 use super::fields::{Doc, Fields, choice, list, number_in, numbers, string, two_names, two_points};
 use super::node::Node;
-use crate::planar::{At, BodyId, Coordinate, PlanarBuilder, PlanarSystem, TimeFunction};
+use crate::planar::{
+    At, BodyId, Coordinate, PlanarBuilder, PlanarSystem, PointMass, RigidBody,
+    RotationalSpringDamper, SpringDamper, TimeFunction,
+};
 
 /// The one format version this reader knows.
 pub const FORMAT: &str = "mstar.planar/1";
@@ -145,8 +148,15 @@ impl<'a> Model<'a> {
         let pose = f.required("pose", numbers::<3>)?;
         let velocity = f.optional("velocity", numbers::<3>)?.unwrap_or([0.0; 3]);
         f.finish(&["name", "mass", "inertia", "pose", "velocity"])?;
-        let id = self.builder.rigid_body(&name, mass, inertia, pose);
-        self.builder.velocity(id, velocity);
+        let id = self.builder.rigid_body(
+            &name,
+            RigidBody {
+                mass,
+                inertia,
+                pose,
+                velocity,
+            },
+        );
         self.bodies.insert(
             name,
             Placed {
@@ -171,8 +181,14 @@ impl<'a> Model<'a> {
         let p = f.required("position", numbers::<2>)?;
         let v = f.optional("velocity", numbers::<2>)?.unwrap_or([0.0; 2]);
         f.finish(&["name", "mass", "position", "velocity"])?;
-        let id = self.builder.point_mass(&name, mass, p);
-        self.builder.velocity(id, [v[0], v[1], 0.0]);
+        let id = self.builder.point_mass(
+            &name,
+            PointMass {
+                mass,
+                position: p,
+                velocity: v,
+            },
+        );
         let pose = [p[0], p[1], 0.0];
         self.bodies.insert(
             name,
@@ -334,8 +350,16 @@ impl<'a> Model<'a> {
         let rest = rest.unwrap_or_else(|| {
             distance(self.global(sides[0], at[0]), self.global(sides[1], at[1]))
         });
-        self.builder
-            .spring(name, at[0], at[1], stiffness, damping, rest);
+        self.builder.spring(
+            name,
+            at[0],
+            at[1],
+            SpringDamper {
+                stiffness,
+                damping,
+                rest_length: rest,
+            },
+        );
         Ok(())
     }
 
@@ -361,7 +385,8 @@ impl<'a> Model<'a> {
         };
         match (rigid(sides[0]), rigid(sides[1])) {
             (Ok(a), Ok(Some(b))) => {
-                self.builder.rotational_spring(name, a, b, stiffness, damping);
+                let spring = RotationalSpringDamper { stiffness, damping };
+                self.builder.rotational_spring(name, a, b, spring);
                 Ok(())
             }
             _ => Err(self.doc.error(

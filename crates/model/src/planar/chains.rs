@@ -2,7 +2,7 @@
 //! and bars of any size at any angle and rate for property tests and the
 //! test catalogue.
 
-use super::{At, ModelError, PlanarBuilder, PlanarSystem};
+use super::{At, ModelError, PlanarBuilder, PlanarSystem, PointMass, RigidBody};
 
 /// One bar of [`bar_chain_of`]: a uniform slender bar hinged at its start.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -39,11 +39,13 @@ pub fn bar_chain_of(bars: &[Bar]) -> Result<PlanarSystem, ModelError> {
         ];
         let body = b.rigid_body(
             &format!("link{}", k + 1),
-            bar.mass,
-            bar.mass * l * l / 12.0,
-            [centre[0], centre[1], bar.angle],
+            RigidBody {
+                mass: bar.mass,
+                inertia: bar.mass * l * l / 12.0,
+                pose: [centre[0], centre[1], bar.angle],
+                velocity: [centre_velocity[0], centre_velocity[1], w],
+            },
         );
-        b.velocity(body, [centre_velocity[0], centre_velocity[1], w]);
         b.revolute(
             &format!("joint{}", k + 1),
             previous,
@@ -81,7 +83,12 @@ pub fn point_mass_chain(n: usize) -> PlanarSystem {
     let mut b = PlanarBuilder::new();
     let mut previous = At::Ground([0.0, 0.0]);
     for k in 1..=n {
-        let body = b.point_mass(&format!("link{k}"), 1.0, [k as f64, 0.0]);
+        let point = PointMass {
+            mass: 1.0,
+            position: [k as f64, 0.0],
+            velocity: [0.0; 2],
+        };
+        let body = b.point_mass(&format!("link{k}"), point);
         b.distance(
             &format!("rod{k}"),
             previous,

@@ -140,7 +140,7 @@ fn bars_case(name: &'static str, bars: &[Bar], t_end: f64, h: f64) -> Case {
         .collect();
     let angles: Vec<f64> = bars.iter().map(|b| b.angle).collect();
     let rates: Vec<f64> = bars.iter().map(|b| b.rate).collect();
-    let tip = sys.body_x(&format!("link{}", bars.len())).unwrap_or(0);
+    let tip = sys.body(&format!("link{}", bars.len())).map_or(0, |b| b.x);
     Case {
         name,
         u0: sys.initial_position(),
@@ -199,7 +199,7 @@ fn point_mass_chain_case() -> Case {
         };
         3
     ];
-    let tip = sys.body_x("link3").unwrap_or(0);
+    let tip = sys.body("link3").map_or(0, |b| b.x);
     Case {
         name: "point-mass-chain",
         u0: sys.initial_position(),

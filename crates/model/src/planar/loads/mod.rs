@@ -1,0 +1,146 @@
+//! Forces and torques: load elements, one file each behind [`LoadElement`],
+//! registered in [`KINDS`] for the derivative tests. A load adds its
+//! generalized forces to `g` on its slots (the coordinates of its anchors)
+//! and gives their Jacobians `∂g/∂q`, `∂g/∂q̇` there.
+
+mod point_force;
+mod rotational_spring;
+mod spring;
+mod torque;
+
+use std::sync::Arc;
+
+pub(crate) use point_force::PointForce;
+pub(crate) use rotational_spring::RotationalSpring;
+pub(crate) use spring::Spring;
+pub(crate) use torque::Torque;
+
+use super::geometry::{Anchor, Pt, Slots};
+
+/// The entries `(a, b)` of a load's `∂g/∂q` and `∂g/∂q̇` on its slots.
+pub(crate) type JacobianPatterns = (Vec<(usize, usize)>, Vec<(usize, usize)>);
+
+/// The generalized forces of a load on its slots.
+pub(crate) trait LoadElement: Send + Sync + std::fmt::Debug {
+    /// The entries `(a, b)` of `∂g/∂q` and of `∂g/∂q̇` on its slots.
+    fn patterns(&self, slots: &Slots) -> JacobianPatterns;
+
+    /// Adds its generalized forces to `g` (global coordinates).
+    fn add_forces(&self, x: &LoadPlace<'_>, g: &mut [f64]);
+
+    /// `∂g/∂q` (`wrt_v = false`) or `∂g/∂q̇` (`true`) in the order of `pattern`.
+    fn jacobian(&self, x: &LoadPlace<'_>, wrt_v: bool, pattern: &[(usize, usize)], out: &mut [f64]);
+
+    /// Why it cannot act on these anchors with its parameters, if it cannot.
+    fn problem(&self, anchors: &[Anchor; 2]) -> Option<String>;
+
+    /// The potential energy of a conservative load (default: 0).
+    fn potential(&self, _x: &LoadPlace<'_>) -> f64 {
+        0.0
+    }
+
+    /// Whether its Jacobians are symmetric at every state (default: yes).
+    fn symmetric(&self) -> bool {
+        true
+    }
+}
+
+/// A registered kind of load, with an example for the derivative tests.
+pub(crate) struct LoadKind {
+    /// Its name, as in model files.
+    pub(crate) name: &'static str,
+    /// A load of this kind from parameters in `[-1, 1)`.
+    pub(crate) example: fn(&[f64]) -> Arc<dyn LoadElement>,
+    /// Whether it acts between two anchors (else on the first only).
+    pub(crate) two_sided: bool,
+}
+
+/// Every kind of load.
+pub(crate) const KINDS: &[LoadKind] = &[
+    point_force::KIND,
+    torque::KIND,
+    spring::KIND,
+    rotational_spring::KIND,
+];
+
+/// A load's evaluation point: the state, its slots and anchors, and its
+/// attachment points.
+pub(crate) struct LoadPlace<'a> {
+    pub(crate) t: f64,
+    pub(crate) u: &'a [f64],
+    pub(crate) v: &'a [f64],
+    pub(crate) slots: &'a Slots,
+    pub(crate) anchors: &'a [Anchor; 2],
+    pub(crate) pts: [Pt; 2],
+}
+
+impl LoadPlace<'_> {
+    /// The angle (`w = u`) or angular velocity (`w = u̇`) of side `side`'s
+    /// rigid body (0 for the ground or a point).
+    pub(crate) fn theta(&self, side: usize, w: &[f64]) -> f64 {
+        match self.anchors[side] {
+            Anchor::Rigid { x, .. } => w[x + 2],
+            _ => 0.0,
+        }
+    }
+}
+
+/// A load placed in a system.
+#[derive(Clone, Debug)]
+pub(crate) struct Force {
+    pub element: Arc<dyn LoadElement>,
+    pub anchors: [Anchor; 2],
+    pub slots: Slots,
+    /// `(a, b)` entries of `∂g/∂q`.
+    pub g_u: Vec<(usize, usize)>,
+    /// `(a, b)` entries of `∂g/∂q̇`.
+    pub g_v: Vec<(usize, usize)>,
+}
+
+impl Force {
+    /// Places `element` at `anchors`.
+    pub(crate) fn new(element: Arc<dyn LoadElement>, anchors: [Anchor; 2]) -> Self {
+        let slots = Slots::of(&anchors);
+        let (g_u, g_v) = element.patterns(&slots);
+        Self {
+            element,
+            anchors,
+            slots,
+            g_u,
+            g_v,
+        }
+    }
+
+    fn place<'a>(&'a self, t: f64, u: &'a [f64], v: &'a [f64]) -> LoadPlace<'a> {
+        LoadPlace {
+            t,
+            u,
+            v,
+            slots: &self.slots,
+            anchors: &self.anchors,
+            pts: [self.anchors[0].point(u), self.anchors[1].point(u)],
+        }
+    }
+
+    /// Whether `∂g/∂q` and `∂g/∂q̇` are symmetric at every state.
+    pub(crate) fn has_symmetric_jacobians(&self) -> bool {
+        self.element.symmetric()
+    }
+
+    /// Adds the generalized forces to `g`.
+    pub(crate) fn add_forces(&self, t: f64, u: &[f64], v: &[f64], g: &mut [f64]) {
+        self.element.add_forces(&self.place(t, u, v), g);
+    }
+
+    /// Values of `∂g/∂q` (`wrt_v = false`) or `∂g/∂q̇` (`true`) in pattern order.
+    pub(crate) fn jacobian(&self, t: f64, u: &[f64], v: &[f64], wrt_v: bool, out: &mut [f64]) {
+        let pattern = if wrt_v { &self.g_v } else { &self.g_u };
+        self.element
+            .jacobian(&self.place(t, u, v), wrt_v, pattern, out);
+    }
+
+    /// Potential energy of a conservative load.
+    pub(crate) fn potential(&self, u: &[f64]) -> f64 {
+        self.element.potential(&self.place(0.0, u, &[]))
+    }
+}
