@@ -502,6 +502,6 @@ impl PlanarBuilder {
                 what: why,
             });
         }
-        Ok(Force::new(element.clone(), anchors))
+        Ok(Force::new(name.to_string(), element.clone(), anchors))
     }
 }

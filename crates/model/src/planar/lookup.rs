@@ -132,7 +132,7 @@ impl PlanarSystem {
     }
 
     /// The body that owns global coordinate `i`.
-    fn body_of(&self, i: usize) -> Option<&super::Body> {
+    pub(super) fn body_of(&self, i: usize) -> Option<&super::Body> {
         let k = self.bodies.partition_point(|b| b.x <= i).checked_sub(1)?;
         Some(&self.bodies[k]).filter(|b| i < b.x + b.count())
     }

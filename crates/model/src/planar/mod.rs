@@ -14,12 +14,14 @@ pub(crate) mod geometry;
 pub(crate) mod joints;
 pub(crate) mod loads;
 mod lookup;
+mod sketch;
 mod time;
 
 pub use builder::{PlanarBuilder, PointMass, RigidBody, RotationalSpringDamper, SpringDamper};
 pub use chains::{Bar, bar_chain, bar_chain_of, point_mass_chain};
 pub use examples::element_examples;
 pub use lookup::{BodyCoords, Reaction};
+pub use sketch::{Attachment, Sketch, SketchBody, SketchElement};
 pub use time::TimeFunction;
 
 use geometry::Slots;

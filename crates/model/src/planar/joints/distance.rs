@@ -23,6 +23,10 @@ pub(crate) const KIND: JointKind = JointKind {
 };
 
 impl JointElement for Distance {
+    fn kind(&self) -> &'static str {
+        KIND.name
+    }
+
     fn problem(&self, _: &[crate::planar::geometry::Anchor; 2]) -> Option<String> {
         (!(self.length > 0.0 && self.length.is_finite()))
             .then(|| "the rod length must be positive".to_string())

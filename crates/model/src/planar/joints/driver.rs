@@ -28,6 +28,10 @@ pub(crate) const KIND: JointKind = JointKind {
 };
 
 impl JointElement for Driver {
+    fn kind(&self) -> &'static str {
+        KIND.name
+    }
+
     fn row_names(&self, _: &Slots) -> Vec<&'static str> {
         vec![""]
     }

@@ -35,6 +35,9 @@ pub(crate) const MAX_HESSIAN: usize = 3 * MAX_SLOTS * MAX_SLOTS;
 
 /// The equations of a joint or driver on its slots.
 pub(crate) trait JointElement: Send + Sync + std::fmt::Debug {
+    /// Its kind's name, as in model files (`"revolute"`, …).
+    fn kind(&self) -> &'static str;
+
     /// The names of its rows: suffixes of the element's name (`.x`, `.y`).
     fn row_names(&self, slots: &Slots) -> Vec<&'static str>;
 

@@ -43,6 +43,10 @@ impl Prismatic {
 }
 
 impl JointElement for Prismatic {
+    fn kind(&self) -> &'static str {
+        KIND.name
+    }
+
     fn problem(&self, anchors: &[Anchor; 2]) -> Option<String> {
         if !self.normal.iter().all(|x| x.is_finite()) {
             Some("the prismatic axis must be a non-zero vector".to_string())

@@ -15,6 +15,10 @@ pub(crate) const KIND: JointKind = JointKind {
 };
 
 impl JointElement for Revolute {
+    fn kind(&self) -> &'static str {
+        KIND.name
+    }
+
     fn row_names(&self, _: &Slots) -> Vec<&'static str> {
         vec![".x", ".y"]
     }

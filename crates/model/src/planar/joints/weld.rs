@@ -19,6 +19,10 @@ pub(crate) const KIND: JointKind = JointKind {
 };
 
 impl JointElement for Weld {
+    fn kind(&self) -> &'static str {
+        KIND.name
+    }
+
     fn problem(&self, _: &[crate::planar::geometry::Anchor; 2]) -> Option<String> {
         (!self.angle.is_finite()).then(|| "the initial relative angle must be finite".to_string())
     }

@@ -22,6 +22,9 @@ pub(crate) type JacobianPatterns = (Vec<(usize, usize)>, Vec<(usize, usize)>);
 
 /// The generalized forces of a load on its slots.
 pub(crate) trait LoadElement: Send + Sync + std::fmt::Debug {
+    /// Its kind's name, as in model files (`"spring-damper"`, …).
+    fn kind(&self) -> &'static str;
+
     /// The entries `(a, b)` of `∂g/∂q` and of `∂g/∂q̇` on its slots.
     fn patterns(&self, slots: &Slots) -> JacobianPatterns;
 
@@ -88,6 +91,7 @@ impl LoadPlace<'_> {
 /// A load placed in a system.
 #[derive(Clone, Debug)]
 pub(crate) struct Force {
+    pub name: String,
     pub element: Arc<dyn LoadElement>,
     pub anchors: [Anchor; 2],
     pub slots: Slots,
@@ -99,10 +103,11 @@ pub(crate) struct Force {
 
 impl Force {
     /// Places `element` at `anchors`.
-    pub(crate) fn new(element: Arc<dyn LoadElement>, anchors: [Anchor; 2]) -> Self {
+    pub(crate) fn new(name: String, element: Arc<dyn LoadElement>, anchors: [Anchor; 2]) -> Self {
         let slots = Slots::of(&anchors);
         let (g_u, g_v) = element.patterns(&slots);
         Self {
+            name,
             element,
             anchors,
             slots,

@@ -34,6 +34,10 @@ impl PointForce {
 }
 
 impl LoadElement for PointForce {
+    fn kind(&self) -> &'static str {
+        KIND.name
+    }
+
     fn problem(&self, anchors: &[Anchor; 2]) -> Option<String> {
         if matches!(anchors[0], Anchor::Ground(_)) {
             return Some("a force acts on a body, not on the ground".to_string());

@@ -32,6 +32,10 @@ fn sign(s: &Slots, a: usize) -> f64 {
 }
 
 impl LoadElement for RotationalSpring {
+    fn kind(&self) -> &'static str {
+        KIND.name
+    }
+
     fn problem(&self, anchors: &[Anchor; 2]) -> Option<String> {
         let angle = |a: &Anchor| matches!(a, Anchor::Rigid { .. } | Anchor::Ground(_));
         if !(angle(&anchors[0]) && matches!(anchors[1], Anchor::Rigid { .. })) {

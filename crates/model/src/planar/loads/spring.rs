@@ -63,6 +63,10 @@ fn geometry(x: &LoadPlace<'_>) -> SpringGeometry {
 }
 
 impl LoadElement for Spring {
+    fn kind(&self) -> &'static str {
+        KIND.name
+    }
+
     fn problem(&self, _: &[Anchor; 2]) -> Option<String> {
         let ok = |x: f64| x.is_finite() && x >= 0.0;
         (!(ok(self.k) && ok(self.c) && ok(self.rest))).then(|| {

@@ -23,6 +23,10 @@ pub(crate) const KIND: LoadKind = LoadKind {
 };
 
 impl LoadElement for Torque {
+    fn kind(&self) -> &'static str {
+        KIND.name
+    }
+
     fn problem(&self, anchors: &[Anchor; 2]) -> Option<String> {
         if !matches!(anchors[0], Anchor::Rigid { .. }) {
             return Some("a torque needs a rigid body: a point mass has no angle".to_string());
