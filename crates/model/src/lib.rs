@@ -27,10 +27,12 @@ mod pattern;
 mod pendulum;
 pub mod planar;
 mod sample;
+mod subset;
 mod system;
 
 pub use fn_system::{FnSystem, NamesError};
 pub use pattern::Pattern;
 pub use pendulum::{Link, PendulumChain};
 pub use sample::{Sample, SampleRef};
+pub use subset::RowSubset;
 pub use system::{System, constraint_names, coord_names, kinetic_energy};

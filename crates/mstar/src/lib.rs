@@ -36,6 +36,7 @@ pub mod analysis;
 pub mod catalogue;
 pub mod csv;
 pub mod pendulum;
+pub mod redundant;
 pub mod run;
 pub mod testing;
 

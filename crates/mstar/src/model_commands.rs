@@ -7,9 +7,11 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mstar::csv::Columns;
+use mstar::model::RowSubset;
 use mstar::model::file::{ModelFile, Simulation};
 use mstar::pendulum::PendulumRun;
 use mstar::planar::PlanarSystem;
+use mstar::redundant::Expanded;
 use mstar::run::ReactionColumns;
 use mstar::{IntegrationError, Integrator, Observer, SampleRef, System, csv};
 
@@ -98,12 +100,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         config.h,
         t_end
     );
-    let mut integ = Integrator::new(sys, config, 0.0, &model.u0, &model.v0)?;
-    println!(
-        "KKT solver: {}; Newton: {:?}",
-        integ.backend(),
-        integ.newton()
-    );
+    let kept = independent_rows(&model)?;
     let columns = match &model.system {
         Model::Planar(sys) => Some(ReactionColumns::new(sys)),
         Model::Other(_) => None,
@@ -116,12 +113,65 @@ pub fn run(args: &RunArgs) -> Result<()> {
         .transpose()?;
     let columns = columns.as_ref().map(|c| c as &dyn Columns);
     let mut output = RunOutput::new(stream, columns, model.every, t_end);
-    let clock = Instant::now();
-    let result = integ.run(t_end, &mut output);
-    let wall = clock.elapsed().as_secs_f64();
+    let start = (config, &model.u0[..], &model.v0[..], t_end);
+    let outcome = match kept {
+        Some(kept) => {
+            let subset = RowSubset::new(sys, kept);
+            integrate(&subset, start, &mut Expanded::new(&subset, &mut output))
+        }
+        None => integrate(sys, start, &mut output),
+    };
     output.progress.finish_and_clear();
-    print_summary(&integ, &output, wall);
+    let (stats, t, wall, result) = outcome?;
+    print_summary(stats, t, &output, wall);
     finish(output, args.out.as_deref(), result)
+}
+
+/// The rows to solve on when the model has redundant constraints and asks
+/// for minimum-norm multipliers (`None`: all rows).
+///
+/// # Errors
+/// Redundant constraints in a model that does not ask for them, by name,
+/// with what to do.
+fn independent_rows(model: &Loaded) -> Result<Option<Vec<usize>>> {
+    let Model::Planar(sys) = &model.system else {
+        return Ok(None);
+    };
+    let choice = model.simulation.redundant.unwrap_or_default();
+    let Some(rows) = mstar::run::solve_rows(sys, &model.u0, choice)? else {
+        return Ok(None);
+    };
+    println!(
+        "redundant constraints: {} (left out of the solve: minimum-norm multipliers)",
+        mstar::run::owners(sys, &rows.dependent).join(", ")
+    );
+    Ok(Some(rows.kept))
+}
+
+/// A run's statistics, end time, wall time and outcome.
+type Outcome = (
+    mstar::RunStats,
+    f64,
+    f64,
+    Result<mstar::RunStats, IntegrationError>,
+);
+
+/// Integrates `sys` from `(u0, v0)` to `t_end`, every sample to `observer`.
+fn integrate<S: System + ?Sized>(
+    sys: &S,
+    (config, u0, v0, t_end): (mstar::Config, &[f64], &[f64], f64),
+    observer: &mut dyn Observer,
+) -> Result<Outcome> {
+    let mut integ = Integrator::new(sys, config, 0.0, u0, v0)?;
+    println!(
+        "KKT solver: {}; Newton: {:?}",
+        integ.backend(),
+        integ.newton()
+    );
+    let clock = Instant::now();
+    let result = integ.run(t_end, observer);
+    let wall = clock.elapsed().as_secs_f64();
+    Ok((integ.stats(), integ.time(), wall, result))
 }
 
 /// Keeps the samples on success, or in `<name>.partial.csv` on a failure.
@@ -308,10 +358,9 @@ impl Observer for RunOutput<'_> {
     }
 }
 
-fn print_summary(integ: &Integrator<'_, dyn System + '_>, out: &RunOutput<'_>, wall: f64) {
-    let st = integ.stats();
+fn print_summary(st: mstar::RunStats, t: f64, out: &RunOutput<'_>, wall: f64) {
     let steps = st.steps.max(1) as f64;
-    println!("t reached: {} s", integ.time());
+    println!("t reached: {t} s");
     println!(
         "steps: {} accepted, {} rejected; Newton iterations: {} ({:.2} per step, {} max); factorizations: {}",
         st.steps,
@@ -348,16 +397,15 @@ pub fn check(args: &CheckArgs) -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    let report = mstar::run::check(&file.system, &config);
+    let redundant = file.simulation.redundant.unwrap_or_default();
+    let report = mstar::run::check(&file.system, &config, redundant);
     print!("{report}");
     if report.can_run() {
         ExitCode::SUCCESS
     } else {
-        if !report.redundant.is_empty() {
-            eprintln!(
-                "error: the constraints of {} are redundant (their equations are linearly dependent): remove or loosen one",
-                report.redundant.join(", ")
-            );
+        if !report.redundant.is_empty() && !report.minimum_norm {
+            let e = mstar::run::RunError::Redundant(report.redundant.clone());
+            eprintln!("error: {e}");
         }
         ExitCode::from(1)
     }

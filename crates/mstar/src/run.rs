@@ -4,10 +4,12 @@
 //! the initial state is from the constraints).
 
 use mstar_kkt::{Backend, MaxAbs};
-use mstar_model::System;
-use mstar_model::file::{IntegratorChoice, NewtonChoice, Simulation};
+use mstar_model::file::{IntegratorChoice, NewtonChoice, RedundantChoice, Simulation};
 use mstar_model::planar::PlanarSystem;
-use mstar_newmark::{Config, Integrator, Newton, Scheme};
+use mstar_model::{RowSubset, System};
+use mstar_newmark::{Config, IntegrationError, Integrator, Newton, Observer, RunStats, Scheme};
+
+use crate::redundant::{Expanded, Rows};
 
 /// The defaults of `[simulation]` (`docs/model-format.md`).
 pub mod defaults {
@@ -74,6 +76,73 @@ pub fn config(sim: &Simulation) -> Result<(Config, f64), String> {
     Ok((c, sim.t_end.unwrap_or(defaults::T_END)))
 }
 
+/// Why a model file does not run.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RunError {
+    /// `[simulation]` names something that does not exist.
+    #[error("{0}")]
+    Settings(String),
+    /// Redundant constraints in a model that does not ask for minimum-norm
+    /// multipliers: the joints, by name.
+    #[error(
+        "the constraints of {} are redundant (their equations are linearly dependent at the start): remove or loosen one, or set [simulation] redundant = \"minimum-norm\" (on the command line: --set simulation.redundant=minimum-norm) to run with minimum-norm multipliers",
+        .0.join(", ")
+    )]
+    Redundant(Vec<String>),
+    /// The start or a step failed.
+    #[error(transparent)]
+    Integration(#[from] IntegrationError),
+}
+
+/// The constraint rows to solve on: `None` for all of them, or (in
+/// [`Rows::kept`]) the independent rows when the model has redundant
+/// constraints and asks for minimum-norm multipliers (`crate::redundant`).
+///
+/// # Errors
+/// [`RunError::Redundant`] when it has redundant constraints and does not.
+pub fn solve_rows(
+    sys: &PlanarSystem,
+    u0: &[f64],
+    choice: RedundantChoice,
+) -> Result<Option<Rows>, RunError> {
+    let Some(rows) = crate::redundant::rows(sys, 0.0, u0) else {
+        return Ok(None);
+    };
+    match (rows.dependent.is_empty(), choice) {
+        (true, _) => Ok(None),
+        (false, RedundantChoice::MinimumNorm) => Ok(Some(rows)),
+        (false, RedundantChoice::Refuse) => Err(RunError::Redundant(owners(sys, &rows.dependent))),
+    }
+}
+
+/// Runs a model from its initial state to `[simulation] t_end` with its
+/// settings (defaults as documented), every sample to `observer` — with the
+/// multipliers of all rows, minimum-norm ones when the model asks for them.
+///
+/// # Errors
+/// [`RunError`]: bad settings, refused redundant constraints, a start or a
+/// step that fails (the samples before it have been observed).
+pub fn simulate(
+    sys: &PlanarSystem,
+    sim: &Simulation,
+    observer: &mut dyn Observer,
+) -> Result<RunStats, RunError> {
+    let (config, t_end) = config(sim).map_err(RunError::Settings)?;
+    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+    match solve_rows(sys, &u0, sim.redundant.unwrap_or_default())? {
+        Some(rows) => {
+            let subset = RowSubset::new(sys, rows.kept);
+            let mut integ = Integrator::new(&subset, config, 0.0, &u0, &v0)?;
+            Ok(integ.run(t_end, &mut Expanded::new(&subset, observer))?)
+        }
+        None => {
+            let mut integ = Integrator::new(sys, config, 0.0, &u0, &v0)?;
+            Ok(integ.run(t_end, observer)?)
+        }
+    }
+}
+
 /// What `mstar check` finds out about a model before running it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CheckReport {
@@ -87,6 +156,9 @@ pub struct CheckReport {
     /// The joints and drivers with a constraint row that depends on the rows
     /// before it, by name, in file order.
     pub redundant: Vec<String>,
+    /// Whether the model runs with minimum-norm multipliers (it has redundant
+    /// constraints and asks for them).
+    pub minimum_norm: bool,
     /// The most violated constraint row at the initial pose, by owner and
     /// row name, with `|Φ|`.
     pub position_violation: Option<(String, String, f64)>,
@@ -99,58 +171,32 @@ pub struct CheckReport {
     pub start_error: Option<String>,
 }
 
-/// Largest dense `m × n` the rank computation takes.
-const DENSE_LIMIT: usize = 4_000_000;
-
 /// Checks `sys` at its initial state with the integrator configuration
-/// `config`.
+/// `config`, redundant constraints handled as `redundant` says.
 #[must_use]
-pub fn check(sys: &PlanarSystem, config: &Config) -> CheckReport {
+pub fn check(sys: &PlanarSystem, config: &Config, redundant: RedundantChoice) -> CheckReport {
     let (n, m) = (sys.n_coords(), sys.n_constraints());
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
-    let (rank, dependent) = if n * m <= DENSE_LIMIT {
-        let (rank, rows) = dependent_rows(&dense_b(sys, &u0));
-        (Some(rank), rows)
-    } else {
-        (None, Vec::new())
+    let rows = crate::redundant::rows(sys, 0.0, &u0);
+    let dependent = rows.as_ref().map_or(&[][..], |r| &r.dependent[..]);
+    let minimum_norm = redundant == RedundantChoice::MinimumNorm && !dependent.is_empty();
+    let (phi, w) = initial_violations(sys, &u0, &v0);
+    let start = match &rows {
+        Some(rows) if minimum_norm => {
+            start_report(&RowSubset::new(sys, rows.kept.clone()), config, &u0, &v0)
+        }
+        _ => start_report(sys, config, &u0, &v0),
     };
-    let mut redundant: Vec<String> = Vec::new();
-    for row in dependent {
-        let owner = sys.constraint_owner(row).unwrap_or("?").to_string();
-        if !redundant.contains(&owner) {
-            redundant.push(owner);
-        }
-    }
-    let mut phi = vec![0.0; m];
-    sys.phi_into(0.0, &u0, &mut phi);
-    let mut w = vec![0.0; m];
-    sys.phi_t_into(0.0, &u0, &mut w);
-    let b = dense_b(sys, &u0);
-    for (wi, row) in w.iter_mut().zip(&b) {
-        *wi += row.iter().zip(&v0).map(|(x, y)| x * y).sum::<f64>();
-    }
-    let (projection, start_error) = match Integrator::new(sys, config.clone(), 0.0, &u0, &v0) {
-        Ok(integ) => {
-            let report = integ.start_report();
-            let largest = |d: &[f64]| {
-                let (i, x) = argmax(d);
-                (sys.coord_name(i), x)
-            };
-            (
-                Some([
-                    largest(&report.position_correction),
-                    largest(&report.velocity_correction),
-                ]),
-                None,
-            )
-        }
-        Err(e) => (None, Some(e.to_string())),
+    let (projection, start_error) = match start {
+        Ok(p) => (Some(p), None),
+        Err(e) => (None, Some(e)),
     };
     CheckReport {
         coordinates: n,
         constraints: m,
-        rank,
-        redundant,
+        rank: rows.as_ref().map(|r| r.rank),
+        redundant: owners(sys, dependent),
+        minimum_norm,
         position_violation: violation(sys, &phi),
         velocity_violation: violation(sys, &w),
         projection,
@@ -158,12 +204,59 @@ pub fn check(sys: &PlanarSystem, config: &Config) -> CheckReport {
     }
 }
 
+/// The joints and drivers that own `rows`, each once, in order.
+#[must_use]
+pub fn owners(sys: &PlanarSystem, rows: &[usize]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for &row in rows {
+        let owner = sys.constraint_owner(row).unwrap_or("?").to_string();
+        if !names.contains(&owner) {
+            names.push(owner);
+        }
+    }
+    names
+}
+
+/// `Φ` and `B u̇ + Φ_t` at the initial state.
+fn initial_violations(sys: &PlanarSystem, u0: &[f64], v0: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    let m = sys.n_constraints();
+    let mut phi = vec![0.0; m];
+    sys.phi_into(0.0, u0, &mut phi);
+    let mut w = vec![0.0; m];
+    sys.phi_t_into(0.0, u0, &mut w);
+    let p = sys.b_pattern();
+    let mut b = vec![0.0; p.len()];
+    sys.b_into(0.0, u0, &mut b);
+    p.mul_add(&b, v0, &mut w);
+    (phi, w)
+}
+
+/// What the initial projection moves most (position, velocity), or why the
+/// start fails.
+fn start_report<S: System + ?Sized>(
+    sys: &S,
+    config: &Config,
+    u0: &[f64],
+    v0: &[f64],
+) -> Result<[(String, f64); 2], String> {
+    let integ = Integrator::new(sys, config.clone(), 0.0, u0, v0).map_err(|e| e.to_string())?;
+    let report = integ.start_report();
+    let largest = |d: &[f64]| {
+        let (i, x) = argmax(d);
+        (sys.coord_name(i), x)
+    };
+    Ok([
+        largest(&report.position_correction),
+        largest(&report.velocity_correction),
+    ])
+}
+
 impl CheckReport {
-    /// Whether the model can run as written: no redundant constraint, and a
-    /// start.
+    /// Whether the model can run as written: no redundant constraint (or
+    /// minimum-norm multipliers asked for), and a start.
     #[must_use]
     pub fn can_run(&self) -> bool {
-        self.redundant.is_empty() && self.start_error.is_none()
+        (self.redundant.is_empty() || self.minimum_norm) && self.start_error.is_none()
     }
 
     /// The degrees of freedom `n − rank B`, when the rank is known.
@@ -181,13 +274,17 @@ impl std::fmt::Display for CheckReport {
             Some(dof) => writeln!(f, "degrees of freedom: {dof}")?,
             None => writeln!(
                 f,
-                "degrees of freedom: not computed (n·m above {DENSE_LIMIT})"
+                "degrees of freedom: not computed (n·m above {})",
+                crate::redundant::DENSE_LIMIT
             )?,
         }
-        let redundant = if self.redundant.is_empty() {
-            "none".to_string()
-        } else {
-            self.redundant.join(", ")
+        let redundant = match (self.redundant.is_empty(), self.minimum_norm) {
+            (true, _) => "none".to_string(),
+            (false, false) => self.redundant.join(", "),
+            (false, true) => format!(
+                "{} (left out of the solve: minimum-norm multipliers)",
+                self.redundant.join(", ")
+            ),
         };
         writeln!(f, "redundant constraints: {redundant}")?;
         for (level, v) in [
@@ -222,40 +319,6 @@ impl std::fmt::Display for CheckReport {
     }
 }
 
-/// `B` at `u`, dense, row by row.
-fn dense_b(sys: &PlanarSystem, u: &[f64]) -> Vec<Vec<f64>> {
-    let p = sys.b_pattern();
-    let mut values = vec![0.0; p.len()];
-    sys.b_into(0.0, u, &mut values);
-    p.to_dense(&values)
-}
-
-/// The rank of the rows and the rows that depend on the ones before them:
-/// modified Gram–Schmidt with one reorthogonalization, a row whose remainder
-/// is at most `1e-10` of its norm counting as dependent.
-fn dependent_rows(rows: &[Vec<f64>]) -> (usize, Vec<usize>) {
-    let mut basis: Vec<Vec<f64>> = Vec::new();
-    let mut dependent = Vec::new();
-    for (i, row) in rows.iter().enumerate() {
-        let norm = row.iter().map(|x| x * x).sum::<f64>().sqrt();
-        let mut r = row.clone();
-        for _ in 0..2 {
-            for q in &basis {
-                let d: f64 = r.iter().zip(q).map(|(a, b)| a * b).sum();
-                r.iter_mut().zip(q).for_each(|(a, b)| *a -= d * b);
-            }
-        }
-        let rest = r.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if rest.is_nan() || rest <= 1e-10 * norm {
-            dependent.push(i);
-        } else {
-            r.iter_mut().for_each(|a| *a /= rest);
-            basis.push(r);
-        }
-    }
-    (basis.len(), dependent)
-}
-
 /// The largest `|xᵢ|` by owner and row name, `None` when all are zero.
 fn violation(sys: &PlanarSystem, x: &[f64]) -> Option<(String, String, f64)> {
     let mut m = MaxAbs::new();
@@ -282,23 +345,6 @@ fn argmax(x: &[f64]) -> (usize, f64) {
                 (k, best)
             }
         })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn dependent_rows_are_found_in_order() {
-        let rows = vec![
-            vec![1.0, 0.0, 0.0],
-            vec![0.0, 1.0, 0.0],
-            vec![1.0, 1.0, 0.0],
-            vec![0.0, 0.0, 2.0],
-            vec![0.0, 0.0, 0.0],
-        ];
-        assert_eq!(dependent_rows(&rows), (3, vec![2, 4]));
-    }
 }
 
 /// The reaction and effort columns of a planar model's CSV

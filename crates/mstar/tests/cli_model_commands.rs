@@ -200,3 +200,42 @@ fn run_takes_built_in_models() {
     let refused = mstar(&["run", "--builtin", "chain", "--set", "simulation.rho=0.5"]);
     assert_eq!(refused.status.code(), Some(1));
 }
+
+#[test]
+fn redundant_joints_are_refused_by_name_and_the_advice_runs_them() {
+    let dir = scratch("redundant");
+    let with = std::fs::read_to_string(model("parallelogram-third-crank.toml")).expect("model");
+    let without = with.replace("redundant = \"minimum-norm\"", "");
+    assert_ne!(with, without, "the model asks for minimum-norm multipliers");
+    let path = dir.join("p.toml");
+    std::fs::write(&path, without).expect("written");
+    let path = path.display().to_string();
+    let refused = mstar(&["run", &path, "--t-end", "0.01"]);
+    assert_eq!(refused.status.code(), Some(1));
+    let message = text(&refused.stderr);
+    assert!(
+        message.contains("right-top") && message.contains("redundant"),
+        "{message}"
+    );
+    assert!(
+        message.contains("--set simulation.redundant=minimum-norm"),
+        "{message}"
+    );
+    let checked = mstar(&["check", &path]);
+    assert_eq!(checked.status.code(), Some(1));
+    assert!(text(&checked.stdout).contains("redundant constraints: right-top\n"));
+    // What the message says to do.
+    let advised = mstar(&[
+        "run",
+        &path,
+        "--t-end",
+        "0.01",
+        "--set",
+        "simulation.redundant=minimum-norm",
+    ]);
+    assert!(advised.status.success(), "{}", text(&advised.stderr));
+    assert!(text(&advised.stdout).contains("minimum-norm multipliers"));
+    let checked = mstar(&["check", &model("parallelogram-third-crank.toml")]);
+    assert_eq!(checked.status.code(), Some(0), "{}", text(&checked.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -8,9 +8,9 @@
 
 use std::path::{Path, PathBuf};
 
-use mstar::model::file::{Format, ModelFile};
+use mstar::model::file::{Format, ModelFile, RedundantChoice};
 use mstar::rk4::{AngleChain, AngleLink};
-use mstar::{Integrator, SampleRef, System};
+use mstar::{SampleRef, System};
 
 fn models() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models")
@@ -21,22 +21,19 @@ fn models() -> PathBuf {
 fn run(path: &Path, set: &[&str]) -> (Vec<(f64, Vec<f64>)>, f64) {
     let set: Vec<String> = set.iter().map(|s| (*s).to_string()).collect();
     let model = ModelFile::load_with(path, &set).unwrap_or_else(|e| panic!("{e}"));
-    let (config, t_end) = mstar::run::config(&model.simulation).expect("valid settings");
+    let (config, _) = mstar::run::config(&model.simulation).expect("valid settings");
     let sys = &model.system;
-    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
     let tol = config.tol;
-    let mut integ = Integrator::new(sys, config, 0.0, &u0, &v0).expect("a start");
     let (mut samples, mut worst) = (Vec::new(), 0.0f64);
     let mut phi = vec![0.0; sys.n_constraints()];
-    integ
-        .run(t_end, &mut |s: &SampleRef<'_>| {
-            sys.phi_into(s.t, s.u, &mut phi);
-            let eta = tol * s.u.iter().fold(1.0f64, |m, x| m.max(x.abs()));
-            let r = mstar::kkt::max_abs(&phi) / eta;
-            worst = if r.is_nan() || r > worst { r } else { worst };
-            samples.push((s.t, s.u.to_vec()));
-        })
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    mstar::run::simulate(sys, &model.simulation, &mut |s: &SampleRef<'_>| {
+        sys.phi_into(s.t, s.u, &mut phi);
+        let eta = tol * s.u.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+        let r = mstar::kkt::max_abs(&phi) / eta;
+        worst = if r.is_nan() || r > worst { r } else { worst };
+        samples.push((s.t, s.u.to_vec()));
+    })
+    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     (samples, worst)
 }
 
@@ -479,7 +476,7 @@ at = [0.5, 0.5]
 "#;
     let model = ModelFile::parse(parallelogram, "p.toml", Format::Toml).expect("valid");
     let (config, _) = mstar::run::config(&model.simulation).expect("defaults");
-    let report = mstar::run::check(&model.system, &config);
+    let report = mstar::run::check(&model.system, &config, RedundantChoice::Refuse);
     assert_eq!((report.coordinates, report.constraints), (12, 12));
     assert_eq!(report.degrees_of_freedom(), Some(1));
     assert_eq!(report.redundant, vec!["middle-top".to_string()]);
@@ -491,7 +488,7 @@ at = [0.5, 0.5]
         "",
     );
     let model = ModelFile::parse(&plain, "p.toml", Format::Toml).expect("valid");
-    let report = mstar::run::check(&model.system, &config);
+    let report = mstar::run::check(&model.system, &config, RedundantChoice::Refuse);
     assert_eq!(
         (report.constraints, report.degrees_of_freedom()),
         (10, Some(2))
@@ -499,7 +496,92 @@ at = [0.5, 0.5]
     assert!(report.redundant.is_empty() && report.can_run(), "{report}");
     // The driven four-bar has none left.
     let four_bar = ModelFile::load(&models().join("four-bar.toml")).expect("valid");
-    let report = mstar::run::check(&four_bar.system, &config);
+    let report = mstar::run::check(&four_bar.system, &config, RedundantChoice::Refuse);
     assert_eq!(report.degrees_of_freedom(), Some(0));
     assert!(report.can_run(), "{report}");
+}
+
+/// Every sample's `(t, u, λ)` of a model file's run (its settings).
+fn samples_of(path: &Path) -> Vec<(f64, Vec<f64>, Vec<f64>)> {
+    let model = ModelFile::load(path).unwrap_or_else(|e| panic!("{e}"));
+    let mut out = Vec::new();
+    mstar::run::simulate(&model.system, &model.simulation, &mut |s: &SampleRef<
+        '_,
+    >| {
+        out.push((s.t, s.u.to_vec(), s.lambda.to_vec()));
+    })
+    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    out
+}
+
+#[test]
+fn a_third_crank_leaves_the_parallelogram_s_motion_as_it_was() {
+    // The third crank moves like the other two: with minimum-norm
+    // multipliers its model moves exactly as the plain parallelogram whose
+    // cranks carry its mass (all the same discrete equations, projected on
+    // the one degree of freedom): to the Newton tolerance, not the step's
+    // truncation error.
+    let third = samples_of(&models().join("parallelogram-third-crank.toml"));
+    let plain = samples_of(&models().join("parallelogram.toml"));
+    let model = ModelFile::load(&models().join("parallelogram-third-crank.toml")).expect("valid");
+    let plain_model = ModelFile::load(&models().join("parallelogram.toml")).expect("valid");
+    let (sys, psys) = (&model.system, &plain_model.system);
+    assert_eq!(third.len(), plain.len());
+    assert_eq!(third.len(), 2001);
+    let mut worst = 0.0f64;
+    for ((t, u, _), (tp, up, _)) in third.iter().zip(&plain) {
+        assert_eq!(t, tp);
+        for body in ["left", "right", "coupler"] {
+            let (a, b) = (
+                sys.body(body).expect("body"),
+                psys.body(body).expect("body"),
+            );
+            for (i, j) in [
+                (a.x, b.x),
+                (a.y, b.y),
+                (a.theta.expect("rigid"), b.theta.expect("rigid")),
+            ] {
+                let d = (u[i] - up[j]).abs();
+                worst = if d.is_nan() || d > worst { d } else { worst };
+            }
+        }
+    }
+    assert!(worst <= 1e-10, "{worst:e}");
+    // The motion is not trivial: the cranks swing through more than a radian.
+    let theta = sys.body("left").and_then(|b| b.theta).expect("angle");
+    let swing = third.iter().map(|s| s.1[theta]).fold(f64::NAN, f64::min);
+    assert!(swing < std::f64::consts::FRAC_PI_3 - 1.0, "{swing}");
+}
+
+#[test]
+fn minimum_norm_multipliers_give_the_forces_with_the_least_norm() {
+    // λ is minimum-norm among the multipliers with the same Bᵀλ iff it is
+    // orthogonal to the null space of Bᵀ (the combination w of rows with
+    // wᵀB = 0, here one vector): checked with that null space, computed
+    // from B's singular vectors, at samples along the run. And Bᵀλ is the
+    // force of the solve on the independent rows (which reproduces the plain
+    // parallelogram's motion, previous test): the reaction columns of
+    // `mstar run` balance the slider in cli_model_commands.rs.
+    let path = models().join("parallelogram-third-crank.toml");
+    let model = ModelFile::load(&path).expect("valid");
+    let sys = &model.system;
+    for (t, u, lambda) in samples_of(&path).iter().step_by(250) {
+        let b = mstar::redundant::dense_b(sys, *t, u);
+        let (m, n) = (b.len(), sys.n_coords());
+        let bt = nalgebra::DMatrix::from_fn(n, m, |i, j| b[j][i]);
+        let svd = bt.clone().svd(false, true);
+        let v_t = svd.v_t.expect("right singular vectors");
+        let smallest = (0..m)
+            .min_by(|&i, &j| svd.singular_values[i].total_cmp(&svd.singular_values[j]))
+            .expect("rows");
+        assert!(
+            svd.singular_values[smallest] < 1e-12,
+            "B has a dependent row"
+        );
+        let w = v_t.row(smallest);
+        let along: f64 = w.iter().zip(lambda).map(|(a, b)| a * b).sum();
+        let norm = lambda.iter().map(|x| x * x).sum::<f64>().sqrt();
+        assert!(norm > 1.0, "{lambda:?}");
+        assert!(along.abs() <= 1e-9 * norm, "t = {t}: wᵀλ = {along:e}");
+    }
 }

@@ -26,6 +26,19 @@ pub enum NewtonChoice {
     Full,
 }
 
+/// What to do with redundant constraints, `[simulation] redundant`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RedundantChoice {
+    /// `"refuse"` (default): a model whose constraint equations are linearly
+    /// dependent does not run; the error names the joints.
+    #[default]
+    Refuse,
+    /// `"minimum-norm"`: the dependent rows are left out of the solve and the
+    /// multipliers of all rows are the minimum-norm ones that give the same
+    /// constraint forces.
+    MinimumNorm,
+}
+
 /// `[simulation]`: every key optional (defaults in `docs/model-format.md`,
 /// applied by the program that runs the model).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -55,6 +68,8 @@ pub struct Simulation {
     /// `kkt`, the KKT solver by name (`auto`, `dense`, `lu`, `ldlt`, `schur`;
     /// checked by the program that runs the model).
     pub kkt: Option<String>,
+    /// `redundant`.
+    pub redundant: Option<RedundantChoice>,
 }
 
 /// `[output]`.
@@ -71,7 +86,7 @@ impl Default for Output {
 }
 
 /// The keys of `[simulation]`.
-const SIMULATION_KEYS: [&str; 12] = [
+const SIMULATION_KEYS: [&str; 13] = [
     "t_end",
     "h",
     "h_min",
@@ -84,6 +99,7 @@ const SIMULATION_KEYS: [&str; 12] = [
     "max_iterations",
     "newton",
     "kkt",
+    "redundant",
 ];
 
 /// Reads `[simulation]` and `[output]` of the document `root`.
@@ -143,6 +159,12 @@ fn simulation(mut f: Fields<'_>) -> Result<Simulation, FileError> {
                 _ => NewtonChoice::Modified,
             }),
         kkt: f.optional("kkt", string)?.map(str::to_string),
+        redundant: f
+            .optional("redundant", choice(&["refuse", "minimum-norm"]))?
+            .map(|c| match c {
+                "minimum-norm" => RedundantChoice::MinimumNorm,
+                _ => RedundantChoice::Refuse,
+            }),
     };
     consistent(&mut f, &s)?;
     f.finish(&SIMULATION_KEYS)?;

@@ -1,0 +1,171 @@
+//! Redundant constraints: finding the rows of `B` that depend on the ones
+//! before them, and running a model that has some with minimum-norm
+//! multipliers (`[simulation] redundant = "minimum-norm"`,
+//! docs/model-format.md).
+//!
+//! With dependent rows the KKT matrix of eq. (15) is singular, whatever the
+//! mass matrix: the multipliers are not unique. The dependent rows are left
+//! out of the solve ([`RowSubset`]), which gives the motion (the kept rows
+//! impose the left-out ones near the start) and one set of multipliers;
+//! [`MinimumNorm`] turns it into the multipliers of all rows with the least
+//! Euclidean norm that give the same constraint forces `Bᵀλ`:
+//! `λ = (Bᵀ)⁺ B_keptᵀ λ_kept`, the pseudo-inverse by a singular value
+//! decomposition (rank-revealing; dense, for models of up to a few hundred
+//! rows).
+
+use mstar_model::{RowSubset, SampleRef, System};
+use mstar_newmark::Observer;
+use nalgebra::{DMatrix, DVector};
+
+/// Largest dense `m × n` the rank computation takes.
+pub const DENSE_LIMIT: usize = 4_000_000;
+
+/// The rows of `B` at a state: which are independent, which depend on the
+/// rows before them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Rows {
+    /// `rank B`.
+    pub rank: usize,
+    /// The rows kept: each independent of the kept rows before it.
+    pub kept: Vec<usize>,
+    /// The rows that depend on the rows before them.
+    pub dependent: Vec<usize>,
+}
+
+/// The rows of `B(t, u)`; `None` when `m · n` is above [`DENSE_LIMIT`].
+#[must_use]
+pub fn rows<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Option<Rows> {
+    if sys.n_coords() * sys.n_constraints() > DENSE_LIMIT {
+        return None;
+    }
+    let (kept, dependent) = dependent_rows(&dense_b(sys, t, u));
+    Some(Rows {
+        rank: kept.len(),
+        kept,
+        dependent,
+    })
+}
+
+/// `B(t, u)`, dense, row by row.
+#[must_use]
+pub fn dense_b<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Vec<Vec<f64>> {
+    let p = sys.b_pattern();
+    let mut values = vec![0.0; p.len()];
+    sys.b_into(t, u, &mut values);
+    p.to_dense(&values)
+}
+
+/// The independent rows and the rows that depend on the ones before them:
+/// modified Gram–Schmidt with one reorthogonalization, a row whose remainder
+/// is at most `1e-10` of its norm counting as dependent (as a zero or NaN
+/// row does).
+fn dependent_rows(rows: &[Vec<f64>]) -> (Vec<usize>, Vec<usize>) {
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    let (mut kept, mut dependent) = (Vec::new(), Vec::new());
+    for (i, row) in rows.iter().enumerate() {
+        let norm = row.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let mut r = row.clone();
+        for _ in 0..2 {
+            for q in &basis {
+                let d: f64 = r.iter().zip(q).map(|(a, b)| a * b).sum();
+                r.iter_mut().zip(q).for_each(|(a, b)| *a -= d * b);
+            }
+        }
+        let rest = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if rest.is_nan() || rest <= 1e-10 * norm || norm == 0.0 {
+            dependent.push(i);
+        } else {
+            r.iter_mut().for_each(|a| *a /= rest);
+            basis.push(r);
+            kept.push(i);
+        }
+    }
+    (kept, dependent)
+}
+
+/// The minimum-norm multipliers of all rows from those of the kept rows.
+#[derive(Debug)]
+pub struct MinimumNorm<'a, S: System + ?Sized> {
+    sys: &'a S,
+    kept: Vec<usize>,
+    lambda: Vec<f64>,
+}
+
+impl<'a, S: System + ?Sized> MinimumNorm<'a, S> {
+    /// For `sys` solved on the rows `kept`.
+    #[must_use]
+    pub fn new(sys: &'a S, kept: Vec<usize>) -> Self {
+        Self {
+            sys,
+            kept,
+            lambda: vec![0.0; sys.n_constraints()],
+        }
+    }
+
+    /// `λ = (Bᵀ)⁺ B_keptᵀ λ_kept` at `(t, u)`: the multipliers of all rows
+    /// with the least norm among those with the same `Bᵀλ`. Singular values
+    /// below `1e-10 σ_max` count as zero (the rank test of [`rows`]).
+    pub fn lambda(&mut self, t: f64, u: &[f64], lambda_kept: &[f64]) -> &[f64] {
+        let b = dense_b(self.sys, t, u);
+        let (m, n) = (b.len(), self.sys.n_coords());
+        let bt = DMatrix::from_fn(n, m, |i, j| b[j][i]);
+        let mut f = DVector::zeros(n);
+        for (&r, &l) in self.kept.iter().zip(lambda_kept) {
+            for (fi, &bij) in f.iter_mut().zip(&b[r]) {
+                *fi += bij * l;
+            }
+        }
+        let svd = bt.svd(true, true);
+        let eps = 1e-10 * svd.singular_values.max();
+        match svd.solve(&f, eps) {
+            Ok(x) => self.lambda.copy_from_slice(x.as_slice()),
+            Err(_) => self.lambda.fill(f64::NAN),
+        }
+        &self.lambda
+    }
+}
+
+/// An observer of a run on [`RowSubset`] that passes on every sample with
+/// the minimum-norm multipliers of all rows.
+pub struct Expanded<'a, 'o, S: System + ?Sized> {
+    minimum_norm: MinimumNorm<'a, S>,
+    inner: &'o mut dyn Observer,
+}
+
+impl<'a, 'o, S: System + ?Sized> Expanded<'a, 'o, S> {
+    /// Passes the samples of `subset`'s run on to `inner`.
+    pub fn new(subset: &RowSubset<'a, S>, inner: &'o mut dyn Observer) -> Self {
+        Self {
+            minimum_norm: MinimumNorm::new(subset.inner(), subset.rows().to_vec()),
+            inner,
+        }
+    }
+}
+
+impl<S: System + ?Sized> Observer for Expanded<'_, '_, S> {
+    fn observe(&mut self, s: &SampleRef<'_>) {
+        let lambda = self.minimum_norm.lambda(s.t, s.u, s.lambda);
+        self.inner.observe(&SampleRef { lambda, ..*s });
+    }
+
+    fn reads_energy(&self) -> bool {
+        self.inner.reads_energy()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dependent_rows_are_found_in_order() {
+        let rows = vec![
+            vec![1.0, 0.0, 0.0],
+            vec![0.0, 1.0, 0.0],
+            vec![1.0, 1.0, 0.0],
+            vec![0.0, 0.0, 2.0],
+            vec![0.0, 0.0, 0.0],
+        ];
+        assert_eq!(dependent_rows(&rows), (vec![0, 1, 3], vec![2, 4]));
+    }
+}
