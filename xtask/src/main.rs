@@ -11,6 +11,8 @@
 //! - `cargo xtask convergence`: fitted orders in u, u̇, ü, λ ([`convergence`]).
 //! - `cargo xtask energy`: energy error over 1000 s ([`energy`]).
 //! - `cargo xtask bench`: the chain benchmark as a table and a plot ([`bench`](mod@bench)).
+//! - `cargo xtask validate`: the models of `models/` against independent
+//!   references; writes docs/validation.md ([`validate`]).
 
 mod bench;
 mod common;
@@ -19,6 +21,7 @@ mod energy;
 mod paper;
 mod plot;
 mod stability;
+mod validate;
 
 use std::path::{Path, PathBuf};
 
@@ -50,6 +53,10 @@ enum Command {
     /// Energy error over 1000 s (RK4, trapezoidal, generalized-α); writes to
     /// target/studies/energy/ and docs/figures/energy/.
     Energy,
+    /// Every model of models/ against its independent reference (closed
+    /// forms, RK4 on minimal coordinates, published values); prints the
+    /// table and writes docs/validation.md.
+    Validate,
     /// The chain benchmark (criterion, release build) for N = 10 … max-n:
     /// µs per step and per body per step, Newton iterations and factorizations
     /// per step, phase times, peak memory; writes to target/studies/bench/.
@@ -73,6 +80,7 @@ fn main() -> Result<()> {
         Command::Stability => stability::run(),
         Command::Convergence => convergence::run(),
         Command::Energy => energy::run(),
+        Command::Validate => validate::run(),
         Command::Bench { max_n, report_only } => bench::run(max_n, report_only),
     }
 }

@@ -39,6 +39,7 @@ pub mod pendulum;
 pub mod redundant;
 pub mod run;
 pub mod testing;
+pub mod validation;
 
 pub use mstar_kkt as kkt;
 pub use mstar_linearize as linearize;

@@ -144,7 +144,13 @@ impl<'a> Model<'a> {
             ));
         }
         let mass = f.required("mass", number_in(|x| x > 0.0, "positive, in kg"))?;
-        let inertia = f.required("inertia", number_in(|x| x > 0.0, "positive, in kg m²"))?;
+        let inertia = f.required(
+            "inertia",
+            number_in(
+                |x| x >= 0.0,
+                "positive (or 0 for a body whose angle a joint fixes), in kg m²",
+            ),
+        )?;
         let pose = f.required("pose", numbers::<3>)?;
         let velocity = f.optional("velocity", numbers::<3>)?.unwrap_or([0.0; 3]);
         f.finish(&["name", "mass", "inertia", "pose", "velocity"])?;

@@ -15,7 +15,8 @@ use super::{At, Body, BodyId, Coordinate, ModelError, PlanarSystem, TimeFunction
 pub struct RigidBody {
     /// Mass, kg (> 0).
     pub mass: f64,
-    /// Inertia about the centre of mass, kg m² (> 0).
+    /// Inertia about the centre of mass, kg m² (> 0, or 0 when a joint fixes
+    /// the angle: see [`PlanarBuilder::rigid_body`]).
     pub inertia: f64,
     /// Centre of mass `x`, `y` (m) and angle `θ` (rad) of the body's x axis.
     pub pose: [f64; 3],
@@ -116,7 +117,10 @@ impl PlanarBuilder {
         self
     }
 
-    /// Adds a rigid body.
+    /// Adds a rigid body. Its inertia may be 0 — a point mass that carries
+    /// an angle coordinate, as the paper's pendulum in `u = [x, y, θ]` whose
+    /// mass matrix is singular (`algorithm.md` §2) — when a joint fixes its
+    /// angle; [`build`](Self::build) checks that.
     pub fn rigid_body(&mut self, name: &str, body: RigidBody) -> BodyId {
         self.add_body(
             name,
@@ -380,14 +384,10 @@ impl PlanarBuilder {
             .iter()
             .map(|(name, element, [a, b])| self.force_element(name, element, [*a, *b]))
             .collect::<Result<Vec<_>, _>>()?;
-        Ok(PlanarSystem::assemble(
-            self.gravity,
-            &self.bodies,
-            self.n,
-            constraints,
-            forces,
-            row,
-        ))
+        let sys =
+            PlanarSystem::assemble(self.gravity, &self.bodies, self.n, constraints, forces, row);
+        check_massless_angles(&sys)?;
+        Ok(sys)
     }
 
     /// Every body and element has its own name.
@@ -408,7 +408,7 @@ impl PlanarBuilder {
         Ok(())
     }
 
-    /// Positive masses and inertias, finite poses and velocities, no angular
+    /// Positive masses, inertias ≥ 0, finite poses and velocities, no angular
     /// velocity on a point mass.
     fn check_bodies(&self) -> Result<(), ModelError> {
         for b in &self.bodies {
@@ -420,9 +420,11 @@ impl PlanarBuilder {
                 return Err(invalid("the mass must be positive"));
             }
             if let Some(j) = b.inertia
-                && !(j > 0.0 && j.is_finite())
+                && !(j >= 0.0 && j.is_finite())
             {
-                return Err(invalid("the inertia must be positive"));
+                return Err(invalid(
+                    "the inertia must be positive (or 0, see PlanarBuilder::rigid_body)",
+                ));
             }
             if !b.pose.iter().chain(&b.velocity).all(|x| x.is_finite()) {
                 return Err(invalid("the initial pose and velocity must be finite"));
@@ -504,4 +506,28 @@ impl PlanarBuilder {
         }
         Ok(Force::new(name.to_string(), element.clone(), anchors))
     }
+}
+
+/// A rigid body with no inertia (the paper's pendulum: `M` singular in `θ`)
+/// needs a joint that fixes its angle, or `M* = M + BᵀB` is singular too: a
+/// non-zero entry in its `θ` column of `B` at the initial pose.
+fn check_massless_angles(sys: &PlanarSystem) -> Result<(), ModelError> {
+    let p = crate::System::b_pattern(sys);
+    let mut b = vec![0.0; p.len()];
+    crate::System::b_into(sys, 0.0, &sys.initial_position(), &mut b);
+    for body in sys.bodies.iter().filter(|b| b.inertia == Some(0.0)) {
+        let theta = body.x + 2;
+        let fixed = p
+            .entries
+            .iter()
+            .zip(&b)
+            .any(|(&(_, c), &v)| c == theta && v != 0.0);
+        if !fixed {
+            return Err(ModelError::Invalid {
+                element: body.name.clone(),
+                what: "inertia 0 needs a joint that fixes the body's angle (a revolute or distance joint away from its centre of mass, a weld, a prismatic joint or a driver of theta); give it an inertia > 0 or a point mass instead".to_string(),
+            });
+        }
+    }
+    Ok(())
 }

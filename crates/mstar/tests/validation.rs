@@ -1,0 +1,95 @@
+//! The classic mechanisms of `models/` against their independent references
+//! (`mstar::validation`, docs/validation.md), on the short spans of
+//! `Level::Quick`; `cargo xtask validate` runs the full ones.
+
+use std::path::{Path, PathBuf};
+
+use mstar::validation::{CASES, Level, Row};
+
+fn models() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models")
+}
+
+fn check(model: &str) {
+    let case = CASES
+        .iter()
+        .find(|c| c.model == model)
+        .unwrap_or_else(|| panic!("no validation case for {model}"));
+    let rows = (case.run)(&models(), Level::Quick).unwrap_or_else(|e| panic!("{e}"));
+    assert!(!rows.is_empty(), "{model}: no rows");
+    let failed: Vec<&Row> = rows.iter().filter(|r| !r.pass()).collect();
+    assert!(failed.is_empty(), "{failed:#?}");
+}
+
+#[test]
+fn the_paper_s_pendulum_converges_to_rk4_at_second_order() {
+    check("pendulum.toml");
+}
+
+#[test]
+fn the_double_pendulum_converges_to_rk4_at_second_order() {
+    check("double-pendulum.toml");
+}
+
+#[test]
+fn the_slider_crank_follows_its_closed_form_and_inverse_dynamics() {
+    check("slider-crank.toml");
+}
+
+#[test]
+fn the_four_bar_follows_its_loop_closure() {
+    check("four-bar.toml");
+}
+
+#[test]
+fn andrews_squeezing_mechanism_matches_the_test_set() {
+    check("andrews.toml");
+}
+
+#[test]
+fn the_n_four_bar_passes_its_singular_positions_as_its_minimal_form() {
+    check("n-four-bar.toml");
+}
+
+#[test]
+fn the_third_crank_leaves_the_parallelogram_s_motion_as_it_was() {
+    check("parallelogram-third-crank.toml");
+}
+
+#[test]
+fn every_model_with_a_reference_is_validated() {
+    // A model file in models/ is a reference case, or the reference of one
+    // (parallelogram.toml), or an example (crank-and-spring, the JSON copy).
+    let examples = [
+        "crank-and-spring.toml",
+        "double-pendulum.json",
+        "parallelogram.toml",
+    ];
+    for entry in std::fs::read_dir(models()).expect("models/") {
+        let name = entry
+            .expect("entry")
+            .file_name()
+            .to_string_lossy()
+            .into_owned();
+        if examples.contains(&name.as_str()) {
+            continue;
+        }
+        assert!(
+            CASES.iter().any(|c| c.model == name),
+            "{name} has no validation case"
+        );
+    }
+}
+
+#[test]
+fn a_row_fails_on_nan() {
+    let row = Row {
+        model: "m".to_string(),
+        quantity: "q".to_string(),
+        reference: "r".to_string(),
+        ours: "o".to_string(),
+        error: f64::NAN,
+        tolerance: 1.0,
+    };
+    assert!(!row.pass());
+}
