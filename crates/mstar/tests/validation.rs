@@ -42,6 +42,16 @@ fn the_four_bar_follows_its_loop_closure() {
 }
 
 #[test]
+fn the_json_double_pendulum_converges_to_rk4_at_second_order() {
+    check("double-pendulum.json");
+}
+
+#[test]
+fn the_example_s_slider_and_motor_follow_their_equations() {
+    check("crank-and-spring.toml");
+}
+
+#[test]
 fn andrews_squeezing_mechanism_matches_the_test_set() {
     check("andrews.toml");
 }

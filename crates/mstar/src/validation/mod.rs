@@ -10,6 +10,7 @@
 //! from the source (the test set's digits, the benchmark's threshold).
 
 mod andrews;
+mod crank_and_spring;
 mod n_four_bar;
 mod order;
 mod parallelogram;
@@ -69,8 +70,10 @@ pub struct Case {
 pub const CASES: &[Case] = &[
     pendulums::PENDULUM,
     pendulums::DOUBLE_PENDULUM,
+    pendulums::DOUBLE_PENDULUM_JSON,
     slider_crank::CASE,
     slider_crank::FOUR_BAR,
+    crank_and_spring::CASE,
     andrews::CASE,
     n_four_bar::CASE,
     parallelogram::CASE,

@@ -17,7 +17,13 @@ pub(super) const PENDULUM: Case = Case {
 /// `models/double-pendulum.toml`: the lower bar's centre of mass.
 pub(super) const DOUBLE_PENDULUM: Case = Case {
     model: "double-pendulum.toml",
-    run: double_pendulum,
+    run: |models, level| double_pendulum(models, level, "double-pendulum.toml"),
+};
+
+/// `models/double-pendulum.json`: the same model in JSON.
+pub(super) const DOUBLE_PENDULUM_JSON: Case = Case {
+    model: "double-pendulum.json",
+    run: |models, level| double_pendulum(models, level, "double-pendulum.json"),
 };
 
 fn pendulum(models: &Path, level: Level) -> Result<Vec<Row>, String> {
@@ -50,7 +56,7 @@ fn pendulum(models: &Path, level: Level) -> Result<Vec<Row>, String> {
     )])
 }
 
-fn double_pendulum(models: &Path, level: Level) -> Result<Vec<Row>, String> {
+fn double_pendulum(models: &Path, level: Level, file: &str) -> Result<Vec<Row>, String> {
     let chain = AngleChain::new(
         vec![
             AngleLink {
@@ -70,7 +76,7 @@ fn double_pendulum(models: &Path, level: Level) -> Result<Vec<Row>, String> {
     );
     let t_end = if level == Level::Tight { 5.0 } else { 1.0 };
     let spec = Spec {
-        file: "double-pendulum.toml",
+        file,
         body: "lower",
         chain: &chain,
         phi0: &[0.4, -0.3],
