@@ -105,7 +105,8 @@ impl<'a> Model<'a> {
         let mut f = Fields::of(self.doc, node, what)?;
         let name = f.required("name", string)?.to_string();
         let span = f.entry("name").and_then(|e| e.node.span.clone());
-        f.what = format!("{kind} '{name}'");
+        // Escaped: a newline in a name must not split the message.
+        f.what = format!("{kind} '{}'", name.escape_debug());
         if name.is_empty() || name.chars().any(|c| c.is_control()) {
             return Err(self.doc.error(
                 span.as_ref(),
@@ -421,7 +422,7 @@ impl<'a> Model<'a> {
                 e,
                 format!(
                     "both sides are '{}': an element joins two different bodies",
-                    names[0]
+                    names[0].escape_debug()
                 ),
             ));
         }
@@ -445,7 +446,8 @@ impl<'a> Model<'a> {
         let mut known: Vec<&str> = self.bodies.keys().map(String::as_str).collect();
         known.sort_unstable();
         format!(
-            "no body or point mass is called '{name}' (known: ground{}{})",
+            "no body or point mass is called '{}' (known: ground{}{})",
+            name.escape_debug(),
             if known.is_empty() { "" } else { ", " },
             known.join(", ")
         )
@@ -527,7 +529,7 @@ impl<'a> Model<'a> {
         };
         match self.names.get(&element) {
             Some((what, span)) => self.doc.error(span.as_ref(), format!("{what}: {message}")),
-            None => self.doc.error(None, message),
+            None => self.doc.error(None, format!("{element}: {message}")),
         }
     }
 }

@@ -350,7 +350,7 @@ impl PlanarBuilder {
     /// Checks the model and assembles the [`PlanarSystem`].
     ///
     /// # Errors
-    /// [`ModelError`] for duplicate names, non-positive masses or inertias,
+    /// [`ModelError`] for a model without bodies, duplicate names, non-positive masses or inertias,
     /// non-finite values, a body handle from another builder, an element
     /// whose parameters are out of range (a zero prismatic axis, a
     /// non-positive rod length, a negative stiffness), a driver of `θ`, a
@@ -359,6 +359,12 @@ impl PlanarBuilder {
     pub fn build(&self) -> Result<PlanarSystem, ModelError> {
         if let Some(problem) = self.problems.first() {
             return Err(problem.clone());
+        }
+        if self.bodies.is_empty() {
+            return Err(ModelError::Invalid {
+                element: "the model".to_string(),
+                what: "no body or point mass: add a [[body]] or [[point_mass]]".to_string(),
+            });
         }
         self.check_names()?;
         self.check_bodies()?;
