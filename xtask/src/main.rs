@@ -11,7 +11,10 @@
 //! - `cargo xtask convergence`: fitted orders in u, u̇, ü, λ ([`convergence`]).
 //! - `cargo xtask energy`: energy error over 1000 s ([`energy`]).
 //! - `cargo xtask bench`: the chain benchmark as a table and a plot ([`bench`](mod@bench)).
+//! - `cargo xtask animate-check`: `mstar animate`'s page in headless Chromium,
+//!   a screenshot and a check that its script plays ([`animate_check`]).
 
+mod animate_check;
 mod bench;
 mod common;
 mod convergence;
@@ -61,6 +64,11 @@ enum Command {
         #[arg(long)]
         report_only: bool,
     },
+    /// `mstar animate` in a real browser: the four-bar's HTML page in
+    /// headless Chromium (`apt-get install -y chromium`), a screenshot to
+    /// docs/figures/animate-four-bar.png and a check that the script plays;
+    /// a slider-crank frame to docs/figures/animate-slider-crank.png.
+    AnimateCheck,
 }
 
 fn main() -> Result<()> {
@@ -74,6 +82,7 @@ fn main() -> Result<()> {
         Command::Convergence => convergence::run(),
         Command::Energy => energy::run(),
         Command::Bench { max_n, report_only } => bench::run(max_n, report_only),
+        Command::AnimateCheck => animate_check::run(),
     }
 }
 
