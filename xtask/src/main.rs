@@ -13,7 +13,10 @@
 //! - `cargo xtask bench`: the chain benchmark as a table and a plot ([`bench`](mod@bench)).
 //! - `cargo xtask validate`: the models of `models/` against independent
 //!   references; writes docs/validation.md ([`validate`]).
+//! - `cargo xtask animate-check`: `mstar animate`'s page in headless Chromium,
+//!   a screenshot and a check that its script plays ([`animate_check`]).
 
+mod animate_check;
 mod bench;
 mod common;
 mod convergence;
@@ -68,6 +71,11 @@ enum Command {
         #[arg(long)]
         report_only: bool,
     },
+    /// `mstar animate` in a real browser: the four-bar's HTML page in
+    /// headless Chromium (`apt-get install -y chromium`), a screenshot to
+    /// docs/figures/animate-four-bar.png and a check that the script plays;
+    /// a slider-crank frame to docs/figures/animate-slider-crank.png.
+    AnimateCheck,
 }
 
 fn main() -> Result<()> {
@@ -82,6 +90,7 @@ fn main() -> Result<()> {
         Command::Energy => energy::run(),
         Command::Validate => validate::run(),
         Command::Bench { max_n, report_only } => bench::run(max_n, report_only),
+        Command::AnimateCheck => animate_check::run(),
     }
 }
 

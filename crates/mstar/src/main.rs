@@ -1,5 +1,6 @@
 //! The `mstar` command-line program.
 
+mod animate;
 mod model_commands;
 
 use std::path::{Path, PathBuf};
@@ -34,6 +35,11 @@ enum Command {
     /// initial state is from the constraints. Exit 0 when it can run as
     /// written, 1 when it cannot, 2 when the file cannot be read.
     Check(model_commands::CheckArgs),
+    /// Draw a model moving through the results of `mstar run`: an animated
+    /// GIF, a self-contained HTML page (play/pause, time slider) or one frame
+    /// as a PNG. Exit 0 when written, 1 when the results do not fit the model
+    /// or a file cannot be written, 2 when the model file cannot be read.
+    Animate(animate::AnimateArgs),
     /// The paper's pendulum in u = [x, y, θ] (singular M = diag(m, m, 0)).
     ///
     /// Without a preset: g = 9.81, θ₀ = π/2, h = 0.01, t_end = 10 s,
@@ -211,6 +217,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => model_commands::run(&args),
         Command::Check(args) => return model_commands::check(&args),
+        Command::Animate(args) => return animate::animate(&args),
         Command::Pendulum(args) => pendulum(&args),
         Command::Chain(args) => chain(&args),
     };

@@ -1,0 +1,342 @@
+//! `mstar animate`: the mechanism of a model file moving through the results
+//! of `mstar run`, as an animated GIF, a self-contained HTML page, or one
+//! frame as a PNG picture. All three draw the same [`scene`]: each body
+//! through its joint points, springs as zigzags, the ground marked, the time
+//! in a corner (docs/model-format.md, "Animating a run").
+
+mod html;
+mod picture;
+mod results;
+mod scene;
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Result, bail};
+use mstar::System;
+use mstar::model::file::ModelFile;
+use mstar::planar::PlanarSystem;
+
+use picture::Canvas;
+use results::Results;
+use scene::{Scene, View};
+
+/// Arguments of `mstar animate`.
+#[derive(clap::Args, Debug)]
+#[command(group(
+    clap::ArgGroup::new("output")
+        .args(["gif", "html", "png"])
+        .required(true)
+        .multiple(true)
+))]
+pub struct AnimateArgs {
+    /// The model file the results were computed with.
+    model: PathBuf,
+    /// The CSV file of `mstar run MODEL --out FILE` (or the
+    /// `<name>.partial.csv` of a run that failed).
+    results: PathBuf,
+    /// Write an animated GIF (looping) to this file.
+    #[arg(long, value_name = "OUT.gif")]
+    gif: Option<PathBuf>,
+    /// Write one self-contained HTML page (inline SVG and script, play/pause,
+    /// time slider, speed) to this file.
+    #[arg(long, value_name = "OUT.html")]
+    html: Option<PathBuf>,
+    /// Write one frame (the one at --at) as a PNG picture to this file.
+    #[arg(long, value_name = "OUT.png")]
+    png: Option<PathBuf>,
+    /// The time of the --png frame, s [default: the first row's].
+    #[arg(long, value_name = "T", requires = "png", allow_hyphen_values = true)]
+    at: Option<f64>,
+    /// GIF frames per second, 1 to 50 (a GIF keeps delays in 1/100 s: 30 fps
+    /// plays at 33.3, and the frames are taken at that rate).
+    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=50))]
+    fps: u32,
+    /// Simulated seconds per second of GIF (1: real time).
+    #[arg(long, default_value_t = 1.0, value_parser = positive, conflicts_with = "duration")]
+    speed: f64,
+    /// The GIF's length, s: the whole run in that time (instead of --speed).
+    #[arg(long, value_parser = positive)]
+    duration: Option<f64>,
+    /// The most GIF frames: a longer GIF is played faster to fit (with a note).
+    #[arg(long, default_value_t = 600, value_parser = clap::value_parser!(u32).range(1..))]
+    max_frames: u32,
+    /// Picture size in pixels, WIDTHxHEIGHT (GIF and PNG; the HTML page's
+    /// drawing, which scales with the window).
+    #[arg(long, default_value = "640x480", value_parser = size)]
+    size: Size,
+    /// Override a key of the model file (as for `mstar run`).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+/// A picture size, px.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Size {
+    width: u32,
+    height: u32,
+}
+
+/// `WIDTHxHEIGHT`, each from 16 to 4096.
+fn size(text: &str) -> Result<Size, String> {
+    let (w, h) = text
+        .split_once(['x', 'X', '×'])
+        .ok_or_else(|| format!("'{text}' is not WIDTHxHEIGHT, e.g. 640x480"))?;
+    let side = |s: &str| match s.trim().parse::<u32>() {
+        Ok(n) if (16..=4096).contains(&n) => Ok(n),
+        _ => Err(format!(
+            "'{s}' in '{text}' is not a whole number of pixels from 16 to 4096"
+        )),
+    };
+    Ok(Size {
+        width: side(w)?,
+        height: side(h)?,
+    })
+}
+
+/// A positive, finite number.
+fn positive(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(x) if x > 0.0 && x.is_finite() => Ok(x),
+        _ => Err(format!("'{text}' is not a positive number")),
+    }
+}
+
+/// `mstar animate`: exit 0 when every output is written, 1 when the results
+/// do not fit the model or an output cannot be written, 2 when the model
+/// file cannot be read (as `mstar check`).
+pub fn animate(args: &AnimateArgs) -> ExitCode {
+    let file = match ModelFile::load_with(&args.model, &args.set) {
+        Ok(file) => file,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    match render(args, &file.system) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// Reads the results and writes each output asked for.
+fn render(args: &AnimateArgs, sys: &PlanarSystem) -> Result<()> {
+    let run = results::read(&args.results, &sys.sketch(), sys.n_coords())?;
+    let scene = Scene::new(sys.sketch(), &run.states);
+    let view = View::fit(scene.bounds(&run.states), args.size.width, args.size.height);
+    let canvas = Canvas {
+        scene: &scene,
+        view,
+    };
+    if let Some(path) = &args.html {
+        write_html(path, args, &canvas, &run)?;
+    }
+    if let Some(path) = &args.png {
+        let (t0, t1) = run.span();
+        let t = args.at.unwrap_or(t0);
+        if !(t0..=t1).contains(&t) {
+            bail!("--at {t}: the run goes from t = {t0} to {t1} s");
+        }
+        picture::write_png(path, &canvas, t, &run.at(t))?;
+        println!(
+            "wrote {} (t = {t:.3} s, {}×{})",
+            path.display(),
+            view.width,
+            view.height
+        );
+    }
+    if let Some(path) = &args.gif {
+        write_gif(path, args, &canvas, &run)?;
+    }
+    Ok(())
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
+fn write_html(path: &Path, args: &AnimateArgs, canvas: &Canvas<'_>, run: &Results) -> Result<()> {
+    let frames = run.at_most(html::MAX_FRAMES);
+    let (t0, t1) = run.span();
+    let title = format!(
+        "mstar animate: {} with {} (t = {t0} … {t1} s, {} frames)",
+        file_name(&args.model),
+        file_name(&args.results),
+        frames.times.len()
+    );
+    let page = html::page(canvas.scene, &canvas.view, &frames, &title);
+    mstar::csv::write_atomically(path, page.as_bytes())?;
+    println!(
+        "wrote {} ({} frames, {} kB)",
+        path.display(),
+        frames.times.len(),
+        page.len().div_ceil(1000)
+    );
+    Ok(())
+}
+
+fn write_gif(path: &Path, args: &AnimateArgs, canvas: &Canvas<'_>, run: &Results) -> Result<()> {
+    let (t0, t1) = run.span();
+    let plan = GifPlan::new(t1 - t0, args);
+    if let Some(note) = &plan.note {
+        eprintln!("note: {note}");
+    }
+    let frames: Vec<(f64, Vec<f64>)> = (0..plan.count)
+        .map(|k| {
+            let t = (t0 + plan.step * k as f64).min(t1);
+            (t, run.at(t))
+        })
+        .collect();
+    // A bar on a terminal for GIFs that take a while (indicatif draws
+    // nothing elsewhere).
+    let progress = if frames.len() > 100 {
+        indicatif::ProgressBar::new(frames.len() as u64)
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let written = picture::write_gif(path, canvas, &frames, plan.delay_cs, &progress);
+    progress.finish_and_clear();
+    written?;
+    println!(
+        "wrote {} ({} frames, {}×{})",
+        path.display(),
+        frames.len(),
+        canvas.view.width,
+        canvas.view.height
+    );
+    Ok(())
+}
+
+/// The GIF's frames in time: how long each is shown and how much simulated
+/// time lies between them.
+#[derive(Clone, Debug, PartialEq)]
+struct GifPlan {
+    /// Each frame's delay, 1/100 s (GIF's unit).
+    delay_cs: u32,
+    /// Simulated time between frames, s.
+    step: f64,
+    /// Number of frames.
+    count: usize,
+    /// Why the speed differs from the one asked for, if it does.
+    note: Option<String>,
+}
+
+impl GifPlan {
+    /// The plan for a run lasting `span` s: real time (or `--speed`, or the
+    /// whole run in `--duration`) at `--fps`, at most `--max-frames`.
+    fn new(span: f64, args: &AnimateArgs) -> Self {
+        let delay_cs = (100.0 / f64::from(args.fps)).round().max(2.0) as u32;
+        let shown = f64::from(delay_cs) / 100.0;
+        let speed = match args.duration {
+            Some(d) if span > 0.0 => span / d,
+            _ => args.speed,
+        };
+        let step = speed * shown;
+        let count = if span > 0.0 {
+            (span / step + 1e-9).floor() as usize + 1
+        } else {
+            1
+        };
+        let max = args.max_frames.max(1) as usize;
+        if count <= max || max < 2 {
+            return Self {
+                delay_cs,
+                step,
+                count: count.min(max),
+                note: None,
+            };
+        }
+        let step = span / (max - 1) as f64;
+        let note = format!(
+            "{count} frames would be more than --max-frames {max}: drawing {max}, the run plays at {:.3}× real time",
+            step / shown
+        );
+        Self {
+            delay_cs,
+            step,
+            count: max,
+            note: Some(note),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: AnimateArgs,
+    }
+
+    fn args(extra: &[&str]) -> AnimateArgs {
+        let mut all = vec!["mstar", "m.toml", "r.csv", "--gif", "o.gif"];
+        all.extend_from_slice(extra);
+        Cli::try_parse_from(all).expect("valid arguments").args
+    }
+
+    #[test]
+    fn gif_frames_follow_the_time_asked_for() {
+        // 30 fps is stored as 3/100 s: a frame every 0.03 s of the run.
+        let real = GifPlan::new(1.0, &args(&[]));
+        assert_eq!(
+            (real.delay_cs, real.count, real.note.is_none()),
+            (3, 34, true)
+        );
+        assert!((real.step - 0.03).abs() < 1e-12);
+        let slow = GifPlan::new(1.0, &args(&["--fps", "10", "--speed", "0.5"]));
+        assert_eq!((slow.delay_cs, slow.count), (10, 21));
+        let fit = GifPlan::new(4.0, &args(&["--fps", "10", "--duration", "2"]));
+        assert_eq!(fit.count, 21);
+        assert!((fit.step - 0.2).abs() < 1e-12);
+        let capped = GifPlan::new(100.0, &args(&[]));
+        assert_eq!(capped.count, 600);
+        assert!((capped.step * 599.0 - 100.0).abs() < 1e-9);
+        assert!(
+            capped
+                .note
+                .as_deref()
+                .unwrap_or_default()
+                .contains("5.565× real time"),
+            "{:?}",
+            capped.note
+        );
+    }
+
+    #[test]
+    fn sizes_and_numbers_are_checked() {
+        assert_eq!(
+            size("320x200"),
+            Ok(Size {
+                width: 320,
+                height: 200
+            })
+        );
+        assert!(size("320").is_err() && size("8x8").is_err() && size("axb").is_err());
+        assert!(positive("0").is_err() && positive("nan").is_err() && positive("-1").is_err());
+        let both = Cli::try_parse_from([
+            "mstar",
+            "m",
+            "r",
+            "--gif",
+            "g",
+            "--speed",
+            "2",
+            "--duration",
+            "3",
+        ]);
+        assert!(both.is_err());
+        let none = Cli::try_parse_from(["mstar", "m", "r"])
+            .err()
+            .map(|e| e.to_string());
+        assert!(none.unwrap_or_default().contains("--gif"));
+    }
+}

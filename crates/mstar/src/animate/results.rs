@@ -1,0 +1,277 @@
+//! The CSV file of `mstar run` read back for a model: the times and, per row,
+//! the coordinates of the model's bodies, found by column name
+//! (`u:<body>.x`, `.y`, `.theta`) so that the column order does not matter.
+
+use std::path::Path;
+
+use anyhow::{Context as _, Result, bail};
+use mstar::planar::Sketch;
+
+/// The rows of a results file, in time order.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Results {
+    /// The time of each row, s (non-decreasing).
+    pub times: Vec<f64>,
+    /// The coordinates `u` of each row, indexed as the model's `u` (entries
+    /// the drawing does not need stay 0).
+    pub states: Vec<Vec<f64>>,
+}
+
+/// Which CSV column fills which entry of `u`.
+struct Column {
+    /// Position in the CSV record (0-based).
+    field: usize,
+    /// Index into `u`.
+    coord: usize,
+    /// The column's name, for messages.
+    name: String,
+}
+
+/// Reads the results of `mstar run` for the model drawn by `sketch`, which has
+/// `n_coords` coordinates. A `<name>.partial.csv` from a failed run reads the
+/// same way.
+///
+/// # Errors
+/// If the file cannot be read, lacks a column the model needs, has no rows,
+/// has a field that is not a finite number (named by line and column), or
+/// goes back in time.
+pub fn read(path: &Path, sketch: &Sketch, n_coords: usize) -> Result<Results> {
+    let file =
+        std::fs::File::open(path).with_context(|| format!("could not read {}", path.display()))?;
+    parse(std::io::BufReader::new(file), path, sketch, n_coords)
+}
+
+/// [`read`] from any reader; `path` names it in messages.
+pub fn parse(
+    reader: impl std::io::Read,
+    path: &Path,
+    sketch: &Sketch,
+    n_coords: usize,
+) -> Result<Results> {
+    let name = path.display();
+    let mut csv = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .from_reader(reader);
+    let header = csv
+        .headers()
+        .with_context(|| format!("{name}: could not read the header"))?
+        .clone();
+    let (time, columns) =
+        columns(&header, sketch, n_coords).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    let mut out = Results {
+        times: Vec::new(),
+        states: Vec::new(),
+    };
+    let mut record = csv::StringRecord::new();
+    loop {
+        match csv.read_record(&mut record) {
+            Ok(true) => {}
+            Ok(false) => break,
+            Err(e) => bail!("{name}: {e}"),
+        }
+        let line = record.position().map_or(0, csv::Position::line);
+        let number = |field: usize, column: &str| -> Result<f64> {
+            let text = record.get(field).unwrap_or_default().trim();
+            match text.parse::<f64>() {
+                Ok(x) if x.is_finite() => Ok(x),
+                _ => bail!(
+                    "{name}:{line}:{}: column '{column}': '{text}' is not a finite number",
+                    field + 1
+                ),
+            }
+        };
+        let t = number(time, "t")?;
+        if let Some(&before) = out.times.last()
+            && t < before
+        {
+            bail!("{name}:{line}: t = {t} comes before the previous row's t = {before}");
+        }
+        let mut u = vec![0.0; n_coords];
+        for c in &columns {
+            u[c.coord] = number(c.field, &c.name)?;
+        }
+        out.times.push(t);
+        out.states.push(u);
+    }
+    if out.times.is_empty() {
+        bail!("{name}: no rows after the header");
+    }
+    Ok(out)
+}
+
+/// The `t` column and the columns of every body's coordinates.
+fn columns(
+    header: &csv::StringRecord,
+    sketch: &Sketch,
+    n_coords: usize,
+) -> Result<(usize, Vec<Column>)> {
+    let find = |name: &str| -> Result<usize> {
+        header.iter().position(|h| h == name).with_context(|| {
+            format!("no column '{name}' — was it written by 'mstar run' for this model?")
+        })
+    };
+    let time = find("t")?;
+    let mut columns = Vec::new();
+    for body in &sketch.bodies {
+        let axes: &[&str] = if body.rigid {
+            &["x", "y", "theta"]
+        } else {
+            &["x", "y"]
+        };
+        for (k, axis) in axes.iter().enumerate() {
+            let name = format!("u:{}.{axis}", body.name);
+            let coord = body.x + k;
+            if coord >= n_coords {
+                bail!("the model's body '{}' has no coordinate {coord}", body.name);
+            }
+            columns.push(Column {
+                field: find(&name)?,
+                coord,
+                name,
+            });
+        }
+    }
+    Ok((time, columns))
+}
+
+impl Results {
+    /// The state at time `t`, linearly interpolated between the rows around
+    /// it (the first or last row outside the run).
+    #[must_use]
+    pub fn at(&self, t: f64) -> Vec<f64> {
+        let k = self.times.partition_point(|&s| s <= t);
+        if k == 0 {
+            return self.states[0].clone();
+        }
+        if k == self.times.len() {
+            return self.states[k - 1].clone();
+        }
+        let (t0, t1) = (self.times[k - 1], self.times[k]);
+        let w = if t1 > t0 { (t - t0) / (t1 - t0) } else { 0.0 };
+        self.states[k - 1]
+            .iter()
+            .zip(&self.states[k])
+            .map(|(a, b)| a + w * (b - a))
+            .collect()
+    }
+
+    /// The first and the last time.
+    #[must_use]
+    pub fn span(&self) -> (f64, f64) {
+        let first = self.times.first().copied().unwrap_or(0.0);
+        (first, self.times.last().copied().unwrap_or(first))
+    }
+
+    /// At most `max` rows: all of them when there are no more, else `max`
+    /// states at evenly spaced times over the run (interpolated).
+    #[must_use]
+    pub fn at_most(&self, max: usize) -> Self {
+        if self.times.len() <= max || max < 2 {
+            return self.clone();
+        }
+        let (t0, t1) = self.span();
+        let times: Vec<f64> = (0..max)
+            .map(|k| t0 + (t1 - t0) * k as f64 / (max - 1) as f64)
+            .collect();
+        let states = times.iter().map(|&t| self.at(t)).collect();
+        Self { times, states }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mstar::planar::{At, PlanarBuilder, PointMass, RigidBody};
+
+    /// A rigid body `a, b` (quotes and a comma in its name) and a point mass.
+    fn sketch() -> Sketch {
+        let mut b = PlanarBuilder::new();
+        let bar = b.rigid_body(
+            "a, \"b\"",
+            RigidBody {
+                mass: 1.0,
+                inertia: 0.1,
+                pose: [0.0; 3],
+                velocity: [0.0; 3],
+            },
+        );
+        let bob = b.point_mass(
+            "bob",
+            PointMass {
+                mass: 1.0,
+                position: [1.0, 0.0],
+                velocity: [0.0; 2],
+            },
+        );
+        b.distance(
+            "rod",
+            At::Body(bar, [0.5, 0.0]),
+            At::Body(bob, [0.0, 0.0]),
+            0.5,
+        );
+        b.build().expect("valid").sketch()
+    }
+
+    fn parse_text(text: &str) -> Result<Results> {
+        parse(text.as_bytes(), Path::new("r.csv"), &sketch(), 5)
+    }
+
+    #[test]
+    fn columns_are_found_by_name_in_any_order() {
+        let text = "u:bob.y,t,\"u:a, \"\"b\"\".theta\",u:bob.x,\"u:a, \"\"b\"\".y\",energy,\"u:a, \"\"b\"\".x\"\n\
+                    5,0,3,4,2,9,1\n\
+                    50,1,30,40,20,9,10\n";
+        let r = parse_text(text).expect("readable");
+        assert_eq!(r.times, [0.0, 1.0]);
+        assert_eq!(r.states[0], [1.0, 2.0, 3.0, 4.0, 5.0]);
+        assert_eq!(r.states[1], [10.0, 20.0, 30.0, 40.0, 50.0]);
+        let mid = r.at(0.25);
+        assert!((mid[0] - 3.25).abs() < 1e-12, "{mid:?}");
+        assert_eq!(r.at(-1.0), r.states[0]);
+        assert_eq!(r.at(2.0), r.states[1]);
+    }
+
+    #[test]
+    fn errors_name_the_column_and_the_place() {
+        let missing = parse_text("t,u:bob.x,u:bob.y\n0,1,2\n").expect_err("no body columns");
+        assert!(
+            missing.to_string().contains(
+                "r.csv: no column 'u:a, \"b\".x' — was it written by 'mstar run' for this model?"
+            ),
+            "{missing}"
+        );
+        let header = "t,\"u:a, \"\"b\"\".x\",\"u:a, \"\"b\"\".y\",\"u:a, \"\"b\"\".theta\",u:bob.x,u:bob.y\n";
+        let bad = parse_text(&format!("{header}0,1,2,3,4,5\n0.1,1,2,x3,4,5\n")).expect_err("x3");
+        assert!(
+            bad.to_string()
+                .contains("r.csv:3:4: column 'u:a, \"b\".theta': 'x3' is not a finite number"),
+            "{bad}"
+        );
+        let back = parse_text(&format!("{header}1,1,2,3,4,5\n0.5,1,2,3,4,5\n")).expect_err("back");
+        assert!(
+            back.to_string().contains("r.csv:3: t = 0.5 comes before"),
+            "{back}"
+        );
+        let empty = parse_text(header).expect_err("no rows");
+        assert!(empty.to_string().contains("no rows"), "{empty}");
+        let short = parse_text(&format!("{header}0,1,2,3,4,5\n0.1,1,2\n")).expect_err("short");
+        assert!(short.to_string().contains("r.csv: "), "{short}");
+    }
+
+    #[test]
+    fn long_runs_are_resampled_evenly() {
+        let r = Results {
+            times: (0..=100).map(|k| f64::from(k) * 0.01).collect(),
+            states: (0..=100).map(|k| vec![f64::from(k)]).collect(),
+        };
+        let few = r.at_most(11);
+        assert_eq!(few.times.len(), 11);
+        assert!((few.times[10] - 1.0).abs() < 1e-12);
+        assert!(
+            (few.states[5][0] - 50.0).abs() < 1e-9,
+            "{:?}",
+            few.states[5]
+        );
+        assert_eq!(r.at_most(1000), r);
+    }
+}

@@ -1,0 +1,287 @@
+//! `mstar animate` as a user meets it: a run drawn as a GIF (counted frame by
+//! frame) and as one self-contained HTML page (nothing fetched, the model's
+//! names escaped, every frame inside), a failed run's partial file, and the
+//! errors with their exit codes (1: results and model do not fit, or a file
+//! cannot be written; 2: the model cannot be read or the command line is
+//! wrong).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn mstar(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mstar"))
+        .args(args)
+        .output()
+        .expect("the mstar program runs")
+}
+
+fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+fn model(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// A fresh directory for one test's files.
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mstar-animate-{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("a scratch directory");
+    dir
+}
+
+fn path(p: &Path) -> String {
+    p.display().to_string()
+}
+
+/// Runs `model` to `t_end` into `dir/<out>`, every step written.
+fn run(model: &str, t_end: &str, out: &Path) {
+    let ok = mstar(&["run", model, "--t-end", t_end, "--out", &path(out)]);
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+}
+
+/// The frames of a GIF file, decoded.
+fn gif_frames(file: &Path) -> usize {
+    let data = std::fs::File::open(file).expect("the GIF");
+    let mut decoder = gif::DecodeOptions::new()
+        .read_info(data)
+        .expect("a GIF header");
+    let mut n = 0;
+    while decoder.read_next_frame().expect("a valid frame").is_some() {
+        n += 1;
+    }
+    n
+}
+
+/// The number of entries of the page's time list.
+fn html_frames(html: &str) -> usize {
+    let times = html
+        .split("\"t\":[")
+        .nth(1)
+        .and_then(|s| s.split(']').next())
+        .expect("a time list");
+    times
+        .split(',')
+        .filter(|s| s.parse::<f64>().is_ok())
+        .count()
+}
+
+#[test]
+fn a_run_becomes_a_gif_and_a_page() {
+    let dir = scratch("both");
+    let csv = dir.join("four-bar.csv");
+    run(&model("four-bar.toml"), "0.2", &csv);
+    let (gif, html) = (dir.join("four-bar.gif"), dir.join("four-bar.html"));
+    let ok = mstar(&[
+        "animate",
+        &model("four-bar.toml"),
+        &path(&csv),
+        "--gif",
+        &path(&gif),
+        "--html",
+        &path(&html),
+        "--fps",
+        "10",
+        "--size",
+        "160x120",
+    ]);
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+    let out = text(&ok.stdout);
+    assert!(out.contains("(3 frames, 160×120)"), "{out}");
+    assert!(out.contains("(201 frames,"), "{out}");
+    let bytes = std::fs::read(&gif).expect("the GIF");
+    assert!(bytes.starts_with(b"GIF89a"));
+    // 10 fps in real time over 0.2 s: t = 0, 0.1, 0.2.
+    assert_eq!(gif_frames(&gif), 3);
+    let page = std::fs::read_to_string(&html).expect("the page");
+    for external in ["http://", "https://", "src=", "href=", "@import", "url("] {
+        assert!(!page.contains(external), "{external} in the page");
+    }
+    assert!(page.contains("<button id=\"play\""), "a play button");
+    assert!(page.contains("type=\"range\""), "a slider");
+    assert!(page.contains("max=\"200\""), "the slider spans the frames");
+    assert_eq!(page.matches("<svg").count(), 1);
+    assert_eq!(html_frames(&page), 201);
+    // Every body's name, in the legend and as a tooltip.
+    for body in ["crank", "coupler", "rocker"] {
+        assert!(page.contains(&format!("<title>{body}</title>")), "{body}");
+    }
+    // Nothing left beside the outputs.
+    let left: Vec<String> = std::fs::read_dir(&dir)
+        .expect("dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains("tmp"))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn names_from_the_model_cannot_break_the_page() {
+    let dir = scratch("names");
+    let name = r#"</script><b>"x",y"#;
+    let toml = format!(
+        "format = \"mstar.planar/1\"\n\
+         [[body]]\nname = '{name}'\nmass = 1.0\ninertia = 0.1\npose = [0.5, 0.0, 0.0]\n\
+         [[joint]]\nname = '<i>hinge</i>'\ntype = \"revolute\"\nbodies = [\"ground\", '{name}']\nat = [0.0, 0.0]\n"
+    );
+    let file = dir.join("odd.toml");
+    std::fs::write(&file, toml).expect("write");
+    let csv = dir.join("odd.csv");
+    run(&path(&file), "0.1", &csv);
+    let html = dir.join("odd.html");
+    let ok = mstar(&["animate", &path(&file), &path(&csv), "--html", &path(&html)]);
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+    let page = std::fs::read_to_string(&html).expect("the page");
+    assert!(
+        !page.contains("<b>") && !page.contains("<i>"),
+        "markup injected"
+    );
+    assert!(
+        page.contains("&lt;/script&gt;&lt;b&gt;&quot;x&quot;,y"),
+        "the name, escaped"
+    );
+    // Only the page's own two scripts (the data and the player) open and close.
+    assert_eq!(page.matches("<script").count(), 2);
+    assert_eq!(page.matches("</script>").count(), 2);
+    assert_eq!(html_frames(&page), 101);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_failed_run_s_partial_file_animates() {
+    let dir = scratch("partial");
+    let out = dir.join("fast.csv");
+    let failed = mstar(&[
+        "run",
+        &model("slider-crank.toml"),
+        "--h",
+        "0.05",
+        "--set",
+        "simulation.h_min=0.05",
+        "--set",
+        "simulation.max_iterations=2",
+        "--out",
+        &path(&out),
+    ]);
+    assert_eq!(failed.status.code(), Some(1));
+    let partial = dir.join("fast.partial.csv");
+    assert!(partial.exists());
+    let png = dir.join("frame.png");
+    let ok = mstar(&[
+        "animate",
+        &model("slider-crank.toml"),
+        &path(&partial),
+        "--png",
+        &path(&png),
+        "--size",
+        "160x120",
+    ]);
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+    let bytes = std::fs::read(&png).expect("the picture");
+    assert!(bytes.starts_with(b"\x89PNG\r\n\x1a\n"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn errors_say_what_and_where() {
+    let dir = scratch("errors");
+    let csv = dir.join("four-bar.csv");
+    run(&model("four-bar.toml"), "0.05", &csv);
+    let html = dir.join("out.html");
+    // Results of another model: the slider-crank's rod has no columns here.
+    let other = mstar(&[
+        "animate",
+        &model("slider-crank.toml"),
+        &path(&csv),
+        "--html",
+        &path(&html),
+    ]);
+    assert_eq!(other.status.code(), Some(1));
+    let e = text(&other.stderr);
+    assert!(
+        e.contains(
+            "four-bar.csv: no column 'u:rod.x' — was it written by 'mstar run' for this model?"
+        ),
+        "{e}"
+    );
+    assert!(!html.exists());
+    // A field that is not a number: its line and column.
+    let text_csv = std::fs::read_to_string(&csv).expect("the CSV");
+    let mut lines: Vec<String> = text_csv.lines().map(String::from).collect();
+    let mut fields: Vec<&str> = lines[3].split(',').collect();
+    fields[1] = "oops";
+    lines[3] = fields.join(",");
+    let broken = dir.join("broken.csv");
+    std::fs::write(&broken, lines.join("\n")).expect("write");
+    let bad = mstar(&[
+        "animate",
+        &model("four-bar.toml"),
+        &path(&broken),
+        "--html",
+        &path(&html),
+    ]);
+    assert_eq!(bad.status.code(), Some(1));
+    let e = text(&bad.stderr);
+    assert!(
+        e.contains("broken.csv:4:2: column 'u:crank.x': 'oops' is not a finite number"),
+        "{e}"
+    );
+    // A model file with an error: exit 2, FILE:LINE:COLUMN.
+    let model_file = dir.join("bad.toml");
+    std::fs::write(&model_file, "format = \"mstar.planar/1\"\n\n[[body]]\nname = \"b\"\nmass = 1.0\ninertia = -1.0\npose = [0.0, 0.0, 0.0]\n").expect("write");
+    let unreadable = mstar(&[
+        "animate",
+        &path(&model_file),
+        &path(&csv),
+        "--html",
+        &path(&html),
+    ]);
+    assert_eq!(unreadable.status.code(), Some(2));
+    let e = text(&unreadable.stderr);
+    assert!(
+        e.contains("bad.toml:6:11: body 'b': inertia: must be positive"),
+        "{e}"
+    );
+    // No output asked for: a usage error naming the options.
+    let nothing = mstar(&["animate", &model("four-bar.toml"), &path(&csv)]);
+    assert_eq!(nothing.status.code(), Some(2));
+    let e = text(&nothing.stderr);
+    assert!(
+        e.contains("required") && e.contains("--gif") && e.contains("--html"),
+        "{e}"
+    );
+    // An output that cannot be written (a directory is in the way): exit 1,
+    // and no temporary file left beside it.
+    let in_the_way = dir.join("taken.gif");
+    std::fs::create_dir_all(&in_the_way).expect("a directory");
+    let blocked = mstar(&[
+        "animate",
+        &model("four-bar.toml"),
+        &path(&csv),
+        "--gif",
+        &path(&in_the_way),
+        "--size",
+        "32x32",
+    ]);
+    assert_eq!(blocked.status.code(), Some(1));
+    assert!(
+        text(&blocked.stderr).contains("could not write"),
+        "{}",
+        text(&blocked.stderr)
+    );
+    let left = std::fs::read_dir(&dir)
+        .expect("dir")
+        .filter(|e| {
+            e.as_ref()
+                .is_ok_and(|e| e.file_name().to_string_lossy().contains("tmp"))
+        })
+        .count();
+    assert_eq!(left, 0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
