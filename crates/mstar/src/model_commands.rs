@@ -100,7 +100,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
         config.h,
         t_end
     );
-    let kept = independent_rows(&model)?;
+    if let Model::Planar(sys) = &model.system {
+        warn_far_start(sys);
+    }
+    let rows = independent_rows(&model)?;
     let columns = match &model.system {
         Model::Planar(sys) => Some(ReactionColumns::new(sys)),
         Model::Other(_) => None,
@@ -114,12 +117,14 @@ pub fn run(args: &RunArgs) -> Result<()> {
     let columns = columns.as_ref().map(|c| c as &dyn Columns);
     let mut output = RunOutput::new(stream, columns, model.every, t_end);
     let start = (config, &model.u0[..], &model.v0[..], t_end);
-    let outcome = match kept {
-        Some(kept) => {
-            let subset = RowSubset::new(sys, kept);
-            integrate(&subset, start, &mut Expanded::new(&subset, &mut output))
+    let outcome = match (&model.system, rows) {
+        (Model::Planar(planar), Some(rows)) => {
+            let subset = RowSubset::new(sys, rows.kept.clone());
+            let hold = |u: &[f64]| mstar::run::left_out_rows_hold(planar, &rows, u);
+            let mut expanded = Expanded::new(&subset, &mut output);
+            integrate(&subset, start, &hold, &mut expanded)
         }
-        None => integrate(sys, start, &mut output),
+        _ => integrate(sys, start, &|_| Ok(()), &mut output),
     };
     output.progress.finish_and_clear();
     let (stats, t, wall, result) = outcome?;
@@ -127,13 +132,28 @@ pub fn run(args: &RunArgs) -> Result<()> {
     finish(output, args.out.as_deref(), result)
 }
 
+/// Names the joint an initial pose is far from, before the start projects
+/// the state onto the constraints (and, if that fails, explains why).
+fn warn_far_start(sys: &PlanarSystem) {
+    if let Some((owner, row, value)) = mstar::run::initial_violation(sys)
+        && value > FAR
+    {
+        eprintln!(
+            "note: the initial pose violates '{owner}' by {value:.3e} (row {row}); the start moves the coordinates onto the constraints (mstar check shows what it moves)"
+        );
+    }
+}
+
+/// An initial violation worth a note, m or rad.
+const FAR: f64 = 1e-6;
+
 /// The rows to solve on when the model has redundant constraints and asks
 /// for minimum-norm multipliers (`None`: all rows).
 ///
 /// # Errors
 /// Redundant constraints in a model that does not ask for them, by name,
 /// with what to do.
-fn independent_rows(model: &Loaded) -> Result<Option<Vec<usize>>> {
+fn independent_rows(model: &Loaded) -> Result<Option<mstar::redundant::Rows>> {
     let Model::Planar(sys) = &model.system else {
         return Ok(None);
     };
@@ -145,7 +165,7 @@ fn independent_rows(model: &Loaded) -> Result<Option<Vec<usize>>> {
         "redundant constraints: {} (left out of the solve: minimum-norm multipliers)",
         mstar::run::owners(sys, &rows.dependent).join(", ")
     );
-    Ok(Some(rows.kept))
+    Ok(Some(rows))
 }
 
 /// A run's statistics, end time, wall time and outcome.
@@ -156,13 +176,16 @@ type Outcome = (
     Result<mstar::RunStats, IntegrationError>,
 );
 
-/// Integrates `sys` from `(u0, v0)` to `t_end`, every sample to `observer`.
+/// Integrates `sys` from `(u0, v0)` to `t_end`, every sample to `observer`,
+/// once `check_start` accepts the start state.
 fn integrate<S: System + ?Sized>(
     sys: &S,
     (config, u0, v0, t_end): (mstar::Config, &[f64], &[f64], f64),
+    check_start: &dyn Fn(&[f64]) -> Result<(), mstar::run::RunError>,
     observer: &mut dyn Observer,
 ) -> Result<Outcome> {
     let mut integ = Integrator::new(sys, config, 0.0, u0, v0)?;
+    check_start(integ.view().u)?;
     println!(
         "KKT solver: {}; Newton: {:?}",
         integ.backend(),

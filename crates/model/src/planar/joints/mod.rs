@@ -76,6 +76,12 @@ pub(crate) trait JointElement: Send + Sync + std::fmt::Debug {
         true
     }
 
+    /// A prismatic joint's sliding direction in its first body's frame, for
+    /// drawings (default: none).
+    fn axis(&self) -> Option<[f64; 2]> {
+        None
+    }
+
     /// Whether it is a driver, whose multiplier is an actuator's effort
     /// (default: no).
     fn is_driver(&self) -> bool {

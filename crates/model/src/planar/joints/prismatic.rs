@@ -47,6 +47,11 @@ impl JointElement for Prismatic {
         KIND.name
     }
 
+    fn axis(&self) -> Option<[f64; 2]> {
+        // normal = (−a_y, a_x) of the unit axis a.
+        Some([self.normal[1], -self.normal[0]])
+    }
+
     fn problem(&self, anchors: &[Anchor; 2]) -> Option<String> {
         if !self.normal.iter().all(|x| x.is_finite()) {
             Some("the prismatic axis must be a non-zero vector".to_string())

@@ -37,6 +37,12 @@ pub(crate) trait LoadElement: Send + Sync + std::fmt::Debug {
     /// Why it cannot act on these anchors with its parameters, if it cannot.
     fn problem(&self, anchors: &[Anchor; 2]) -> Option<String>;
 
+    /// Whether it acts at its anchors' points (default: yes; a torque or a
+    /// rotational spring acts on bodies as a whole).
+    fn uses_points(&self) -> bool {
+        true
+    }
+
     /// The potential energy of a conservative load (default: 0).
     fn potential(&self, _x: &LoadPlace<'_>) -> f64 {
         0.0

@@ -36,6 +36,10 @@ impl LoadElement for RotationalSpring {
         KIND.name
     }
 
+    fn uses_points(&self) -> bool {
+        false
+    }
+
     fn problem(&self, anchors: &[Anchor; 2]) -> Option<String> {
         let angle = |a: &Anchor| matches!(a, Anchor::Rigid { .. } | Anchor::Ground(_));
         if !(angle(&anchors[0]) && matches!(anchors[1], Anchor::Rigid { .. })) {

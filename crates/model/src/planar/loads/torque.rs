@@ -27,6 +27,10 @@ impl LoadElement for Torque {
         KIND.name
     }
 
+    fn uses_points(&self) -> bool {
+        false
+    }
+
     fn problem(&self, anchors: &[Anchor; 2]) -> Option<String> {
         if !matches!(anchors[0], Anchor::Rigid { .. }) {
             return Some("a torque needs a rigid body: a point mass has no angle".to_string());
