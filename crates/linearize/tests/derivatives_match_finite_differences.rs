@@ -152,12 +152,10 @@ fn kkt_matrix_is_eq_16_with_m_star() {
     }
 }
 
-/// A model with every planar element, at random parameters.
+/// A model with every planar element, at random parameters: all of them in
+/// one system, so that their rows and entries must not overlap.
 fn every_element(p: &[f64]) -> mstar_model::planar::PlanarSystem {
-    use mstar_model::planar::{
-        At, Coordinate, PlanarBuilder, PointMass, RigidBody, RotationalSpringDamper, SpringDamper,
-        TimeFunction,
-    };
+    use mstar_model::planar::{At, PlanarBuilder, PointMass, RigidBody};
     let rigid = |mass, inertia, pose| RigidBody {
         mass,
         inertia,
@@ -219,6 +217,18 @@ fn every_element(p: &[f64]) -> mstar_model::planar::PlanarSystem {
         At::Body(r3, [p[37], p[38]]),
         2.0,
     );
+    loads(&mut b, p, [r1, r2, r3], pm);
+    b.build().expect("valid model")
+}
+
+/// The drivers and loads of [`every_element`].
+fn loads(
+    b: &mut mstar_model::planar::PlanarBuilder,
+    p: &[f64],
+    [r1, r2, r3]: [mstar_model::planar::BodyId; 3],
+    pm: mstar_model::planar::BodyId,
+) {
+    use mstar_model::planar::{At, Coordinate, RotationalSpringDamper, SpringDamper, TimeFunction};
     let sine = TimeFunction::Sine {
         offset: p[39],
         amplitude: 0.5,
@@ -280,7 +290,6 @@ fn every_element(p: &[f64]) -> mstar_model::planar::PlanarSystem {
             damping: 0.2,
         },
     );
-    b.build().expect("valid model")
 }
 
 proptest! {
