@@ -56,6 +56,8 @@ fn field(s: &str) -> std::borrow::Cow<'_, str> {
 /// A number in shortest round-trip form: plain for `1e-4 ≤ |x| < 1e15` (and 0),
 /// exponent notation otherwise.
 fn number(out: &mut String, x: f64) {
+    // −0 reads as 0 (a multiplier of an unloaded joint).
+    let x = if x == 0.0 { 0.0 } else { x };
     let a = x.abs();
     if x == 0.0 || (1e-4..1e15).contains(&a) || !x.is_finite() {
         let _ = write!(out, "{x}");

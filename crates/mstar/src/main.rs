@@ -215,7 +215,7 @@ struct PendulumArgs {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Run(args) => model_commands::run(&args),
+        Command::Run(args) => return model_commands::run(&args),
         Command::Check(args) => return model_commands::check(&args),
         Command::Animate(args) => return animate::animate(&args),
         Command::Pendulum(args) => pendulum(&args),
@@ -225,7 +225,10 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            if let Some(hint) = e.downcast_ref::<IntegrationError>().and_then(hint) {
+            if let Some(hint) = e
+                .downcast_ref::<IntegrationError>()
+                .and_then(|e| hint(e, false))
+            {
                 eprintln!("hint: {hint}");
             }
             ExitCode::FAILURE
@@ -233,13 +236,29 @@ fn main() -> ExitCode {
     }
 }
 
-/// The command-line form of a library error's advice.
-fn hint(e: &IntegrationError) -> Option<&'static str> {
-    match e {
-        IntegrationError::NewtonFailed { .. } => Some(
+/// "the sample" or "the n samples".
+pub(crate) fn samples_phrase(n: usize) -> String {
+    if n == 1 {
+        "the sample".to_string()
+    } else {
+        format!("the {n} samples")
+    }
+}
+
+/// The command-line form of a library error's advice: for `mstar run`
+/// (`files`), the model file's keys; for the built-in commands, their options.
+pub(crate) fn hint(e: &IntegrationError, files: bool) -> Option<&'static str> {
+    match (e, files) {
+        (IntegrationError::NewtonFailed { .. }, true) => Some(
+            "the step size is --h (or [simulation] h), the tolerance --set simulation.tol=…, the scheme --set simulation.integrator=generalized-alpha (with --set simulation.rho=…)",
+        ),
+        (IntegrationError::NewtonFailed { .. }, false) => Some(
             "generalized-α is --integrator generalized-alpha (--rho sets ρ∞); the step size is --h, the tolerance --tol",
         ),
-        IntegrationError::StepSizeTooSmall { .. } => {
+        (IntegrationError::StepSizeTooSmall { .. }, true) => Some(
+            "the step size is --h (or [simulation] h), the smallest step size --set simulation.h_min=…",
+        ),
+        (IntegrationError::StepSizeTooSmall { .. }, false) => {
             Some("the step size is --h, the smallest step size --h-min")
         }
         _ => None,
@@ -459,9 +478,10 @@ fn pendulum(args: &PendulumArgs) -> Result<()> {
                 let partial = partial_path(out);
                 csv::write_csv(&partial, &sys, &samples)?;
                 eprintln!(
-                    "note: {} was not written; the {} samples up to the failure are in {}",
+                    "note: {} was not written; {} up to the failure {} in {}",
                     out.display(),
-                    samples.len(),
+                    samples_phrase(samples.len()),
+                    if samples.len() == 1 { "is" } else { "are" },
                     partial.display()
                 );
             }

@@ -87,8 +87,28 @@ impl Model {
     }
 }
 
-/// `mstar run`.
-pub fn run(args: &RunArgs) -> Result<()> {
+/// `mstar run`: exit 0 when the run reaches its end, 2 when the model file
+/// cannot be read (as `mstar check`), 1 on any other failure.
+pub fn run(args: &RunArgs) -> ExitCode {
+    match run_model(args) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            if e.downcast_ref::<mstar::model::file::FileError>().is_some() {
+                return ExitCode::from(2);
+            }
+            if let Some(hint) = e
+                .downcast_ref::<IntegrationError>()
+                .and_then(|e| crate::hint(e, true))
+            {
+                eprintln!("hint: {hint}");
+            }
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run_model(args: &RunArgs) -> Result<()> {
     let model = load(args)?;
     let (config, t_end) = mstar::run::config(&model.simulation).map_err(anyhow::Error::msg)?;
     let sys = model.system.system();
@@ -217,9 +237,10 @@ fn finish(
             let partial = crate::partial_path(out);
             stream.finish_as(&partial)?;
             eprintln!(
-                "note: {} was not written; the {} samples up to the failure are in {}",
+                "note: {} was not written; {} up to the failure {} in {}",
                 out.display(),
-                output.written,
+                crate::samples_phrase(output.written),
+                if output.written == 1 { "is" } else { "are" },
                 partial.display()
             );
             Err(e.into())

@@ -71,8 +71,8 @@ pub enum IntegrationError {
     #[error(
         "Newton iteration did not converge at t = {t} s (h = {h:e}): after {iterations} iterations \
          ‖r‖∞ = {residual:.3e} (tolerance {residual_tol:.3e}) and ‖Φ‖∞ = {constraint:.3e} (tolerance {constraint_tol:.3e}). \
-         With the trapezoidal rule (Newmark γ = 1/2) this is usually the growing period-2h oscillation of λ: use \
-         generalized-α (Scheme::GeneralizedAlpha, the default); otherwise try a smaller step size h or a looser tolerance"
+         Try a smaller step size h or a looser tolerance; with the trapezoidal rule (Newmark γ = 1/2) this is \
+         usually the growing period-2h oscillation of λ, which generalized-α (the default scheme) damps"
     )]
     NewtonFailed {
         /// Time of the failed step's end.

@@ -141,7 +141,9 @@ fn closest<'k>(key: &str, known: &[&'k str]) -> Option<&'k str> {
     known
         .iter()
         .map(|&k| (edit_distance(key, k), k))
-        .filter(|&(d, k)| d <= 2.max(k.len() / 3))
+        // One edit for a short key (`foo` is not a typo of `rho`), a third
+        // of a longer one.
+        .filter(|&(d, k)| d <= 1.max(k.len() / 3))
         .min()
         .map(|(_, k)| k)
 }

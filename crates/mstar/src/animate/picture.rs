@@ -180,12 +180,17 @@ fn via_temporary(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result
         std::process::id(),
         name.to_string_lossy()
     ));
-    let result = write(&tmp).and_then(|()| {
-        std::fs::File::open(&tmp)
-            .and_then(|f| f.sync_all())
-            .and_then(|()| std::fs::rename(&tmp, path))
-            .map_err(anyhow::Error::from)
-    });
+    // Created here first: an I/O error then reads as one (plotters' own
+    // errors print their internals).
+    let result = std::fs::File::create(&tmp)
+        .map_err(anyhow::Error::from)
+        .and_then(|_| write(&tmp))
+        .and_then(|()| {
+            std::fs::File::open(&tmp)
+                .and_then(|f| f.sync_all())
+                .and_then(|()| std::fs::rename(&tmp, path))
+                .map_err(anyhow::Error::from)
+        });
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }

@@ -571,10 +571,10 @@ fn linear_algebra<S: System + ?Sized>(
                 continue;
             }
             return Err(IntegrationError::Config(format!(
-                "the {backend} KKT backend needs a symmetric iteration matrix, and this system's tangent \
-                 is not symmetric (System::tangent_is_symmetric: velocity-dependent or non-conservative \
-                 forces, or a configuration-dependent mass matrix); use the lu or dense backend, or the \
-                 automatic choice"
+                "the {backend} KKT backend needs a symmetric iteration matrix, and this model's is not \
+                 (a damper, another velocity-dependent or non-conservative force, or a \
+                 configuration-dependent mass matrix: see System::tangent_is_symmetric); use the lu or \
+                 dense backend, or the automatic choice"
             )));
         }
         if auto && !structure.augmented && !mass_diagonal_positive(sys, t0, u0) {
