@@ -224,6 +224,9 @@ fn redundant_joints_are_refused_by_name_and_the_advice_runs_them() {
     let checked = mstar(&["check", &path]);
     assert_eq!(checked.status.code(), Some(1));
     assert!(text(&checked.stdout).contains("redundant constraints: right-top\n"));
+    // A file it cannot read: 2, as check.
+    let missing = dir.join("missing.toml").display().to_string();
+    assert_eq!(mstar(&["run", &missing]).status.code(), Some(2));
     // What the message says to do.
     let advised = mstar(&[
         "run",
