@@ -405,14 +405,19 @@ impl Observer for RunOutput<'_> {
 fn print_summary(st: mstar::RunStats, t: f64, out: &RunOutput<'_>, wall: f64) {
     let steps = st.steps.max(1) as f64;
     println!("t reached: {t} s");
+    // Iterations count every attempt, the maximum accepted steps only.
+    let per_step = if st.steps == 0 {
+        "no step accepted".to_string()
+    } else {
+        format!(
+            "{:.2} per accepted step, at most {} in one",
+            st.iterations as f64 / steps,
+            st.max_iterations
+        )
+    };
     println!(
-        "steps: {} accepted, {} rejected; Newton iterations: {} ({:.2} per step, {} max); factorizations: {}",
-        st.steps,
-        st.rejected,
-        st.iterations,
-        st.iterations as f64 / steps,
-        st.max_iterations,
-        st.factorizations
+        "steps: {} accepted, {} rejected; Newton iterations: {} ({per_step}); factorizations: {}",
+        st.steps, st.rejected, st.iterations, st.factorizations
     );
     println!(
         "max ‖Φ‖∞ = {:.3e}; energy drift max |E − E₀| = {:.3e} J",
