@@ -81,7 +81,7 @@ mod testing;
 
 pub use backend::{Analyse, Backend, KktBackend, Registration, Structure, backends};
 pub use csc::{Csc, condition_number};
-pub use norm::{Finite, MaxAbs, max_abs};
+pub use norm::{Finite, MaxAbs, argmax_abs, max_abs};
 pub use schur::MAX_BLOCK as MAX_SCHUR_BLOCK;
 pub use solver::KktSolver;
 

@@ -142,9 +142,34 @@ pub fn max_abs(x: &[f64]) -> f64 {
     m.value()
 }
 
+/// The index and magnitude of the largest `|xᵢ|`, a NaN winning over any
+/// number (the first of equals; `(0, 0.0)` for an empty `x`): where a
+/// residual or a violation is worst.
+#[must_use]
+pub fn argmax_abs(x: &[f64]) -> (usize, f64) {
+    x.iter()
+        .enumerate()
+        .fold((0, 0.0f64), |(k, best), (i, &v)| {
+            if v.abs() > best || (v.is_nan() && !best.is_nan()) {
+                (i, v.abs())
+            } else {
+                (k, best)
+            }
+        })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn argmax_abs_finds_the_largest_magnitude_and_a_nan_first() {
+        assert_eq!(argmax_abs(&[1.0, -3.0, 2.0, 3.0]), (1, 3.0));
+        assert_eq!(argmax_abs(&[]), (0, 0.0));
+        let (k, v) = argmax_abs(&[1.0, f64::NAN, 5.0, f64::NAN]);
+        assert_eq!(k, 1);
+        assert!(v.is_nan());
+    }
 
     /// The reference: `‖x‖∞` by cases, NaN and infinity looked for first.
     fn by_cases(x: &[f64]) -> f64 {

@@ -3,7 +3,7 @@
 //! before a run (degrees of freedom, redundant constraints by name, how far
 //! the initial state is from the constraints).
 
-use mstar_kkt::{Backend, MaxAbs};
+use mstar_kkt::{Backend, MaxAbs, argmax_abs};
 use mstar_model::file::{IntegratorChoice, NewtonChoice, RedundantChoice, Simulation};
 use mstar_model::planar::PlanarSystem;
 use mstar_model::{RowSubset, System};
@@ -296,7 +296,7 @@ fn start_report<S: System + ?Sized>(
     let integ = Integrator::new(sys, config.clone(), 0.0, u0, v0).map_err(|e| e.to_string())?;
     let report = integ.start_report();
     let largest = |d: &[f64]| {
-        let (i, x) = argmax(d);
+        let (i, x) = argmax_abs(d);
         (sys.coord_name(i), x)
     };
     let moved = [
@@ -381,25 +381,12 @@ fn violation(sys: &PlanarSystem, x: &[f64]) -> Option<(String, String, f64)> {
     if m.value() == 0.0 {
         return None;
     }
-    let (i, value) = argmax(x);
+    let (i, value) = argmax_abs(x);
     Some((
         sys.constraint_owner(i).unwrap_or("?").to_string(),
         sys.constraint_name(i),
         value,
     ))
-}
-
-/// Index and magnitude of the largest `|xᵢ|` (NaN wins).
-fn argmax(x: &[f64]) -> (usize, f64) {
-    x.iter()
-        .enumerate()
-        .fold((0, 0.0f64), |(k, best), (i, &v)| {
-            if v.abs() > best || v.is_nan() {
-                (i, v.abs())
-            } else {
-                (k, best)
-            }
-        })
 }
 
 /// The reaction and effort columns of a planar model's CSV

@@ -5,35 +5,11 @@
 //! cannot be written; 2: the model cannot be read or the command line is
 //! wrong).
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn mstar(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mstar"))
-        .args(args)
-        .output()
-        .expect("the mstar program runs")
-}
+use std::path::Path;
 
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
-fn model(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../models")
-        .join(name)
-        .display()
-        .to_string()
-}
-
-/// A fresh directory for one test's files.
-fn scratch(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mstar-animate-{test}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("a scratch directory");
-    dir
-}
+use common::{model, mstar, scratch, text};
 
 fn path(p: &Path) -> String {
     p.display().to_string()
@@ -73,7 +49,7 @@ fn html_frames(html: &str) -> usize {
 
 #[test]
 fn a_run_becomes_a_gif_and_a_page() {
-    let dir = scratch("both");
+    let dir = scratch("animate-both");
     let csv = dir.join("four-bar.csv");
     run(&model("four-bar.toml"), "0.2", &csv);
     let (gif, html) = (dir.join("four-bar.gif"), dir.join("four-bar.html"));
@@ -125,7 +101,7 @@ fn a_run_becomes_a_gif_and_a_page() {
 
 #[test]
 fn names_from_the_model_cannot_break_the_page() {
-    let dir = scratch("names");
+    let dir = scratch("animate-names");
     let name = r#"</script><b>"x",y"#;
     let toml = format!(
         "format = \"mstar.planar/1\"\n\
@@ -157,7 +133,7 @@ fn names_from_the_model_cannot_break_the_page() {
 
 #[test]
 fn a_failed_run_s_partial_file_animates() {
-    let dir = scratch("partial");
+    let dir = scratch("animate-partial");
     let out = dir.join("fast.csv");
     let failed = mstar(&[
         "run",
@@ -192,7 +168,7 @@ fn a_failed_run_s_partial_file_animates() {
 
 #[test]
 fn errors_say_what_and_where() {
-    let dir = scratch("errors");
+    let dir = scratch("animate-errors");
     let csv = dir.join("four-bar.csv");
     run(&model("four-bar.toml"), "0.05", &csv);
     let html = dir.join("out.html");

@@ -3,35 +3,9 @@
 //! the file's line and column, a CSV file written completely, and the samples
 //! of a failed run kept in `<name>.partial.csv`.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn mstar(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mstar"))
-        .args(args)
-        .output()
-        .expect("the mstar program runs")
-}
-
-fn text(bytes: &[u8]) -> String {
-    String::from_utf8_lossy(bytes).into_owned()
-}
-
-fn model(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../models")
-        .join(name)
-        .display()
-        .to_string()
-}
-
-/// A fresh directory for one test's files.
-fn scratch(test: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mstar-cli-{test}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("a scratch directory");
-    dir
-}
+use common::{model, mstar, scratch, text};
 
 #[test]
 fn check_exits_with_what_it_found() {

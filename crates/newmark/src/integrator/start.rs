@@ -2,25 +2,12 @@
 //! projected onto the constraints, the consistent (or the paper's) initial
 //! accelerations and multipliers, and the start on the discrete solution.
 
-use mstar_kkt::{Backend, KktOptions, KktSolver};
+use mstar_kkt::{Backend, KktOptions, KktSolver, argmax_abs};
 use mstar_linearize::{Coefficients, max_abs};
 use mstar_model::System;
 
 use super::Integrator;
 use crate::{AlphaParams, IntegrationError, Start};
-
-/// Index and magnitude of the largest `|xᵢ|`.
-fn argmax(x: &[f64]) -> (usize, f64) {
-    x.iter()
-        .enumerate()
-        .fold((0, 0.0f64), |(k, best), (i, &v)| {
-            if v.abs() > best || v.is_nan() {
-                (i, v.abs())
-            } else {
-                (k, best)
-            }
-        })
-}
 
 impl<S: System + ?Sized> Integrator<'_, S> {
     /// Checks `Φ(u₀) = 0` and `B u̇₀ + Φ_t = 0`; projects (minimum-norm Newton
@@ -54,14 +41,14 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 return Ok(());
             }
             if !self.config.project {
-                let (k, value) = argmax(self.lin.phi());
+                let (k, value) = argmax_abs(self.lin.phi());
                 return Err(self.inconsistent("position", k, value));
             }
             if iterations == 50 || (projected && phi <= ctol && iterations > 5) {
                 if phi <= ctol {
                     return Ok(());
                 }
-                let (k, _) = argmax(self.lin.phi());
+                let (k, _) = argmax_abs(self.lin.phi());
                 return Err(IntegrationError::ProjectionFailed {
                     t,
                     iterations,
@@ -95,7 +82,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             return Ok(());
         }
         if !self.config.project {
-            let (k, value) = argmax(&w);
+            let (k, value) = argmax_abs(&w);
             return Err(self.inconsistent("velocity", k, value));
         }
         self.rhs[..n].fill(0.0);

@@ -1,0 +1,35 @@
+//! What the command-line tests share: running the `mstar` program, its
+//! output as text, the paths of `models/`, scratch directories.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs the `mstar` program with `args`.
+pub fn mstar(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_mstar"))
+        .args(args)
+        .output()
+        .expect("the mstar program runs")
+}
+
+/// Program output as text.
+pub fn text(bytes: &[u8]) -> String {
+    String::from_utf8_lossy(bytes).into_owned()
+}
+
+/// The path of a file of `models/`.
+pub fn model(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../models")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// A fresh directory for one test's files (`tag` names the test).
+pub fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mstar-cli-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("a scratch directory");
+    dir
+}
