@@ -137,19 +137,33 @@ fn run_model(args: &RunArgs) -> Result<()> {
     let columns = columns.as_ref().map(|c| c as &dyn Columns);
     let mut output = RunOutput::new(stream, columns, model.every, t_end);
     let start = (config, &model.u0[..], &model.v0[..], t_end);
-    let outcome = match (&model.system, rows) {
+    let (outcome, drift) = match (&model.system, rows) {
         (Model::Planar(planar), Some(rows)) => {
             let subset = RowSubset::new(sys, rows.kept.clone());
             let hold = |u: &[f64]| mstar::run::left_out_rows_hold(planar, &rows, u);
             let mut expanded = Expanded::new(&subset, &mut output);
-            integrate(&subset, start, &hold, &mut expanded)
+            let outcome = integrate(&subset, start, &hold, &mut expanded);
+            let drift = expanded
+                .drifted()
+                .map(|d| mstar::run::redundancy_changed(planar, d));
+            (outcome, drift)
         }
-        _ => integrate(sys, start, &|_| Ok(()), &mut output),
+        _ => (integrate(sys, start, &|_| Ok(()), &mut output), None),
     };
     output.progress.finish_and_clear();
     let (stats, t, wall, result) = outcome?;
     print_summary(stats, t, &output, wall);
-    finish(output, args.out.as_deref(), result)
+    finish(output, args.out.as_deref(), result)?;
+    // The samples are written; they are wrong from the drift on.
+    if let (Some(mstar::run::RunError::RedundancyChanged { t, .. }), Some(out)) =
+        (&drift, &args.out)
+    {
+        eprintln!(
+            "note: {} holds the whole run, and from t = {t} s on it is not the mechanism's motion",
+            out.display()
+        );
+    }
+    drift.map_or(Ok(()), |e| Err(e.into()))
 }
 
 /// Names the joint an initial pose is far from, before the start projects

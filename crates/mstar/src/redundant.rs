@@ -127,23 +127,78 @@ impl<'a, S: System + ?Sized> MinimumNorm<'a, S> {
 
 /// An observer of a run on [`RowSubset`] that passes on every sample with
 /// the minimum-norm multipliers of all rows.
+///
+/// It also watches the left-out rows: they hold while the redundancy is the
+/// one found at the start; [`drifted`](Self::drifted) reports the first
+/// sample where one does not (the redundancy changed along the motion, and
+/// the motion from there on is not the mechanism's).
 pub struct Expanded<'a, 'o, S: System + ?Sized> {
     minimum_norm: MinimumNorm<'a, S>,
     inner: &'o mut dyn Observer,
+    left_out: Vec<usize>,
+    phi: Vec<f64>,
+    drift: Option<Drift>,
+}
+
+/// The first sample where a left-out row is violated.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Drift {
+    /// Time, s.
+    pub t: f64,
+    /// The row.
+    pub row: usize,
+    /// `|Φ_row|`, m or rad.
+    pub violation: f64,
 }
 
 impl<'a, 'o, S: System + ?Sized> Expanded<'a, 'o, S> {
     /// Passes the samples of `subset`'s run on to `inner`.
     pub fn new(subset: &RowSubset<'a, S>, inner: &'o mut dyn Observer) -> Self {
+        let sys = subset.inner();
+        let m = sys.n_constraints();
+        let left_out = (0..m).filter(|r| !subset.rows().contains(r)).collect();
         Self {
-            minimum_norm: MinimumNorm::new(subset.inner(), subset.rows().to_vec()),
+            minimum_norm: MinimumNorm::new(sys, subset.rows().to_vec()),
             inner,
+            left_out,
+            phi: vec![0.0; m],
+            drift: None,
+        }
+    }
+
+    /// The first sample where a left-out row was violated by more than
+    /// `1e-8 max(1, ‖u‖∞)`, if any.
+    #[must_use]
+    pub fn drifted(&self) -> Option<Drift> {
+        self.drift
+    }
+
+    fn watch(&mut self, s: &SampleRef<'_>) {
+        if self.drift.is_some() {
+            return;
+        }
+        self.minimum_norm.sys.phi_into(s.t, s.u, &mut self.phi);
+        let scale = s.u.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+        let (k, violation) = mstar_kkt::argmax_abs(
+            &self
+                .left_out
+                .iter()
+                .map(|&r| self.phi[r])
+                .collect::<Vec<_>>(),
+        );
+        if violation > 1e-8 * scale || violation.is_nan() {
+            self.drift = Some(Drift {
+                t: s.t,
+                row: self.left_out[k],
+                violation,
+            });
         }
     }
 }
 
 impl<S: System + ?Sized> Observer for Expanded<'_, '_, S> {
     fn observe(&mut self, s: &SampleRef<'_>) {
+        self.watch(s);
         let lambda = self.minimum_norm.lambda(s.t, s.u, s.lambda);
         self.inner.observe(&SampleRef { lambda, ..*s });
     }

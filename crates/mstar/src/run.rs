@@ -86,7 +86,7 @@ pub enum RunError {
     /// Redundant constraints in a model that does not ask for minimum-norm
     /// multipliers: the joints, by name.
     #[error(
-        "the constraints of {} are redundant (their equations are linearly dependent at the start): remove or loosen one, or set [simulation] redundant = \"minimum-norm\" (on the command line: --set simulation.redundant=minimum-norm) to run with minimum-norm multipliers",
+        "the constraints of {} are redundant (their equations are linearly dependent at the start): if they repeat what the other joints impose in every position (a third crank on a parallelogram), remove or loosen one, or set [simulation] redundant = \"minimum-norm\" (on the command line: --set simulation.redundant=minimum-norm) to run with minimum-norm multipliers; if the start is a singular position of the mechanism (a parallelogram lying flat), start it away from there",
         .0.join(", ")
     )]
     Redundant(Vec<String>),
@@ -100,6 +100,20 @@ pub enum RunError {
         /// The joints of the violated rows.
         joints: Vec<String>,
         /// The largest violation, m or rad.
+        violation: f64,
+    },
+    /// A row left out of a minimum-norm solve stopped holding during the run:
+    /// the redundancy found at the start changed along the motion.
+    #[error(
+        "the constraints of {} stopped holding at t = {t} s (violated by {violation:.3e}): they were redundant at the start but are not along the motion (a mechanism passing a singular position), so minimum-norm multipliers cannot run it; remove the redundancy from the model",
+        .joints.join(", ")
+    )]
+    RedundancyChanged {
+        /// The joints.
+        joints: Vec<String>,
+        /// When, s.
+        t: f64,
+        /// By how much, m or rad.
         violation: f64,
     },
     /// The start or a step failed.
@@ -154,6 +168,16 @@ pub fn left_out_rows_hold(sys: &PlanarSystem, rows: &Rows, u: &[f64]) -> Result<
     })
 }
 
+/// The error for rows that stopped holding.
+#[must_use]
+pub fn redundancy_changed(sys: &PlanarSystem, d: crate::redundant::Drift) -> RunError {
+    RunError::RedundancyChanged {
+        joints: owners(sys, &[d.row]),
+        t: d.t,
+        violation: d.violation,
+    }
+}
+
 /// Runs a model from its initial state to `[simulation] t_end` with its
 /// settings (defaults as documented), every sample to `observer` — with the
 /// multipliers of all rows, minimum-norm ones when the model asks for them.
@@ -173,7 +197,12 @@ pub fn simulate(
             let subset = RowSubset::new(sys, rows.kept.clone());
             let mut integ = Integrator::new(&subset, config, 0.0, &u0, &v0)?;
             left_out_rows_hold(sys, &rows, integ.view().u)?;
-            Ok(integ.run(t_end, &mut Expanded::new(&subset, observer))?)
+            let mut expanded = Expanded::new(&subset, observer);
+            let stats = integ.run(t_end, &mut expanded)?;
+            match expanded.drifted() {
+                Some(d) => Err(redundancy_changed(sys, d)),
+                None => Ok(stats),
+            }
         }
         None => {
             let mut integ = Integrator::new(sys, config, 0.0, &u0, &v0)?;

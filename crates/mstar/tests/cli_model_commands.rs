@@ -252,3 +252,69 @@ fn a_start_far_from_a_joint_is_named_and_a_contradicting_redundant_joint_refused
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn minimum_norm_refuses_a_redundancy_that_changes_along_the_motion() {
+    // A parallelogram lying flat: its constraints are dependent there only.
+    // Minimum-norm multipliers leave a row out that stops holding as soon as
+    // it rises; the run says so, with when, and exits with 1. What the
+    // refusal without minimum-norm advises for a singular start — start it
+    // away from there — runs.
+    let dir = scratch("flat");
+    let parallelogram = |angle: f64, redundant: &str| {
+        let (s, c) = angle.sin_cos();
+        let crank = |name: &str, x: f64| {
+            format!(
+                "[[body]]\nname = \"{name}\"\nmass = 1.0\ninertia = 0.02\npose = [{}, {}, {angle}]\nvelocity = [{}, {}, 4.0]\n",
+                x + 0.25 * c,
+                0.25 * s,
+                -s,
+                c
+            )
+        };
+        let joint = |name: &str, a: &str, b: &str, x: f64, y: f64| {
+            format!(
+                "[[joint]]\nname = \"{name}\"\ntype = \"revolute\"\nbodies = [\"{a}\", \"{b}\"]\nat = [{x}, {y}]\n"
+            )
+        };
+        [
+            "format = \"mstar.planar/1\"\n".to_string(),
+            crank("left", 0.0),
+            crank("right", 1.0),
+            format!(
+                "[[body]]\nname = \"coupler\"\nmass = 1.0\ninertia = 0.08\npose = [{}, {}, 0.0]\nvelocity = [{}, {}, 0.0]\n",
+                1.0 + 0.5 * c,
+                0.5 * s,
+                -2.0 * s,
+                2.0 * c
+            ),
+            joint("left-ground", "ground", "left", 0.0, 0.0),
+            joint("left-top", "left", "coupler", 0.5 * c, 0.5 * s),
+            joint("right-ground", "ground", "right", 1.0, 0.0),
+            joint("right-top", "right", "coupler", 1.0 + 0.5 * c, 0.5 * s),
+            format!("[simulation]\nt_end = 0.1\n{redundant}"),
+        ]
+        .concat()
+    };
+    let run = |name: &str, text_of: String| {
+        let path = dir.join(name);
+        std::fs::write(&path, text_of).expect("written");
+        mstar(&["run", &path.display().to_string()])
+    };
+    let out = run(
+        "flat.toml",
+        parallelogram(0.0, "redundant = \"minimum-norm\"\n"),
+    );
+    assert_eq!(out.status.code(), Some(1));
+    let message = text(&out.stderr);
+    assert!(
+        message.contains("the constraints of right-top stopped holding at t = "),
+        "{message}"
+    );
+    let out = run("refused.toml", parallelogram(0.0, ""));
+    assert_eq!(out.status.code(), Some(1));
+    assert!(text(&out.stderr).contains("start it away from there"));
+    let out = run("away.toml", parallelogram(0.3, ""));
+    assert!(out.status.success(), "{}", text(&out.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
