@@ -110,6 +110,28 @@ pub enum IntegrationError {
         /// Final `‖Φ‖∞` of the last attempt.
         constraint: f64,
     },
+    /// The local error estimate exceeded the tolerance: a step in strict
+    /// mode, or adaptive stepping at its smallest step size.
+    #[error(
+        "the estimated local error exceeds the tolerance at t = {t} s (h = {h:e}): {ratio:.3} times \
+         atol + rtol·|u| (rtol = {rtol:e}, atol = {atol:e}) at coordinate '{coordinate}'. {advice}"
+    )]
+    ErrorTooLarge {
+        /// The end of the step.
+        t: f64,
+        /// Its size.
+        h: f64,
+        /// The estimate over the tolerance.
+        ratio: f64,
+        /// The coordinate where it is largest.
+        coordinate: String,
+        /// The relative tolerance.
+        rtol: f64,
+        /// The absolute tolerance.
+        atol: f64,
+        /// What to try.
+        advice: String,
+    },
     /// NaN or infinity appeared in the state.
     #[error(
         "NaN or infinity in {what} at t = {t} s; the step size may be too large for the model's stiffness"

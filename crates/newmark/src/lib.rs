@@ -30,8 +30,10 @@ mod error;
 mod integrator;
 mod output;
 mod params;
+mod resample;
 
 pub use error::IntegrationError;
 pub use integrator::{Integrator, StartReport};
-pub use output::{Observer, RunStats, Trajectory};
-pub use params::{AlphaParams, Config, Newton, Predictor, Scheme, Start};
+pub use output::{ErrorReport, Observer, RunStats, Trajectory};
+pub use params::{AlphaParams, Config, ErrorControl, Newton, Predictor, Scheme, Start, StepMode};
+pub use resample::Resample;

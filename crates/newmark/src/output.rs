@@ -53,6 +53,58 @@ pub struct RunStats {
     pub factorizations: usize,
     /// Smallest step size used.
     pub h_min_used: f64,
+    /// Largest step size used (0 before the first step).
+    pub h_max_used: f64,
     /// Time reached.
     pub t: f64,
+    /// The local error estimate over the accepted steps.
+    pub error: ErrorReport,
+}
+
+/// The local error estimate over a run's accepted steps, as a ratio to the
+/// tolerance ([`ErrorControl`](crate::ErrorControl)): a step is within
+/// tolerance when its ratio is at most 1.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ErrorReport {
+    /// The largest ratio (NaN if an estimate was NaN).
+    pub max_ratio: f64,
+    /// When that step ended.
+    pub t_max: f64,
+    /// The step size of that step.
+    pub h_max: f64,
+    /// The coordinate where it was largest.
+    pub coordinate: Option<usize>,
+    /// Accepted steps whose ratio exceeded 1.
+    pub exceeded: usize,
+    /// When the first such step ended.
+    pub first_exceeded: Option<f64>,
+    /// Steps rejected (and retried smaller) because of the estimate.
+    pub rejected: usize,
+}
+
+impl ErrorReport {
+    /// Records an accepted step's ratio.
+    pub(crate) fn record(&mut self, ratio: f64, t: f64, h: f64, coordinate: Option<usize>) {
+        if ratio > self.max_ratio || ratio.is_nan() && !self.max_ratio.is_nan() {
+            (self.max_ratio, self.t_max, self.h_max, self.coordinate) = (ratio, t, h, coordinate);
+        }
+        if ratio.is_nan() || ratio > 1.0 {
+            self.exceeded += 1;
+            self.first_exceeded.get_or_insert(t);
+        }
+    }
+
+    /// Whether some accepted step exceeded the tolerance.
+    #[must_use]
+    pub fn exceeded_tolerance(&self) -> bool {
+        self.exceeded > 0
+    }
+
+    /// A step size that would bring the worst step within tolerance: the
+    /// local error is `O(h³)`, so `h · (0.5 / ratio)^(1/3)` (half the
+    /// tolerance, for margin).
+    #[must_use]
+    pub fn suggested_h(&self) -> f64 {
+        self.h_max * (0.5 / self.max_ratio).cbrt()
+    }
 }

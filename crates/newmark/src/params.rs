@@ -258,6 +258,9 @@ pub struct Config {
     /// Scale the KKT system (equilibrium rows × `1/c_a`, multipliers ÷ `1/c_a`)
     /// so that its conditioning does not grow like `h⁻⁴` (default: true).
     pub scaling: bool,
+    /// The local error estimate and what is done with it (default: monitor
+    /// with `rtol = 1e-3`, `atol = 1e-6`; [`ErrorControl`]).
+    pub error: ErrorControl,
     /// Linear solver options (default: [`KktOptions::default`], the automatic
     /// choice: dense up to 24 unknowns; above, the Schur complement when `S_T`
     /// without `BᵀB` is block-diagonal and `M`'s diagonal is positive, else
@@ -282,6 +285,7 @@ impl Default for Config {
             project: true,
             exact_multiplier_update: true,
             scaling: true,
+            error: ErrorControl::default(),
             kkt: KktOptions::default(),
         }
     }
@@ -334,6 +338,7 @@ impl Config {
                 self.tol
             ));
         }
+        self.error.validate(self.h)?;
         if self.max_iterations == 0 {
             return bad("max_iterations must be at least 1".into());
         }
@@ -347,10 +352,94 @@ impl Config {
         self.scheme.params()
     }
 
-    /// `h_min` with its default applied.
+    /// `h_min` with its default applied: `h / 1024` at a fixed step size,
+    /// `h · 1e-6` with adaptive steps.
     #[must_use]
     pub fn h_min(&self) -> f64 {
-        self.h_min.unwrap_or(self.h / 1024.0)
+        let factor = match self.error.mode {
+            StepMode::Adaptive => 1e-6,
+            StepMode::Monitor | StepMode::Strict => 1.0 / 1024.0,
+        };
+        self.h_min.unwrap_or(self.h * factor)
+    }
+}
+
+/// What the integrator does with its local error estimate
+/// (`docs/theory.md`, "Local error estimate and step control").
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum StepMode {
+    /// Fixed step size `h`; the estimate is computed and reported in
+    /// [`RunStats::error`](crate::RunStats::error), for a warning (default).
+    #[default]
+    Monitor,
+    /// Fixed step size; a step whose estimate exceeds the tolerance is an
+    /// error ([`IntegrationError::ErrorTooLarge`]).
+    Strict,
+    /// The step size follows the estimate: a PI controller, steps rejected
+    /// and retried while the estimate exceeds the tolerance, `h` the first
+    /// step, bounded by `h_min` and [`ErrorControl::h_max`].
+    Adaptive,
+}
+
+/// The local error estimate's tolerances and use.
+///
+/// A step is within tolerance when `|e_i| ≤ atol + rtol · max(|u_n,i|, |u_n+1,i|)`
+/// for every coordinate `i`, where `e` is the estimate of the local error
+/// in the positions (Zienkiewicz & Xie 1991, extended to generalized-α:
+/// `docs/theory.md`). The defaults are those of SciPy's `solve_ivp`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorControl {
+    /// Relative tolerance (default 1e-3).
+    pub rtol: f64,
+    /// Absolute tolerance, in the coordinates' units (m, rad; default 1e-6).
+    pub atol: f64,
+    /// What the estimate is used for (default: [`StepMode::Monitor`]).
+    pub mode: StepMode,
+    /// Largest step size of adaptive stepping (default: none).
+    pub h_max: Option<f64>,
+}
+
+impl Default for ErrorControl {
+    fn default() -> Self {
+        Self {
+            rtol: 1e-3,
+            atol: 1e-6,
+            mode: StepMode::Monitor,
+            h_max: None,
+        }
+    }
+}
+
+impl ErrorControl {
+    /// Checks ranges (`h` is the configuration's step size).
+    ///
+    /// # Errors
+    /// [`IntegrationError::Config`] naming the offending field.
+    pub fn validate(&self, h: f64) -> Result<(), IntegrationError> {
+        let bad = |s: String| Err(IntegrationError::Config(s));
+        for (name, x) in [("rtol", self.rtol), ("atol", self.atol)] {
+            if !(x >= 0.0 && x.is_finite()) {
+                return bad(format!("{name} must be finite and ≥ 0 (got {x:e})"));
+            }
+        }
+        if self.rtol == 0.0 && self.atol == 0.0 {
+            return bad("rtol and atol cannot both be 0".into());
+        }
+        if let Some(h_max) = self.h_max
+            && !(h_max >= h && h_max.is_finite())
+        {
+            return bad(format!(
+                "h_max must be finite and at least the step size h = {h:e} (got {h_max:e})"
+            ));
+        }
+        Ok(())
+    }
+
+    /// The coefficient `c` of the local error `c h³ u⃛` of the positions:
+    /// `c = β − 1/6 + (α_m − α_f)/2` (`1/12` for the trapezoidal rule).
+    #[must_use]
+    pub fn coefficient(p: &AlphaParams) -> f64 {
+        p.beta - 1.0 / 6.0 + 0.5 * (p.alpha_m - p.alpha_f)
     }
 }
 

@@ -2,6 +2,7 @@
 //! one step (paper §2.2, Fig. 2; `algorithm.md` §4) is in `newton.rs`, the
 //! initial conditions (§3, §6) in `start.rs`.
 
+mod control;
 mod newton;
 mod start;
 
@@ -9,7 +10,9 @@ use mstar_kkt::{Backend, KktError, KktSolver};
 use mstar_linearize::Linearization;
 use mstar_model::{Sample, SampleRef, System, kinetic_energy};
 
-use crate::{AlphaParams, Config, IntegrationError, Newton, Observer, Predictor, RunStats, Start};
+use crate::{
+    AlphaParams, Config, IntegrationError, Newton, Observer, Predictor, RunStats, Start, StepMode,
+};
 
 /// What the initialization did, for the run summary.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -102,8 +105,20 @@ pub struct Integrator<'s, S: System + ?Sized> {
     previous: State,
     previous_h: Option<f64>,
     rhs: Vec<f64>,
-    /// Current nominal step size (≤ config.h).
+    /// Current nominal step size (≤ config.h unless adaptive).
     h: f64,
+    /// The size of the last accepted step (at the start: `config.h`, the step
+    /// the corrected start was made for). The acceleration-like variable
+    /// `a_n ≈ ü(t_n + (α_m − α_f) h)` belongs to it and is rescaled when the
+    /// next step's size differs (`control.rs`).
+    h_last: f64,
+    /// The local error estimate of the trial step, per coordinate.
+    error: Vec<f64>,
+
+    /// The previous accepted step's error ratio (the PI controller's memory).
+    error_previous: f64,
+    /// Whether the last attempt was rejected (then `h` may not grow).
+    rejected_last: bool,
     /// The step size the current factorization was made for.
     factored_h: Option<f64>,
     easy_steps: usize,
@@ -177,6 +192,10 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             previous_h: None,
             rhs: vec![0.0; n + m],
             h,
+            h_last: h,
+            error: vec![0.0; n],
+            error_previous: 1.0,
+            rejected_last: false,
             factored_h: None,
             easy_steps: 0,
             t_anchor: t0,
@@ -229,6 +248,14 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     #[must_use]
     pub fn stats(&self) -> RunStats {
         self.stats
+    }
+
+    /// The local error estimate of the last accepted step, per coordinate
+    /// (`control.rs`; projected onto `B e = 0` with adaptive steps or when
+    /// it exceeded the tolerance, else as first computed).
+    #[must_use]
+    pub fn error_estimate(&self) -> &[f64] {
+        &self.error
     }
 
     /// What the initialization did.
@@ -307,7 +334,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     /// Whether the integration has reached `t_end` (within `1e-9 h`).
     #[must_use]
     pub fn reached(&self, t_end: f64) -> bool {
-        t_end - self.t <= 1e-9 * self.config.h
+        t_end - self.t <= 1e-9 * self.config.h.min(self.h)
     }
 
     /// Takes one accepted step towards `t_end` (shortened to land on it),
@@ -335,10 +362,18 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             };
             let factorizations_before = self.stats.factorizations;
             match self.attempt(h_try) {
-                Ok(iterations) => {
-                    self.accept(h_try, iterations);
-                    return Ok(());
-                }
+                Ok(iterations) => match self.judge(h_try)? {
+                    Some(estimate) => {
+                        self.accept(h_try, iterations, estimate);
+                        return Ok(());
+                    }
+                    None => {
+                        // Rejected by the error estimate: `judge` set `self.h`.
+                        h = self.h;
+                        retried_fresh = false;
+                        continue;
+                    }
+                },
                 Err(failure) => {
                     let fresh = self.stats.factorizations > factorizations_before;
                     let stale_jacobian = matches!(self.config.newton, Newton::Modified { .. })
@@ -433,7 +468,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         }
     }
 
-    fn accept(&mut self, h: f64, iterations: usize) {
+    fn accept(&mut self, h: f64, iterations: usize, estimate: control::Estimate) {
         // Buffers change roles instead of being copied: the predictor rewrites
         // every field of `trial` before it is read again.
         if self.config.predictor == Predictor::Extrapolated {
@@ -454,7 +489,15 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         st.steps += 1;
         st.max_iterations = st.max_iterations.max(iterations);
         st.h_min_used = st.h_min_used.min(h);
+        st.h_max_used = st.h_max_used.max(h);
         st.t = self.t;
+        st.error
+            .record(estimate.ratio, self.t, h, estimate.coordinate);
+        self.h_last = h;
+        if self.config.error.mode == StepMode::Adaptive {
+            self.adapt(h, &estimate);
+            return;
+        }
         // A step that needed many iterations with a reused Jacobian asks for a
         // fresh one at the next step.
         if iterations > 4 {

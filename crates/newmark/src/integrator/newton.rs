@@ -220,18 +220,20 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             (Predictor::Extrapolated, Some(h_prev)) => h / h_prev,
             _ => 0.0,
         };
+        // a_n belongs to the last step's size; rescaled to this one's.
+        let rescale = h / self.h_last;
         for i in 0..s.u.len() {
+            let a_n = s.a[i] + rescale * (s.a_alpha[i] - s.a[i]);
             let a1 = match self.config.predictor {
                 Predictor::ZeroAcceleration => 0.0,
                 Predictor::ConstantAcceleration => s.a[i],
                 Predictor::Extrapolated => s.a[i] + ratio * (s.a[i] - self.previous.a[i]),
             };
-            let aa1 = (alpha_f * s.a[i] - alpha_m * s.a_alpha[i] + (1.0 - alpha_f) * a1)
-                / (1.0 - alpha_m);
+            let aa1 = (alpha_f * s.a[i] - alpha_m * a_n + (1.0 - alpha_f) * a1) / (1.0 - alpha_m);
             t.a[i] = a1;
             t.a_alpha[i] = aa1;
-            t.v[i] = s.v[i] + h * ((1.0 - gamma) * s.a_alpha[i] + gamma * aa1);
-            t.u[i] = s.u[i] + h * s.v[i] + h * h * ((0.5 - beta) * s.a_alpha[i] + beta * aa1);
+            t.v[i] = s.v[i] + h * ((1.0 - gamma) * a_n + gamma * aa1);
+            t.u[i] = s.u[i] + h * s.v[i] + h * h * ((0.5 - beta) * a_n + beta * aa1);
         }
         for (i, l) in t.lambda.iter_mut().enumerate() {
             *l = s.lambda[i] + ratio * (s.lambda[i] - self.previous.lambda[i]);
