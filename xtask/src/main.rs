@@ -13,6 +13,8 @@
 //! - `cargo xtask bench`: the chain benchmark as a table and a plot ([`bench`](mod@bench)).
 //! - `cargo xtask validate`: the models of `models/` against independent
 //!   references; writes docs/validation.md ([`validate`]).
+//! - `cargo xtask work-precision`: error against CPU time, fixed and
+//!   adaptive steps; writes docs/work-precision.md ([`work_precision`]).
 //! - `cargo xtask animate-check`: `mstar animate`'s page in headless Chromium,
 //!   a screenshot and a check that its script plays ([`animate_check`]).
 
@@ -25,6 +27,7 @@ mod paper;
 mod plot;
 mod stability;
 mod validate;
+mod work_precision;
 
 use std::path::{Path, PathBuf};
 
@@ -76,6 +79,10 @@ enum Command {
     /// docs/figures/animate-four-bar.png and a check that the script plays;
     /// a slider-crank frame to docs/figures/animate-slider-crank.png.
     AnimateCheck,
+    /// Error against CPU time on the pendulum, a 10-link chain and Andrews'
+    /// mechanism, fixed steps against error-controlled ones; writes
+    /// docs/work-precision.md and docs/figures/work-precision.png.
+    WorkPrecision,
 }
 
 fn main() -> Result<()> {
@@ -91,6 +98,7 @@ fn main() -> Result<()> {
         Command::Validate => validate::run(),
         Command::Bench { max_n, report_only } => bench::run(max_n, report_only),
         Command::AnimateCheck => animate_check::run(),
+        Command::WorkPrecision => work_precision::run(),
     }
 }
 

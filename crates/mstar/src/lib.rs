@@ -32,6 +32,7 @@
 //! ```
 #![deny(missing_docs)]
 
+pub mod accuracy;
 pub mod analysis;
 pub mod catalogue;
 pub mod csv;

@@ -12,7 +12,8 @@ use clap::{Parser, Subcommand, ValueEnum};
 use mstar::kkt::Backend;
 use mstar::pendulum::PendulumRun;
 use mstar::{
-    Config, IntegrationError, Newton, Observer, Sample, SampleRef, Scheme, Start, System, csv,
+    Config, IntegrationError, Newton, Observer, Sample, SampleRef, Scheme, Start, StepMode, System,
+    csv,
 };
 
 /// mstar: time integration of constrained multibody systems (index-3 DAEs
@@ -171,6 +172,26 @@ struct IntegratorArgs {
     /// Newton iterations per step attempt [default: 20].
     #[arg(long)]
     max_iter: Option<usize>,
+    /// Relative tolerance of the local error estimate on the positions
+    /// [default: 1e-3]: a step is within it when its estimated error is at
+    /// most atol + rtol·|u| in every coordinate.
+    #[arg(long)]
+    rtol: Option<f64>,
+    /// Absolute tolerance of the local error estimate, m or rad [default: 1e-6].
+    #[arg(long)]
+    atol: Option<f64>,
+    /// Adapt the step size to the error estimate (--h is the first step;
+    /// ρ∞ defaults to 0.5). Without it the step size is fixed and the
+    /// estimate only monitored: a warning when it exceeds the tolerance.
+    #[arg(long, conflicts_with = "strict")]
+    adaptive: bool,
+    /// Fixed step size, and an error (exit 1, samples kept) at the first step
+    /// whose estimated error exceeds the tolerance.
+    #[arg(long)]
+    strict: bool,
+    /// Largest step size with --adaptive, s [default: none].
+    #[arg(long, requires = "adaptive")]
+    h_max: Option<f64>,
 }
 
 #[derive(clap::Args, Debug)]
@@ -329,6 +350,30 @@ fn pendulum_run(args: &PendulumArgs) -> Result<PendulumRun> {
     Ok(run)
 }
 
+/// Applies the error-control options to `c`: `--adaptive` without an
+/// explicit scheme is generalized-α with ρ∞ = 0.5 (`docs/work-precision.md`).
+fn apply_error_control(args: &IntegratorArgs, c: &mut Config) {
+    c.error.rtol = args.rtol.unwrap_or(c.error.rtol);
+    c.error.atol = args.atol.unwrap_or(c.error.atol);
+    c.error.h_max = args.h_max.or(c.error.h_max);
+    if args.strict {
+        c.error.mode = StepMode::Strict;
+    }
+    let explicit_scheme = args.integrator.is_some()
+        || args.rho.is_some()
+        || args.alpha.is_some()
+        || args.beta.is_some()
+        || args.gamma.is_some();
+    if args.adaptive {
+        c.error.mode = StepMode::Adaptive;
+        if c.scheme == Scheme::default() && !explicit_scheme {
+            c.scheme = Scheme::GeneralizedAlpha {
+                rho_inf: mstar::run::defaults::RHO_ADAPTIVE,
+            };
+        }
+    }
+}
+
 /// Applies the integrator options to `c` (`paper_preset`: an explicit `--h`
 /// also fixes `h_min`, keeping step control off as in the paper).
 fn apply_integrator(args: &IntegratorArgs, c: &mut Config, paper_preset: bool) -> Result<()> {
@@ -347,6 +392,7 @@ fn apply_integrator(args: &IntegratorArgs, c: &mut Config, paper_preset: bool) -
     if let Some(k) = args.max_iter {
         c.max_iterations = k;
     }
+    apply_error_control(args, c);
     if let Some(n) = args.newton {
         c.newton = match n {
             NewtonArg::Full => Newton::Full,
@@ -394,7 +440,11 @@ fn apply_integrator(args: &IntegratorArgs, c: &mut Config, paper_preset: bool) -
                 alpha: args.alpha.unwrap_or(-0.1),
             },
             Integrator::GeneralizedAlpha => Scheme::GeneralizedAlpha {
-                rho_inf: args.rho.unwrap_or(0.9),
+                rho_inf: args.rho.unwrap_or(if args.adaptive {
+                    mstar::run::defaults::RHO_ADAPTIVE
+                } else {
+                    mstar::run::defaults::RHO
+                }),
             },
         };
     }
@@ -467,6 +517,9 @@ fn pendulum(args: &PendulumArgs) -> Result<()> {
                 wall.as_secs_f64(),
                 wall.as_secs_f64() * 1e6 / stats.steps.max(1) as f64
             );
+            if let Some(w) = mstar::accuracy::warning(&stats, &run.config, &|i| sys.coord_name(i)) {
+                eprintln!("{w}");
+            }
             if let Some(out) = &args.out {
                 csv::write_csv(out, &sys, &samples)?;
                 println!("wrote {} ({} rows)", out.display(), samples.len());
@@ -527,7 +580,7 @@ fn chain(args: &ChainArgs) -> Result<()> {
         args.t_end
     );
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
-    let mut integ = mstar::Integrator::new(&sys, config, 0.0, &u0, &v0)?;
+    let mut integ = mstar::Integrator::new(&sys, config.clone(), 0.0, &u0, &v0)?;
     let setup = clock.elapsed();
     println!(
         "KKT solver: {}; Newton: {}",
@@ -582,6 +635,9 @@ fn chain(args: &ChainArgs) -> Result<()> {
         s.u[tip + 1],
         s.constraint
     );
+    if let Some(w) = mstar::accuracy::warning(&st, &config, &|i| sys.coord_name(i)) {
+        eprintln!("{w}");
+    }
     if let (Some(stream), Some(out)) = (output.stream, &args.out) {
         stream.finish()?;
         println!("wrote {}", out.display());

@@ -37,6 +37,25 @@ pub struct RunArgs {
     /// Step size, s (overrides [simulation] h).
     #[arg(long)]
     h: Option<f64>,
+    /// Adapt the step size to the local error estimate (sets
+    /// [simulation] error_control = "adaptive"; ρ∞ defaults to 0.5).
+    #[arg(long, conflicts_with = "strict")]
+    adaptive: bool,
+    /// Fixed step size, and an error at the first step whose estimated error
+    /// exceeds the tolerance (sets [simulation] error_control = "strict").
+    #[arg(long)]
+    strict: bool,
+    /// Relative tolerance of the local error estimate (overrides
+    /// [simulation] rtol).
+    #[arg(long)]
+    rtol: Option<f64>,
+    /// Absolute tolerance of the local error estimate, m or rad (overrides
+    /// [simulation] atol).
+    #[arg(long)]
+    atol: Option<f64>,
+    /// Newton tolerance (overrides [simulation] tol).
+    #[arg(long)]
+    tol: Option<f64>,
     /// Override a key of the file, e.g. --set simulation.rho=0.8 or
     /// --set output.every=10 (repeatable; values in TOML syntax).
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -136,6 +155,7 @@ fn run_model(args: &RunArgs) -> Result<()> {
         .transpose()?;
     let columns = columns.as_ref().map(|c| c as &dyn Columns);
     let mut output = RunOutput::new(stream, columns, model.every, t_end);
+    let config_used = config.clone();
     let start = (config, &model.u0[..], &model.v0[..], t_end);
     let (outcome, drift) = match (&model.system, rows) {
         (Model::Planar(planar), Some(rows)) => {
@@ -153,6 +173,9 @@ fn run_model(args: &RunArgs) -> Result<()> {
     output.progress.finish_and_clear();
     let (stats, t, wall, result) = outcome?;
     print_summary(stats, t, &output, wall);
+    if let Some(w) = mstar::accuracy::warning(&stats, &config_used, &|i| sys.coord_name(i)) {
+        eprintln!("{w}");
+    }
     finish(output, args.out.as_deref(), result)?;
     // The samples are written; they are wrong from the drift on.
     if let (Some(mstar::run::RunError::RedundancyChanged { t, .. }), Some(out)) =
@@ -265,9 +288,20 @@ fn finish(
 /// The model of `mstar run`: a file or a built-in.
 fn load(args: &RunArgs) -> Result<Loaded> {
     let mut set = args.set.clone();
-    for (key, value) in [("t_end", args.t_end), ("h", args.h)] {
+    for (key, value) in [
+        ("t_end", args.t_end),
+        ("h", args.h),
+        ("rtol", args.rtol),
+        ("atol", args.atol),
+        ("tol", args.tol),
+    ] {
         if let Some(v) = value {
             set.push(format!("simulation.{key}={v:e}"));
+        }
+    }
+    for (flag, mode) in [(args.adaptive, "adaptive"), (args.strict, "strict")] {
+        if flag {
+            set.push(format!("simulation.error_control={mode}"));
         }
     }
     if let Some(builtin) = args.builtin {
@@ -285,22 +319,50 @@ fn load(args: &RunArgs) -> Result<Loaded> {
     })
 }
 
-/// A built-in model with its defaults, `--t-end`/`--h` (as overrides of
-/// `simulation.t_end`/`simulation.h`) applied; other overrides are refused.
+/// One override of a built-in model: the command line's `--t-end`, `--h`,
+/// `--tol`, `--rtol`, `--atol`, `--adaptive`, `--strict` (as
+/// `simulation.<key>=…`); other keys are refused.
+fn builtin_setting(simulation: &mut Simulation, assignment: &str) -> Result<()> {
+    let (key, value) = assignment.split_once('=').unwrap_or((assignment, ""));
+    if key == "simulation.error_control" {
+        simulation.error_control = Some(match value {
+            "adaptive" => mstar_model::file::ErrorControlChoice::Adaptive,
+            "strict" => mstar_model::file::ErrorControlChoice::Strict,
+            _ => mstar_model::file::ErrorControlChoice::Monitor,
+        });
+        return Ok(());
+    }
+    let number: f64 = value
+        .parse()
+        .ok()
+        .filter(|v: &f64| v.is_finite() && *v >= 0.0)
+        .with_context(|| format!("{key}: expected a number ≥ 0, got '{value}'"))?;
+    let positive = || -> Result<f64> {
+        if number > 0.0 {
+            Ok(number)
+        } else {
+            bail!("{key}: expected a positive number, got '{value}'")
+        }
+    };
+    match key {
+        "simulation.t_end" => simulation.t_end = Some(positive()?),
+        "simulation.h" => simulation.h = Some(positive()?),
+        "simulation.tol" => simulation.tol = Some(positive()?),
+        "simulation.rtol" => simulation.rtol = Some(number),
+        "simulation.atol" => simulation.atol = Some(number),
+        _ => bail!(
+            "--set {assignment}: a built-in model takes --t-end, --h, --tol, --rtol, --atol, --adaptive and --strict only"
+        ),
+    }
+    Ok(())
+}
+
+/// A built-in model with its defaults and the command line's overrides
+/// ([`builtin_setting`]).
 fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
     let mut simulation = Simulation::default();
     for assignment in set {
-        let (key, value) = assignment.split_once('=').unwrap_or((assignment, ""));
-        let value: f64 = value
-            .parse()
-            .ok()
-            .filter(|v: &f64| v.is_finite() && *v > 0.0)
-            .with_context(|| format!("{key}: expected a positive number, got '{value}'"))?;
-        match key {
-            "simulation.t_end" => simulation.t_end = Some(value),
-            "simulation.h" => simulation.h = Some(value),
-            _ => bail!("--set {assignment}: a built-in model takes --t-end and --h only"),
-        }
+        builtin_setting(&mut simulation, assignment)?;
     }
     Ok(match builtin {
         Builtin::Pendulum => {

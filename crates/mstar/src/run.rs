@@ -4,10 +4,14 @@
 //! the initial state is from the constraints).
 
 use mstar_kkt::{Backend, MaxAbs, argmax_abs};
-use mstar_model::file::{IntegratorChoice, NewtonChoice, RedundantChoice, Simulation};
+use mstar_model::file::{
+    ErrorControlChoice, IntegratorChoice, NewtonChoice, RedundantChoice, Simulation,
+};
 use mstar_model::planar::PlanarSystem;
 use mstar_model::{RowSubset, System};
-use mstar_newmark::{Config, IntegrationError, Integrator, Newton, Observer, RunStats, Scheme};
+use mstar_newmark::{
+    Config, IntegrationError, Integrator, Newton, Observer, RunStats, Scheme, StepMode,
+};
 
 use crate::redundant::{Expanded, Rows};
 
@@ -19,6 +23,10 @@ pub mod defaults {
     pub const H: f64 = 1e-3;
     /// `rho` (generalized-α).
     pub const RHO: f64 = 0.9;
+    /// `rho` with `error_control = "adaptive"`: each change of the step size
+    /// excites generalized-α's period-2 mode, which ρ∞ = 0.9 damps slowly
+    /// (`docs/work-precision.md`).
+    pub const RHO_ADAPTIVE: f64 = 0.5;
     /// `alpha` (HHT).
     pub const ALPHA: f64 = -0.1;
     /// `beta`, `gamma` (Newmark: the paper's trapezoidal rule).
@@ -38,9 +46,22 @@ pub fn config(sim: &Simulation) -> Result<(Config, f64), String> {
         h_min: sim.h_min,
         ..Config::default()
     };
+    c.error.mode = match sim.error_control.unwrap_or_default() {
+        ErrorControlChoice::Monitor => StepMode::Monitor,
+        ErrorControlChoice::Strict => StepMode::Strict,
+        ErrorControlChoice::Adaptive => StepMode::Adaptive,
+    };
+    c.error.rtol = sim.rtol.unwrap_or(c.error.rtol);
+    c.error.atol = sim.atol.unwrap_or(c.error.atol);
+    c.error.h_max = sim.h_max;
+    let rho = if c.error.mode == StepMode::Adaptive {
+        defaults::RHO_ADAPTIVE
+    } else {
+        defaults::RHO
+    };
     c.scheme = match sim.integrator.unwrap_or(IntegratorChoice::GeneralizedAlpha) {
         IntegratorChoice::GeneralizedAlpha => Scheme::GeneralizedAlpha {
-            rho_inf: sim.rho.unwrap_or(defaults::RHO),
+            rho_inf: sim.rho.unwrap_or(rho),
         },
         IntegratorChoice::Hht => Scheme::Hht {
             alpha: sim.alpha.unwrap_or(defaults::ALPHA),

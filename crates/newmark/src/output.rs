@@ -80,9 +80,26 @@ pub struct ErrorReport {
     pub first_exceeded: Option<f64>,
     /// Steps rejected (and retried smaller) because of the estimate.
     pub rejected: usize,
+    /// Accepted steps whose converged constraint violation exceeded the
+    /// tolerance (a Newton tolerance too loose for it; the step size cannot
+    /// help).
+    pub newton_exceeded: usize,
+    /// The largest converged `‖Φ‖∞` over the tolerance.
+    pub newton_max_ratio: f64,
 }
 
 impl ErrorReport {
+    /// Records an accepted step's Newton ratio (converged `‖Φ‖∞` over the
+    /// tolerance).
+    pub(crate) fn record_newton(&mut self, ratio: f64) {
+        if ratio > self.newton_max_ratio || ratio.is_nan() {
+            self.newton_max_ratio = ratio;
+        }
+        if ratio.is_nan() || ratio > 1.0 {
+            self.newton_exceeded += 1;
+        }
+    }
+
     /// Records an accepted step's ratio.
     pub(crate) fn record(&mut self, ratio: f64, t: f64, h: f64, coordinate: Option<usize>) {
         if ratio > self.max_ratio || ratio.is_nan() && !self.max_ratio.is_nan() {

@@ -42,7 +42,9 @@ mod settings;
 use std::path::Path;
 
 pub use planar::FORMAT;
-pub use settings::{IntegratorChoice, NewtonChoice, Output, RedundantChoice, Simulation};
+pub use settings::{
+    ErrorControlChoice, IntegratorChoice, NewtonChoice, Output, RedundantChoice, Simulation,
+};
 
 use crate::planar::PlanarSystem;
 use fields::Doc;

@@ -39,6 +39,19 @@ pub enum RedundantChoice {
     MinimumNorm,
 }
 
+/// What `[simulation] error_control` does with the local error estimate.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ErrorControlChoice {
+    /// `"monitor"` (default): fixed step size `h`; a warning when the
+    /// estimate exceeds the tolerance.
+    #[default]
+    Monitor,
+    /// `"strict"`: fixed step size; a step beyond the tolerance is an error.
+    Strict,
+    /// `"adaptive"`: the step size follows the estimate (`h` is the first).
+    Adaptive,
+}
+
 /// `[simulation]`: every key optional (defaults in `docs/model-format.md`,
 /// applied by the program that runs the model).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -70,23 +83,37 @@ pub struct Simulation {
     pub kkt: Option<String>,
     /// `redundant`.
     pub redundant: Option<RedundantChoice>,
+    /// `rtol`, the local error estimate's relative tolerance (≥ 0).
+    pub rtol: Option<f64>,
+    /// `atol`, its absolute tolerance, m or rad (≥ 0).
+    pub atol: Option<f64>,
+    /// `error_control`.
+    pub error_control: Option<ErrorControlChoice>,
+    /// `h_max`, the largest step size of adaptive steps, s (≥ h).
+    pub h_max: Option<f64>,
 }
 
 /// `[output]`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Output {
     /// `every`: write every n-th step (≥ 1; default 1).
     pub every: usize,
+    /// `every_time`: write the state every this many seconds instead,
+    /// interpolated within the steps (> 0).
+    pub every_time: Option<f64>,
 }
 
 impl Default for Output {
     fn default() -> Self {
-        Self { every: 1 }
+        Self {
+            every: 1,
+            every_time: None,
+        }
     }
 }
 
 /// The keys of `[simulation]`.
-const SIMULATION_KEYS: [&str; 13] = [
+const SIMULATION_KEYS: [&str; 17] = [
     "t_end",
     "h",
     "h_min",
@@ -100,6 +127,10 @@ const SIMULATION_KEYS: [&str; 13] = [
     "newton",
     "kkt",
     "redundant",
+    "rtol",
+    "atol",
+    "error_control",
+    "h_max",
 ];
 
 /// Reads `[simulation]` and `[output]` of the document `root`.
@@ -115,9 +146,16 @@ pub(crate) fn read(doc: Doc<'_>, root: &Node) -> Result<(Simulation, Output), Fi
     let output = match find("output") {
         Some(e) => {
             let mut f = Fields::of(doc, &e.node, "[output]".to_string())?;
-            let every = f.optional("every", count(1))?.unwrap_or(1);
-            f.finish(&["every"])?;
-            Output { every }
+            let every = f.optional("every", count(1))?;
+            let every_time = f.optional("every_time", number_in(|x| x > 0.0, "positive, in s"))?;
+            if let (Some(_), Some(entry)) = (every, f.entry("every_time")) {
+                return Err(f.bad(entry, "give either every (steps) or every_time (seconds)"));
+            }
+            f.finish(&["every", "every_time"])?;
+            Output {
+                every: every.unwrap_or(1),
+                every_time,
+            }
         }
         None => Output::default(),
     };
@@ -165,6 +203,16 @@ fn simulation(mut f: Fields<'_>) -> Result<Simulation, FileError> {
                 "minimum-norm" => RedundantChoice::MinimumNorm,
                 _ => RedundantChoice::Refuse,
             }),
+        rtol: f.optional("rtol", number_in(|x| x >= 0.0, "at least 0"))?,
+        atol: f.optional("atol", number_in(|x| x >= 0.0, "at least 0, in m or rad"))?,
+        error_control: f
+            .optional("error_control", choice(&["monitor", "strict", "adaptive"]))?
+            .map(|c| match c {
+                "strict" => ErrorControlChoice::Strict,
+                "adaptive" => ErrorControlChoice::Adaptive,
+                _ => ErrorControlChoice::Monitor,
+            }),
+        h_max: f.optional("h_max", positive("positive, in s"))?,
     };
     consistent(&mut f, &s)?;
     f.finish(&SIMULATION_KEYS)?;
@@ -209,6 +257,18 @@ fn consistent(f: &mut Fields<'_>, s: &Simulation) -> Result<(), FileError> {
     {
         let e: &Entry = f.entry("h_min").expect("given");
         return Err(f.bad(e, format!("must not exceed h = {h}")));
+    }
+    if let (Some(h_max), Some(h)) = (s.h_max, s.h)
+        && h_max < h
+    {
+        let e: &Entry = f.entry("h_max").expect("given");
+        return Err(f.bad(e, format!("must be at least h = {h}")));
+    }
+    if s.rtol == Some(0.0)
+        && s.atol == Some(0.0)
+        && let Some(e) = f.entry("atol")
+    {
+        return Err(f.bad(e, "rtol and atol cannot both be 0"));
     }
     Ok(())
 }

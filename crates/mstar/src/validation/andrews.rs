@@ -13,7 +13,7 @@ pub(super) const CASE: Case = Case {
 };
 
 /// The test set's `β, Θ, γ, Φ, δ, Ω, ε` at t = 0.03 s.
-const REFERENCE: [(&str, f64); 7] = [
+pub const REFERENCE: [(&str, f64); 7] = [
     ("β", 0.158_107_711_962_990_4e2),
     ("Θ", -0.157_563_710_598_429_8e2),
     ("γ", 0.408_222_401_307_310_1e-1),
@@ -22,6 +22,22 @@ const REFERENCE: [(&str, f64); 7] = [
     ("Ω", 0.534_730_116_322_694_8),
     ("ε", 0.104_808_074_104_226_3e1),
 ];
+
+/// The test set's angles `β, Θ, γ, Φ, δ, Ω, ε` from the bodies' absolute
+/// angles K1 … K7 of `models/andrews.toml`: K1 β, K2 β + Θ, K3 γ, K4 Φ + δ,
+/// K5 δ, K6 Ω + ε, K7 ε (the model file's header).
+#[must_use]
+pub fn angles(a: [f64; 7]) -> [f64; 7] {
+    [
+        a[0],
+        a[1] - a[0],
+        a[2],
+        a[3] - a[4],
+        a[4],
+        a[5] - a[6],
+        a[6],
+    ]
+}
 
 fn andrews(models: &Path, _: Level) -> Result<Vec<Row>, String> {
     // One level: the file's h = 1e-6 s runs in under a second.
@@ -40,18 +56,7 @@ fn andrews(models: &Path, _: Level) -> Result<Vec<Row>, String> {
     if (last.t - 0.03).abs() > 1e-12 {
         return Err(format!("andrews.toml ends at t = {}, not 0.03", last.t));
     }
-    // The bodies' angles are the absolute ones: K1 β, K2 β + Θ, K3 γ,
-    // K4 Φ + δ, K5 δ, K6 Ω + ε, K7 ε (the model file's header).
-    let a = theta.map(|i| last.u[i]);
-    let ours = [
-        a[0],
-        a[1] - a[0],
-        a[2],
-        a[3] - a[4],
-        a[4],
-        a[5] - a[6],
-        a[6],
-    ];
+    let ours = angles(theta.map(|i| last.u[i]));
     Ok(REFERENCE
         .iter()
         .zip(ours)

@@ -9,7 +9,7 @@
 //! come from the method (second order: errors fall by 4 when `h` halves) or
 //! from the source (the test set's digits, the benchmark's threshold).
 
-mod andrews;
+pub mod andrews;
 mod crank_and_spring;
 mod n_four_bar;
 mod order;

@@ -32,6 +32,8 @@ pub(super) struct Estimate {
     /// The coordinate where the truncation ratio is largest (`None` when the
     /// converged constraint violation dominates: a loose Newton tolerance).
     pub coordinate: Option<usize>,
+    /// The converged `‖Φ‖∞` over the tolerance.
+    pub newton: f64,
 }
 
 /// The PI controller's exponents for a local error `O(h³)` (Gustafsson's
@@ -132,6 +134,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             } else {
                 truncation.1
             },
+            newton,
         }
     }
 

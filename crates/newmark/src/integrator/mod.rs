@@ -493,6 +493,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         st.t = self.t;
         st.error
             .record(estimate.ratio, self.t, h, estimate.coordinate);
+        st.error.record_newton(estimate.newton);
         self.h_last = h;
         if self.config.error.mode == StepMode::Adaptive {
             self.adapt(h, &estimate);

@@ -1,0 +1,105 @@
+//! The local error estimate on the command line: a fixed step too large for
+//! the tolerance (or a Newton tolerance too loose) no longer exits 0 in
+//! silence; the warning's advice works on the case that triggers it, and
+//! `--strict` turns it into an error that keeps the samples.
+
+mod common;
+
+use common::{model, mstar, scratch, text};
+
+/// Runs `mstar args`; returns (exit code, standard error).
+fn run(args: &[&str]) -> (Option<i32>, String) {
+    let out = mstar(args);
+    (out.status.code(), text(&out.stderr))
+}
+
+/// The value after `option` in a warning (`--h 0.0832 …` → "0.0832").
+fn advised(stderr: &str, option: &str) -> Option<String> {
+    let line = stderr.lines().find(|l| l.starts_with("warning: the"))?;
+    let key = format!("with {option} ");
+    let rest = &line[line.find(&key)? + key.len()..];
+    Some(rest.split([' ', ',', ')']).next()?.to_string())
+}
+
+/// Follows the `--h` advice of `args`' warning until no warning is left;
+/// returns how many reruns that took (at most `limit`).
+fn follow_h_advice(args: &[&str], limit: usize) -> usize {
+    let (code, mut stderr) = run(args);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(
+        stderr.contains("warning: the estimated local error"),
+        "{args:?}: {stderr}"
+    );
+    for rerun in 1..=limit {
+        let h = advised(&stderr, "--h").unwrap_or_else(|| panic!("no --h advice: {stderr}"));
+        let mut again: Vec<&str> = args.to_vec();
+        let at = again.iter().position(|a| *a == "--h").expect("--h given");
+        again[at + 1] = &h;
+        let (code, next) = run(&again);
+        assert_eq!(code, Some(0), "{next}");
+        if !next.contains("warning: the estimated") {
+            return rerun;
+        }
+        stderr = next;
+    }
+    panic!("{args:?}: still a warning after {limit} reruns: {stderr}");
+}
+
+#[test]
+fn a_step_too_large_warns_and_its_advice_works() {
+    // Moderately beyond the tolerance: one rerun at the advised h.
+    assert_eq!(follow_h_advice(&["pendulum", "--h", "0.03"], 1), 1);
+    // Far beyond (the reproductions): the advice says to check again.
+    let (_, stderr) = run(&["pendulum", "--h", "2"]);
+    assert!(stderr.contains("or smaller"), "{stderr}");
+    assert!(follow_h_advice(&["pendulum", "--h", "2"], 2) <= 2);
+    assert!(follow_h_advice(&["chain", "--links", "3", "--h", "10"], 3) <= 3);
+    // --adaptive, the other advice.
+    for args in [
+        &["pendulum", "--h", "2", "--adaptive"][..],
+        &["chain", "--links", "3", "--h", "10", "--adaptive"],
+    ] {
+        let (code, stderr) = run(args);
+        assert_eq!(code, Some(0), "{stderr}");
+        assert!(!stderr.contains("warning"), "{args:?}: {stderr}");
+    }
+}
+
+#[test]
+fn a_loose_newton_tolerance_is_named_and_the_advised_one_works() {
+    let (code, stderr) = run(&["pendulum", "--tol", "0.1"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(stderr.contains("constraint violation"), "{stderr}");
+    let tol = advised(&stderr, "--tol").unwrap_or_else(|| panic!("no --tol advice: {stderr}"));
+    let (code, stderr) = run(&["pendulum", "--tol", &tol]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(!stderr.contains("warning"), "--tol {tol}: {stderr}");
+}
+
+#[test]
+fn strict_is_an_error_that_keeps_the_samples() {
+    let dir = scratch("strict");
+    let out = dir.join("p.csv");
+    let out_arg = out.display().to_string();
+    let (code, stderr) = run(&["pendulum", "--h", "0.1", "--strict", "--out", &out_arg]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.contains("exceeds the tolerance"), "{stderr}");
+    assert!(!out.exists());
+    let partial = std::fs::read_to_string(dir.join("p.partial.csv")).expect("the partial file");
+    assert!(
+        partial.lines().count() >= 2,
+        "header and the initial state at least"
+    );
+    // A model file: the same warning, and the same options.
+    let pendulum = model("pendulum.toml");
+    let (code, stderr) = run(&["run", &pendulum, "--h", "0.05"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(
+        stderr.contains("warning: the estimated local error"),
+        "{stderr}"
+    );
+    let (code, stderr) = run(&["run", &pendulum, "--h", "0.05", "--adaptive"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(!stderr.contains("warning"), "{stderr}");
+    let _ = std::fs::remove_dir_all(dir);
+}
