@@ -72,8 +72,11 @@ struct Problem<'a> {
     hs: Vec<f64>,
     h_adaptive: f64,
     /// The error of the final coordinates.
-    error: Box<dyn Fn(&[f64]) -> f64 + 'a>,
+    error: ErrorOf<'a>,
 }
+
+/// The error of a run from its final coordinates.
+type ErrorOf<'a> = Box<dyn Fn(&[f64]) -> f64 + 'a>;
 
 /// One run: error, CPU time (s), accepted and rejected steps.
 #[derive(Clone, Copy, Debug)]
