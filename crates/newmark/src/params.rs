@@ -183,11 +183,10 @@ pub enum Start {
 pub enum Newton {
     /// Refactor the iteration matrix at every iteration. With the Schur
     /// backend one iteration per step meets the tolerance and it is the
-    /// fastest variant on chains (docs/performance.md), but step control has
-    /// no local error estimate, and cheap converged steps let `h` regrow into
-    /// motion it does not resolve: random chains that whip can then blow up
-    /// (`crates/mstar/tests/random_chains.rs` finds such cases), which the
-    /// modified variant's more cautious iterations avoid.
+    /// fastest variant on chains (docs/performance.md; the default of
+    /// `mstar chain`). A motion too fast for `h` (a whip) converges in one
+    /// iteration as readily as a resolved one: the local error estimate
+    /// ([`ErrorControl`]) is what reports it, for either variant.
     Full,
     /// Keep the factorization across iterations and steps while the observed
     /// contraction rate `‖Δu_k‖/‖Δu_{k−1}‖` stays below `max_rate`; refactor when it
