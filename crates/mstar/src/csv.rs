@@ -334,6 +334,14 @@ impl CsvStream {
         }
     }
 
+    /// Hands the buffered rows to the target now; `false` when a write has
+    /// failed (then [`keep_partial`](Self::keep_partial) keeps what got
+    /// through).
+    pub fn write_pending(&mut self) -> bool {
+        self.flush_buffer();
+        self.error.is_none()
+    }
+
     /// Whether a write has failed (the run should stop: later rows are lost).
     #[must_use]
     pub fn failed(&self) -> bool {

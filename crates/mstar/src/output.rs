@@ -109,8 +109,14 @@ pub fn conclude(
     ended: Result<(), Stop>,
     t: f64,
 ) -> anyhow::Result<()> {
-    let (Some(stream), Some(out)) = (stream, out) else {
+    let (Some(mut stream), Some(out)) = (stream, out) else {
         return ended.map_err(|stop| cause(stop, None, t));
+    };
+    // The last rows may still fail (a disk that fills at the end): then the
+    // rows that got through are kept as for a write error during the run.
+    let ended = match ended {
+        Ok(()) if !stream.write_pending() => Err(Stop::Write),
+        other => other,
     };
     let stop = match ended {
         Ok(()) => {

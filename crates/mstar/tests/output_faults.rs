@@ -326,15 +326,15 @@ fn a_file_size_limit_is_an_error_and_whole_rows_are_kept() {
     assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
 }
 
-/// A 1 MiB tmpfs at `dir/small` (root only), unmounted on drop.
+/// A tmpfs of `size` at `dir/<size>` (root only), unmounted on drop.
 struct Tmpfs(PathBuf);
 
 impl Tmpfs {
-    fn mount(dir: &Path) -> Option<Self> {
-        let at = dir.join("small");
+    fn mount(dir: &Path, size: &str) -> Option<Self> {
+        let at = dir.join(size);
         std::fs::create_dir_all(&at).ok()?;
         let ok = Command::new("mount")
-            .args(["-t", "tmpfs", "-o", "size=1m", "tmpfs"])
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
             .arg(&at)
             .stderr(Stdio::null())
             .status()
@@ -352,7 +352,7 @@ impl Drop for Tmpfs {
 #[test]
 fn a_full_disk_is_an_error_and_an_oversized_run_is_refused() {
     let dir = scratch("faults-tmpfs");
-    let Some(fs) = Tmpfs::mount(&dir) else {
+    let Some(fs) = Tmpfs::mount(&dir, "1m") else {
         eprintln!("skipped: cannot mount a tmpfs here (not root, or no CAP_SYS_ADMIN)");
         return;
     };
@@ -386,6 +386,26 @@ fn a_full_disk_is_an_error_and_an_oversized_run_is_refused() {
         .unwrap_or_default();
     let ok = mstar(&["pendulum", "--t-end", t_end, "--out", &path(&out)]);
     assert!(ok.status.success(), "--t-end {t_end}: {}", text(&ok.stderr));
+}
+
+#[test]
+fn a_disk_that_fills_at_the_last_rows_keeps_them() {
+    let dir = scratch("faults-tmpfs-end");
+    let Some(fs) = Tmpfs::mount(&dir, "32k") else {
+        eprintln!("skipped: cannot mount a tmpfs here (not root, or no CAP_SYS_ADMIN)");
+        return;
+    };
+    // About 37 kB of rows, fewer than the program holds before writing:
+    // the disk fills when the run has ended.
+    let out = fs.0.join("end.csv");
+    let run = mstar(&["pendulum", "--t-end", "1.3", "--out", &path(&out)]);
+    let err = text(&run.stderr);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("No space left on device"), "{err}");
+    let partial = fs.0.join("end.partial.csv");
+    let (n, _) = rows(&std::fs::read_to_string(&partial).expect("kept"));
+    assert!(n > 50 && err.contains(&path(&partial)), "{n}: {err}");
+    assert!(!out.exists() && temporaries(&fs.0).is_empty());
 }
 
 #[test]
