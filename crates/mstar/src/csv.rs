@@ -1,8 +1,8 @@
 //! CSV output with one column scheme for every model, written atomically.
 
 use std::fmt::Write as _;
-use std::io::Write as _;
-use std::path::Path;
+use std::io::{self, Write as _};
+use std::path::{Path, PathBuf};
 
 use mstar_model::{Sample, SampleRef, System, coord_names};
 use mstar_newmark::Observer;
@@ -97,25 +97,167 @@ pub fn to_csv<S: System + ?Sized>(sys: &S, samples: &[Sample]) -> String {
     out
 }
 
-/// A CSV file written sample by sample (for runs too large to keep in memory),
-/// complete or not at all: rows go to a temporary file beside the target, which
-/// [`CsvStream::finish`] renames into place; dropped unfinished, the temporary
-/// file is removed.
+/// Where an output file goes, by what its path names now.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Target {
+    /// A new path or a regular file (the file a symbolic link names, for a
+    /// link to one): written to a hidden temporary file beside it and renamed
+    /// over it at the end, so that it is complete or untouched.
+    Replace(PathBuf),
+    /// Standard output: `-` or `/dev/stdout`.
+    Stdout,
+    /// Anything else that exists (a device such as `/dev/null`, a FIFO, a
+    /// socket): written directly, never replaced.
+    Direct,
+}
+
+/// How `path` is to be written (see [`Target`]).
+///
+/// # Errors
+/// A directory (with a file name to use instead), or a path whose kind
+/// cannot be read (permissions), with the path in the message.
+pub fn target(path: &Path) -> io::Result<Target> {
+    if path.as_os_str() == "-" || path == Path::new("/dev/stdout") {
+        return Ok(Target::Stdout);
+    }
+    let kind = match std::fs::symlink_metadata(path) {
+        Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(Target::Replace(path.into())),
+        Err(e) => return Err(described(path, e)),
+        Ok(m) => m.file_type(),
+    };
+    if kind.is_file() {
+        return Ok(Target::Replace(path.into()));
+    }
+    if kind.is_symlink() {
+        // Replace the file a link names (keeping the link), unless it leads
+        // into /dev or /proc (`/dev/stderr`, `/proc/self/fd/1`): those are
+        // written through the link.
+        return match (std::fs::canonicalize(path), std::fs::metadata(path)) {
+            (Ok(real), Ok(m))
+                if m.is_file()
+                    && !["/dev", "/proc"]
+                        .iter()
+                        .any(|d| path.starts_with(d) || real.starts_with(d)) =>
+            {
+                Ok(Target::Replace(real))
+            }
+            (_, Ok(m)) if m.is_dir() => Err(directory(path)),
+            _ => Ok(Target::Direct),
+        };
+    }
+    if kind.is_dir() {
+        return Err(directory(path));
+    }
+    Ok(Target::Direct)
+}
+
+/// The error for an output path that names a directory, with a file to name
+/// instead.
+fn directory(path: &Path) -> io::Error {
+    io::Error::new(
+        io::ErrorKind::IsADirectory,
+        format!(
+            "could not write {}: it is a directory; name a file in it, e.g. {}",
+            path.display(),
+            path.join("run.csv").display()
+        ),
+    )
+}
+
+/// `e` with the output's name in front.
+fn described(path: &Path, e: io::Error) -> io::Error {
+    io::Error::new(e.kind(), format!("could not write {}: {e}", display(path)))
+}
+
+/// An output path for messages: `-` is standard output.
+#[must_use]
+pub fn display(path: &Path) -> String {
+    if path.as_os_str() == "-" {
+        "standard output".to_string()
+    } else {
+        path.display().to_string()
+    }
+}
+
+/// Rows are handed to the target in chunks of about this many bytes: whole
+/// rows, so that a failed write leaves the file at a row boundary.
+const CHUNK: usize = 1 << 16;
+
+/// A CSV file written sample by sample (for runs too large to keep in
+/// memory). A regular file is complete or not at all: rows go to a hidden
+/// temporary file beside the target (`.<name>.<pid>.tmp`), which
+/// [`finish`](Self::finish) renames into place, and which is removed when the
+/// stream is dropped unfinished; [`keep_partial`](Self::keep_partial) keeps
+/// the rows written so far under another name instead. Devices, FIFOs and
+/// standard output are written directly (see [`Target`]).
+///
+/// The first I/O error is kept: [`failed`](Self::failed) tells a run to stop,
+/// and every later row is dropped.
 #[derive(Debug)]
 pub struct CsvStream {
-    path: std::path::PathBuf,
-    tmp: std::path::PathBuf,
-    file: Option<std::io::BufWriter<std::fs::File>>,
+    path: PathBuf,
+    sink: Option<Sink>,
     line: String,
-    error: Option<std::io::Error>,
+    /// Whole rows not yet handed to the target.
+    buffer: Vec<u8>,
+    buffered_rows: usize,
+    /// Rows pushed, and rows (and their bytes, the header included) that
+    /// reached the target.
+    rows: usize,
+    rows_out: usize,
+    bytes_out: u64,
+    error: Option<io::Error>,
+    removed: Vec<PathBuf>,
+}
+
+/// Where a [`CsvStream`]'s bytes go.
+enum Sink {
+    Temporary {
+        file: std::fs::File,
+        tmp: PathBuf,
+        target: PathBuf,
+    },
+    Direct(Box<dyn io::Write>),
+}
+
+impl std::fmt::Debug for Sink {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Temporary { tmp, target, .. } => f
+                .debug_struct("Temporary")
+                .field("tmp", tmp)
+                .field("target", target)
+                .finish_non_exhaustive(),
+            Self::Direct(_) => f.write_str("Direct"),
+        }
+    }
+}
+
+/// What [`CsvStream::keep_partial`] kept.
+#[derive(Debug)]
+pub enum Kept {
+    /// The rows that reached the disk, under the partial file's name.
+    File {
+        /// The partial file.
+        path: PathBuf,
+        /// Its rows (after the header).
+        rows: usize,
+    },
+    /// The rows went straight to a device, a FIFO or standard output.
+    Streamed {
+        /// How many reached it.
+        rows: usize,
+    },
+    /// Nothing could be kept: why.
+    Nothing(io::Error),
 }
 
 impl CsvStream {
-    /// Creates the temporary file and writes the header.
+    /// Opens the output (see [`Target`]) and writes the header.
     ///
     /// # Errors
     /// Any I/O error, with the path in the message.
-    pub fn create<S: System + ?Sized>(path: &Path, sys: &S) -> std::io::Result<Self> {
+    pub fn create<S: System + ?Sized>(path: &Path, sys: &S) -> io::Result<Self> {
         Self::create_with(path, sys, &[])
     }
 
@@ -128,72 +270,196 @@ impl CsvStream {
         path: &Path,
         sys: &S,
         extra: &[String],
-    ) -> std::io::Result<Self> {
-        let tmp = temporary_path(path);
-        let with_path = |e: std::io::Error| {
-            std::io::Error::new(e.kind(), format!("could not write {}: {e}", path.display()))
+    ) -> io::Result<Self> {
+        let mut removed = Vec::new();
+        let sink = match target(path)? {
+            Target::Replace(target) => {
+                removed = remove_leftovers(&target);
+                let tmp = temporary_path(&target);
+                let file = std::fs::File::create(&tmp).map_err(|e| described(path, e))?;
+                // A replaced file keeps its permissions.
+                if let Ok(m) = std::fs::metadata(&target) {
+                    let _ = file.set_permissions(m.permissions());
+                }
+                Sink::Temporary { file, tmp, target }
+            }
+            Target::Stdout => Sink::Direct(Box::new(io::stdout())),
+            Target::Direct => Sink::Direct(Box::new(
+                std::fs::File::create(path).map_err(|e| described(path, e))?,
+            )),
         };
-        let mut file = std::io::BufWriter::new(std::fs::File::create(&tmp).map_err(with_path)?);
         let mut names = header(sys);
         names.extend_from_slice(extra);
         let mut line = join_fields(&names);
         line.push('\n');
-        file.write_all(line.as_bytes()).map_err(with_path)?;
         Ok(Self {
             path: path.to_path_buf(),
-            tmp,
-            file: Some(file),
+            sink: Some(sink),
+            buffer: line.clone().into_bytes(),
             line,
+            buffered_rows: 0,
+            rows: 0,
+            rows_out: 0,
+            bytes_out: 0,
             error: None,
+            removed,
         })
     }
 
-    /// Appends a sample (the first I/O error is kept and reported by `finish`).
+    /// Temporary files of earlier runs on the same target that were killed
+    /// before they could clean up, removed by [`create`](Self::create).
+    #[must_use]
+    pub fn removed_leftovers(&self) -> &[PathBuf] {
+        &self.removed
+    }
+
+    /// Appends a sample.
     pub fn push(&mut self, s: &SampleRef<'_>) {
         self.push_with(s, &[]);
     }
 
-    /// Appends a sample and the values of the extra columns.
+    /// Appends a sample and the values of the extra columns (nothing once a
+    /// write has failed).
     pub fn push_with(&mut self, s: &SampleRef<'_>, extra: &[f64]) {
         if self.error.is_some() {
             return;
         }
         self.line.clear();
         row(&mut self.line, s, extra);
-        if let Some(f) = self.file.as_mut()
-            && let Err(e) = f.write_all(self.line.as_bytes())
-        {
-            self.error = Some(e);
+        self.buffer.extend_from_slice(self.line.as_bytes());
+        self.rows += 1;
+        self.buffered_rows += 1;
+        if self.buffer.len() >= CHUNK {
+            self.flush_buffer();
         }
     }
 
-    /// Flushes and renames the file into place.
-    ///
-    /// # Errors
-    /// The first I/O error of the whole stream, with the path; the target is
-    /// then untouched.
-    pub fn finish(self) -> std::io::Result<()> {
-        let path = self.path.clone();
-        self.finish_as(&path)
+    /// Hands the buffered rows to the target now; `false` when a write has
+    /// failed (then [`keep_partial`](Self::keep_partial) keeps what got
+    /// through).
+    pub fn write_pending(&mut self) -> bool {
+        self.flush_buffer();
+        self.error.is_none()
     }
 
-    /// Flushes and renames the file to `path` instead of the target (e.g.
-    /// `<name>.partial.csv` when a run fails).
+    /// Whether a write has failed (the run should stop: later rows are lost).
+    #[must_use]
+    pub fn failed(&self) -> bool {
+        self.error.is_some()
+    }
+
+    /// The rows pushed so far (after the header).
+    #[must_use]
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Hands the buffered rows to the target; on an error, keeps it.
+    fn flush_buffer(&mut self) {
+        if self.error.is_some() || self.buffer.is_empty() {
+            return;
+        }
+        let (done, result) = match self.sink.as_mut() {
+            Some(Sink::Temporary { file, .. }) => write_counted(file, &self.buffer),
+            Some(Sink::Direct(w)) => match write_counted(w, &self.buffer) {
+                (done, Ok(())) => (done, w.flush()),
+                failed => failed,
+            },
+            None => (self.buffer.len(), Ok(())),
+        };
+        match result {
+            Ok(()) => {
+                self.bytes_out += self.buffer.len() as u64;
+                self.rows_out += self.buffered_rows;
+            }
+            Err(e) => {
+                // The whole rows that got through (a full disk takes part
+                // of a chunk): the partial file ends after them.
+                let cut = self.buffer[..done]
+                    .iter()
+                    .rposition(|&b| b == b'\n')
+                    .map_or(0, |i| i + 1);
+                let lines = self.buffer[..cut].iter().filter(|&&b| b == b'\n').count();
+                let header = usize::from(self.bytes_out == 0 && cut > 0);
+                self.rows_out += lines - header;
+                self.bytes_out += cut as u64;
+                self.error = Some(e);
+            }
+        }
+        self.buffer.clear();
+        self.buffered_rows = 0;
+    }
+
+    /// Writes what is left and renames the file into place; returns the rows
+    /// written (after the header).
     ///
     /// # Errors
-    /// As [`finish`](Self::finish).
-    pub fn finish_as(mut self, path: &Path) -> std::io::Result<()> {
-        let result = match (self.error.take(), self.file.take()) {
-            (Some(e), _) => Err(e),
-            (None, Some(mut f)) => f
-                .flush()
-                .and_then(|()| f.get_ref().sync_all())
-                .and_then(|()| std::fs::rename(&self.tmp, path)),
-            (None, None) => Ok(()),
-        };
-        result.map_err(|e| {
-            std::io::Error::new(e.kind(), format!("could not write {}: {e}", path.display()))
-        })
+    /// The first I/O error of the whole stream, with the path; a replaced
+    /// file is then untouched.
+    pub fn finish(mut self) -> io::Result<usize> {
+        self.flush_buffer();
+        if let Some(e) = self.error.take() {
+            return Err(described(&self.path, e));
+        }
+        match self.sink.take() {
+            Some(Sink::Temporary { file, tmp, target }) => {
+                let done = file
+                    .sync_all()
+                    .and_then(|()| std::fs::rename(&tmp, &target));
+                if let Err(e) = done {
+                    let _ = std::fs::remove_file(&tmp);
+                    return Err(described(&self.path, e));
+                }
+            }
+            Some(Sink::Direct(mut w)) => w.flush().map_err(|e| described(&self.path, e))?,
+            None => {}
+        }
+        Ok(self.rows)
+    }
+
+    /// Keeps the rows that reached the disk (or as many whole rows as a full
+    /// disk let through) as `partial` instead of the target: for a run that
+    /// stopped before its end. A device, FIFO or standard output has had the
+    /// rows as they came.
+    pub fn keep_partial(mut self, partial: &Path) -> Kept {
+        self.flush_buffer();
+        match self.sink.take() {
+            Some(Sink::Temporary { file, tmp, .. }) => {
+                // A failed write may have left part of a chunk: cut it off.
+                let kept = if self.bytes_out == 0 {
+                    Err(io::Error::other("not even the header reached the disk"))
+                } else {
+                    file.set_len(self.bytes_out)
+                        .and_then(|()| file.sync_all())
+                        .and_then(|()| std::fs::rename(&tmp, partial))
+                };
+                match kept {
+                    Ok(()) => Kept::File {
+                        path: partial.to_path_buf(),
+                        rows: self.rows_out,
+                    },
+                    Err(e) => {
+                        let _ = std::fs::remove_file(&tmp);
+                        Kept::Nothing(described(partial, e))
+                    }
+                }
+            }
+            Some(Sink::Direct(mut w)) => {
+                let _ = w.flush();
+                Kept::Streamed {
+                    rows: self.rows_out,
+                }
+            }
+            None => Kept::Streamed { rows: 0 },
+        }
+    }
+
+    /// The first write error, with the path, if any.
+    #[must_use]
+    pub fn error(&self) -> Option<io::Error> {
+        self.error
+            .as_ref()
+            .map(|e| described(&self.path, io::Error::new(e.kind(), e.to_string())))
     }
 }
 
@@ -206,56 +472,127 @@ impl Observer for CsvStream {
 
 impl Drop for CsvStream {
     fn drop(&mut self) {
-        if self.file.take().is_some() || self.error.is_some() {
-            let _ = std::fs::remove_file(&self.tmp);
+        if let Some(Sink::Temporary { tmp, .. }) = self.sink.take() {
+            let _ = std::fs::remove_file(&tmp);
         }
     }
 }
 
-fn temporary_path(path: &Path) -> std::path::PathBuf {
+/// Writes `buf` as `write_all` does, and tells how many bytes got through
+/// when it fails.
+fn write_counted(w: &mut dyn io::Write, buf: &[u8]) -> (usize, io::Result<()>) {
+    let mut done = 0;
+    while done < buf.len() {
+        match w.write(&buf[done..]) {
+            Ok(0) => return (done, Err(io::ErrorKind::WriteZero.into())),
+            Ok(n) => done += n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return (done, Err(e)),
+        }
+    }
+    (done, Ok(()))
+}
+
+/// The temporary file beside `path`: `.<name>.<pid>.tmp`, hidden, and
+/// recognisable by [`remove_leftovers`] when a killed run leaves it behind.
+fn temporary_path(path: &Path) -> PathBuf {
+    let (dir, name) = dir_and_name(path);
+    dir.join(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+fn dir_and_name(path: &Path) -> (PathBuf, String) {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => std::path::PathBuf::from("."),
+        _ => PathBuf::from("."),
     };
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "output".into());
-    dir.join(format!(".{name}.{}.tmp", std::process::id()))
+    (dir, name)
 }
 
-/// Writes `contents` to `path` completely or not at all: to a temporary file in
-/// the same directory first, then renamed over `path`.
+/// Removes the temporary files of `path` that runs killed outright
+/// (`kill -9`, a power cut) left behind: `.<name>.<pid>.tmp` beside it whose
+/// process no longer exists. Returns what it removed. Where the processes
+/// cannot be listed (no `/proc`), nothing is removed.
+pub fn remove_leftovers(path: &Path) -> Vec<PathBuf> {
+    let proc = Path::new("/proc");
+    if !proc.join("self").exists() {
+        return Vec::new();
+    }
+    let (dir, name) = dir_and_name(path);
+    let prefix = format!(".{name}.");
+    let Ok(entries) = std::fs::read_dir(&dir) else {
+        return Vec::new();
+    };
+    let mut removed = Vec::new();
+    for entry in entries.flatten() {
+        let file = entry.file_name().to_string_lossy().into_owned();
+        let Some(pid) = file
+            .strip_prefix(&prefix)
+            .and_then(|rest| rest.strip_suffix(".tmp"))
+        else {
+            continue;
+        };
+        let is_pid = !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit());
+        let regular = entry.file_type().is_ok_and(|t| t.is_file());
+        if is_pid && regular && pid != std::process::id().to_string() && !proc.join(pid).exists() {
+            let leftover = dir.join(&file);
+            if std::fs::remove_file(&leftover).is_ok() {
+                removed.push(leftover);
+            }
+        }
+    }
+    removed
+}
+
+/// Writes `contents` to `path`: a new path or a regular file completely or
+/// not at all (to a temporary file in the same directory first, then renamed
+/// over `path`); a device, FIFO or standard output directly (see [`Target`]).
 ///
 /// # Errors
-/// Any I/O error, with the path in the message; `path` is then untouched.
-pub fn write_atomically(path: &Path, contents: &[u8]) -> std::io::Result<()> {
-    let tmp = temporary_path(path);
+/// Any I/O error, with the path in the message; a regular file is then
+/// untouched.
+pub fn write_atomically(path: &Path, contents: &[u8]) -> io::Result<()> {
+    let target = match target(path)? {
+        Target::Replace(target) => target,
+        Target::Stdout => {
+            let mut out = io::stdout().lock();
+            return out
+                .write_all(contents)
+                .and_then(|()| out.flush())
+                .map_err(|e| described(path, e));
+        }
+        Target::Direct => {
+            return std::fs::File::create(path)
+                .and_then(|mut f| f.write_all(contents))
+                .map_err(|e| described(path, e));
+        }
+    };
+    remove_leftovers(&target);
+    let tmp = temporary_path(&target);
     let result = (|| {
         let mut f = std::fs::File::create(&tmp)?;
+        if let Ok(m) = std::fs::metadata(&target) {
+            let _ = f.set_permissions(m.permissions());
+        }
         f.write_all(contents)?;
         f.sync_all()?;
-        std::fs::rename(&tmp, path)
+        std::fs::rename(&tmp, &target)
     })();
     if let Err(e) = result {
         let _ = std::fs::remove_file(&tmp);
-        return Err(std::io::Error::new(
-            e.kind(),
-            format!("could not write {}: {e}", path.display()),
-        ));
+        return Err(described(path, e));
     }
     Ok(())
 }
 
-/// Writes the samples as CSV to `path`, atomically (see [`write_atomically`]).
+/// Writes the samples as CSV to `path` (see [`write_atomically`]).
 ///
 /// # Errors
 /// Any I/O error, with the path in the message.
-pub fn write_csv<S: System + ?Sized>(
-    path: &Path,
-    sys: &S,
-    samples: &[Sample],
-) -> std::io::Result<()> {
+pub fn write_csv<S: System + ?Sized>(path: &Path, sys: &S, samples: &[Sample]) -> io::Result<()> {
     write_atomically(path, to_csv(sys, samples).as_bytes())
 }
 

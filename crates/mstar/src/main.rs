@@ -1,7 +1,30 @@
 //! The `mstar` command-line program.
 
+/// Report lines for the whole program (see `output::say`): a closed pipe
+/// (`mstar chain | head -1`) loses them quietly instead of panicking as the
+/// standard `println!` does. Defined before the modules to cover them.
+macro_rules! println {
+    () => {
+        $crate::output::say(format_args!(""))
+    };
+    ($($arg:tt)*) => {
+        $crate::output::say(format_args!($($arg)*))
+    };
+}
+
+/// `eprintln!` that never panics (see `output::note`).
+macro_rules! eprintln {
+    ($($arg:tt)*) => {
+        $crate::output::note(format_args!($($arg)*))
+    };
+}
+
 mod animate;
+mod limits;
 mod model_commands;
+mod output;
+mod signals;
+mod summary;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -11,10 +34,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use mstar::kkt::Backend;
 use mstar::pendulum::PendulumRun;
-use mstar::{
-    Config, IntegrationError, Newton, Observer, Sample, SampleRef, Scheme, Start, StepMode, System,
-    csv,
-};
+use mstar::{Config, IntegrationError, Newton, Scheme, Start, StepMode, System, csv};
 
 /// mstar: time integration of constrained multibody systems (index-3 DAEs
 /// M ü + Bᵀλ = g, Φ(u, t) = 0) with Newmark / HHT-α / generalized-α and
@@ -234,6 +254,20 @@ struct PendulumArgs {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let integrates = matches!(
+        cli.command,
+        Command::Run(_) | Command::Pendulum(_) | Command::Chain(_)
+    );
+    signals::install(integrates);
+    let out = match &cli.command {
+        Command::Run(args) => args.out.as_deref(),
+        Command::Pendulum(args) => args.out.as_deref(),
+        Command::Chain(args) => args.out.as_deref(),
+        _ => None,
+    };
+    if output::is_stdout(out) {
+        output::report_on_stderr();
+    }
     let result = match cli.command {
         Command::Run(args) => return model_commands::run(&args),
         Command::Check(args) => return model_commands::check(&args),
@@ -241,19 +275,7 @@ fn main() -> ExitCode {
         Command::Pendulum(args) => pendulum(&args),
         Command::Chain(args) => chain(&args),
     };
-    match result {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            if let Some(hint) = e
-                .downcast_ref::<IntegrationError>()
-                .and_then(|e| hint(e, false))
-            {
-                eprintln!("hint: {hint}");
-            }
-            ExitCode::FAILURE
-        }
-    }
+    ExitCode::from(output::exit_code(result, false, 1))
 }
 
 /// "the sample" or "the n samples".
@@ -471,75 +493,131 @@ fn describe(run: &PendulumRun) -> String {
     )
 }
 
-fn partial_path(out: &Path) -> PathBuf {
-    let stem = out
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    out.with_file_name(format!("{stem}.partial.csv"))
+/// Refuses an output that would not fit on its file system (`every`: the
+/// `--set output.every` of `mstar run`, for the advice).
+fn check_output(
+    out: Option<&Path>,
+    fields: usize,
+    (t_end, h): (f64, f64),
+    every: Option<usize>,
+) -> Result<()> {
+    let Some(path) = out else {
+        return Ok(());
+    };
+    let rows = t_end / h / every.unwrap_or(1) as f64 + 1.0;
+    let o = limits::Output {
+        path,
+        rows,
+        fields,
+        t_end,
+        h,
+        every,
+    };
+    limits::check_output(&o, limits::free_space(path))
+}
+
+/// Opens the CSV output, if any, and says which leftovers of killed runs it
+/// removed.
+pub(crate) fn open_output<S: System + ?Sized>(
+    out: Option<&Path>,
+    sys: &S,
+    extra: &[String],
+) -> Result<Option<csv::CsvStream>> {
+    let Some(path) = out else {
+        return Ok(None);
+    };
+    let stream = csv::CsvStream::create_with(path, sys, extra)?;
+    for leftover in stream.removed_leftovers() {
+        eprintln!(
+            "note: removed {}, left by an earlier run that was killed",
+            leftover.display()
+        );
+    }
+    Ok(Some(stream))
 }
 
 fn pendulum(args: &PendulumArgs) -> Result<()> {
     let run = pendulum_run(args)?;
     let sys = run.system();
+    limits::check_steps(run.t_end, run.config.h)?;
+    let out = args.out.as_deref();
+    check_output(
+        out,
+        csv::header(&sys).len(),
+        (run.t_end, run.config.h),
+        None,
+    )?;
     if args.reference == Some(Reference::Rk4) {
-        let samples = run.reference_on_grid();
-        println!("RK4 reference (minimal coordinate θ): {}", describe(&run));
-        println!("samples: {}", samples.len());
-        if let Some(last) = samples.last() {
-            println!("θ(t_end) = {:.9} rad at t = {}", last.u[2], last.t);
-        }
-        if let Some(out) = &args.out {
-            csv::write_csv(out, &sys, &samples)?;
-            println!("wrote {}", out.display());
-        }
-        return Ok(());
+        return pendulum_reference(args, &run);
     }
+    let mut stream = open_output(out, &sys, &[])?;
     println!("{}", describe(&run));
+    let u0 = sys.position(&[run.theta0]);
+    let v0 = sys.velocity(&[run.theta0], &[run.omega0]);
     let clock = Instant::now();
-    let (samples, result) = run.run();
-    let wall = clock.elapsed();
-    summary(&samples);
-    match result {
-        Ok(stats) => {
-            println!(
-                "steps: {} accepted, {} rejected; Newton iterations: {} total, {:.2} per step, {} max; factorizations: {}",
-                stats.steps,
-                stats.rejected,
-                stats.iterations,
-                stats.iterations as f64 / stats.steps.max(1) as f64,
-                stats.max_iterations,
-                stats.factorizations
-            );
-            println!(
-                "wall time: {:.3} s ({:.2} µs per step)",
-                wall.as_secs_f64(),
-                wall.as_secs_f64() * 1e6 / stats.steps.max(1) as f64
-            );
-            if let Some(w) = mstar::accuracy::warning(&stats, &run.config, &|i| sys.coord_name(i)) {
-                eprintln!("{w}");
-            }
-            if let Some(out) = &args.out {
-                csv::write_csv(out, &sys, &samples)?;
-                println!("wrote {} ({} rows)", out.display(), samples.len());
-            }
-            Ok(())
+    let mut integ = mstar::Integrator::new(&sys, run.config.clone(), 0.0, &u0, &v0)?;
+    let mut summary = summary::Summary::new();
+    let ended = output::drive(&mut integ, run.t_end, &mut |integ| {
+        let s = integ.view();
+        summary.push(&s);
+        if let Some(stream) = stream.as_mut() {
+            stream.push(&s);
+            output::watch(stream);
         }
-        Err(e) => {
-            if let Some(out) = &args.out {
-                let partial = partial_path(out);
-                csv::write_csv(&partial, &sys, &samples)?;
-                eprintln!(
-                    "note: {} was not written; {} up to the failure {} in {}",
-                    out.display(),
-                    samples_phrase(samples.len()),
-                    if samples.len() == 1 { "is" } else { "are" },
-                    partial.display()
-                );
+    });
+    let wall = clock.elapsed();
+    summary.print();
+    if ended.is_ok() {
+        let stats = integ.stats();
+        println!(
+            "steps: {} accepted, {} rejected; Newton iterations: {} total, {:.2} per step, {} max; factorizations: {}",
+            stats.steps,
+            stats.rejected,
+            stats.iterations,
+            stats.iterations as f64 / stats.steps.max(1) as f64,
+            stats.max_iterations,
+            stats.factorizations
+        );
+        println!(
+            "wall time: {:.3} s ({:.2} µs per step)",
+            wall.as_secs_f64(),
+            wall.as_secs_f64() * 1e6 / stats.steps.max(1) as f64
+        );
+    }
+    // Also after a failure: the samples kept are as inaccurate as it says.
+    if let Some(w) = mstar::accuracy::warning(&integ.stats(), &run.config, &|i| sys.coord_name(i)) {
+        eprintln!("{w}");
+    }
+    output::conclude(stream, out, ended, integ.time())
+}
+
+/// `--reference rk4`: the RK4 solution on the grid `0, h, 2h, …, t_end` (the
+/// last step shortened), kept in memory, then written.
+fn pendulum_reference(args: &PendulumArgs, run: &PendulumRun) -> Result<()> {
+    limits::check_reference(run.t_end, run.config.h, limits::available_memory())?;
+    let sys = run.system();
+    let samples = run.reference_on_grid();
+    let mut stream = open_output(args.out.as_deref(), &sys, &[])?;
+    println!("RK4 reference (minimal coordinate θ): {}", describe(run));
+    println!("samples: {}", samples.len());
+    if let Some(last) = samples.last() {
+        println!("θ(t_end) = {:.9} rad at t = {}", last.u[2], last.t);
+    }
+    let mut ended = Ok(());
+    if let Some(stream) = stream.as_mut() {
+        for s in &samples {
+            if let Some(signal) = signals::received() {
+                ended = Err(output::Stop::Signal(signal));
+                break;
             }
-            Err(e.into())
+            stream.push(&s.view());
+            if stream.failed() {
+                ended = Err(output::Stop::Write);
+                break;
+            }
         }
     }
+    output::conclude(stream, args.out.as_deref(), ended, run.t_end)
 }
 
 /// The chain's configuration from the command line.
@@ -566,11 +644,17 @@ fn chain_config(args: &ChainArgs) -> Result<Config> {
 fn chain(args: &ChainArgs) -> Result<()> {
     let config = chain_config(args)?;
     let n = args.links;
+    limits::check_steps(args.t_end, config.h)?;
+    let dense = config.kkt.backend == Backend::DENSE;
+    limits::check_chain(n, dense, limits::available_memory())?;
     let clock = Instant::now();
     let sys = match args.kind {
         ChainKind::Bars => mstar::planar::bar_chain(n),
         ChainKind::Points => mstar::planar::point_mass_chain(n),
     };
+    let out = args.out.as_deref();
+    check_output(out, csv::header(&sys).len(), (args.t_end, config.h), None)?;
+    let mut stream = open_output(out, &sys, &[])?;
     println!(
         "{n}-link chain of {} ({} coordinates, {} constraints); h = {} s, t_end = {} s",
         match args.kind {
@@ -593,18 +677,33 @@ fn chain(args: &ChainArgs) -> Result<()> {
             Newton::Full => "full (a fresh Jacobian at every iteration)".to_string(),
         }
     );
-    let stream = args
-        .out
-        .as_deref()
-        .map(|p| csv::CsvStream::create(p, &sys))
-        .transpose()?;
     let clock = Instant::now();
-    let mut output = ChainOutput {
-        stream,
-        progress: Progress::new(args.t_end),
-    };
-    integ.run(args.t_end, &mut output)?;
-    let wall = clock.elapsed().as_secs_f64();
+    let mut progress = Progress::new(args.t_end);
+    // Without a file, the samples' energies are not evaluated (see
+    // `Observer::reads_energy`): the progress report reads only t.
+    let ended = output::drive(&mut integ, args.t_end, &mut |integ| {
+        if let Some(stream) = stream.as_mut() {
+            stream.push(&integ.view());
+            output::watch(stream);
+        }
+        progress.tick(integ.time());
+    });
+    if ended.is_ok() {
+        chain_summary(&integ, &sys, n, (setup, clock.elapsed().as_secs_f64()))?;
+    }
+    if let Some(w) = mstar::accuracy::warning(&integ.stats(), &config, &|i| sys.coord_name(i)) {
+        eprintln!("{w}");
+    }
+    output::conclude(stream, out, ended, integ.time())
+}
+
+/// The chain's timing summary and where its tip ended.
+fn chain_summary<S: System + ?Sized>(
+    integ: &mstar::Integrator<'_, S>,
+    sys: &mstar::planar::PlanarSystem,
+    n: usize,
+    (setup, wall): (std::time::Duration, f64),
+) -> Result<()> {
     let st = integ.stats();
     let steps = st.steps.max(1) as f64;
     println!(
@@ -626,7 +725,7 @@ fn chain(args: &ChainArgs) -> Result<()> {
         wall * 1e6 / steps,
         wall * 1e6 / steps / n as f64
     );
-    let s = integ.sample();
+    let s = integ.view();
     let tip = sys
         .body(&format!("link{n}"))
         .map(|b| b.x)
@@ -638,34 +737,7 @@ fn chain(args: &ChainArgs) -> Result<()> {
         s.u[tip + 1],
         s.constraint
     );
-    if let Some(w) = mstar::accuracy::warning(&st, &config, &|i| sys.coord_name(i)) {
-        eprintln!("{w}");
-    }
-    if let (Some(stream), Some(out)) = (output.stream, &args.out) {
-        stream.finish()?;
-        println!("wrote {}", out.display());
-    }
     Ok(())
-}
-
-/// The chain's output: the CSV stream, if any, and the progress report.
-struct ChainOutput {
-    stream: Option<csv::CsvStream>,
-    progress: Progress,
-}
-
-impl Observer for ChainOutput {
-    fn observe(&mut self, s: &SampleRef<'_>) {
-        if let Some(stream) = self.stream.as_mut() {
-            stream.observe(s);
-        }
-        self.progress.observe(s);
-    }
-
-    /// Only the CSV file has an energy column.
-    fn reads_energy(&self) -> bool {
-        self.stream.is_some()
-    }
 }
 
 /// Reports the time reached on standard error every two seconds.
@@ -686,73 +758,19 @@ impl Progress {
             steps: 0,
         }
     }
-}
 
-impl Observer for Progress {
-    fn reads_energy(&self) -> bool {
-        false
-    }
-
-    fn observe(&mut self, s: &SampleRef<'_>) {
+    /// One more sample, at `t`.
+    fn tick(&mut self, t: f64) {
         self.steps += 1;
         if self.last.elapsed().as_secs_f64() > 2.0 {
             self.last = Instant::now();
             eprintln!(
                 "  t = {:.4} s of {} ({:.0} %), {} steps, {:.1} s elapsed",
-                s.t,
+                t,
                 self.t_end,
-                100.0 * s.t / self.t_end,
+                100.0 * t / self.t_end,
                 self.steps.saturating_sub(1),
                 self.start.elapsed().as_secs_f64()
-            );
-        }
-    }
-}
-
-/// `max |x|`, NaN-aware: a summary never reports a NaN as small.
-fn largest(values: impl Iterator<Item = f64>) -> f64 {
-    let mut m = mstar::kkt::MaxAbs::new();
-    values.for_each(|x| m.push(x));
-    m.value()
-}
-
-fn summary(samples: &[Sample]) {
-    let (Some(first), Some(last)) = (samples.first(), samples.last()) else {
-        return;
-    };
-    let e0 = first.energy();
-    let drift = largest(samples.iter().map(|s| s.energy() - e0));
-    let phi = largest(samples.iter().map(|s| s.constraint));
-    println!(
-        "t reached: {} s; θ = {:.9} rad, θ̇ = {:.9} rad/s, λ = [{:.6}, {:.6}]",
-        last.t, last.u[2], last.v[2], last.lambda[0], last.lambda[1]
-    );
-    println!("energy: E₀ = {e0:.6} J, max |E − E₀| = {drift:.3e} J; max ‖Φ‖∞ = {phi:.3e} m");
-    // The trapezoidal rule's period-2h mode of λ grows silently: warn when the
-    // last second's amplitude is far above the first second's.
-    let per_second = samples
-        .iter()
-        .position(|s| s.t >= first.t + 1.0)
-        .unwrap_or(samples.len());
-    if samples.len() >= 2 * per_second && per_second >= 3 {
-        let amplitude = |part: &[Sample]| {
-            (0..first.lambda.len())
-                .map(|i| {
-                    let x: Vec<f64> = part.iter().map(|s| s.lambda[i]).collect();
-                    mstar::analysis::nyquist_amplitude(&x)
-                })
-                .fold(0.0, f64::max)
-        };
-        // (The amplitudes of finite samples: a NaN would have stopped the run.)
-        let (early, late) = (
-            amplitude(&samples[..per_second]),
-            amplitude(&samples[samples.len() - per_second..]),
-        );
-        let scale = largest(samples.iter().flat_map(|s| s.lambda.iter().copied()));
-        if late > 10.0 * early && late > 1e-3 * scale {
-            println!(
-                "warning: the period-2h oscillation of λ grew from {early:.3e} in the first second to {late:.3e} in the last: \
-                 the multipliers are not trustworthy (trapezoidal rule on an index-3 system); use generalized-α"
             );
         }
     }

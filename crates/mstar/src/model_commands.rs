@@ -1,6 +1,6 @@
 //! `mstar run` and `mstar check`: model files on the command line.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -13,7 +13,9 @@ use mstar::pendulum::PendulumRun;
 use mstar::planar::PlanarSystem;
 use mstar::redundant::Expanded;
 use mstar::run::ReactionColumns;
-use mstar::{IntegrationError, Integrator, Observer, SampleRef, System, csv};
+use mstar::{Integrator, Observer, SampleRef, System, csv};
+
+use crate::output::Stop;
 
 /// Arguments of `mstar run`.
 #[derive(clap::Args, Debug)]
@@ -30,7 +32,7 @@ pub struct RunArgs {
     /// Write the samples to this CSV file (streamed; complete, or on a failure
     /// the samples so far in <name>.partial.csv).
     #[arg(long)]
-    out: Option<PathBuf>,
+    pub(crate) out: Option<PathBuf>,
     /// End time, s (overrides [simulation] t_end).
     #[arg(long)]
     t_end: Option<f64>,
@@ -109,22 +111,14 @@ impl Model {
 /// `mstar run`: exit 0 when the run reaches its end, 2 when the model file
 /// cannot be read (as `mstar check`), 1 on any other failure.
 pub fn run(args: &RunArgs) -> ExitCode {
-    match run_model(args) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            if e.downcast_ref::<mstar::model::file::FileError>().is_some() {
-                return ExitCode::from(2);
-            }
-            if let Some(hint) = e
-                .downcast_ref::<IntegrationError>()
-                .and_then(|e| crate::hint(e, true))
-            {
-                eprintln!("hint: {hint}");
-            }
-            ExitCode::FAILURE
-        }
+    let result = run_model(args);
+    if let Err(e) = &result
+        && e.downcast_ref::<mstar::model::file::FileError>().is_some()
+    {
+        eprintln!("error: {e:#}");
+        return ExitCode::from(2);
     }
+    ExitCode::from(crate::output::exit_code(result, true, 1))
 }
 
 fn run_model(args: &RunArgs) -> Result<()> {
@@ -148,11 +142,11 @@ fn run_model(args: &RunArgs) -> Result<()> {
         Model::Other(_) => None,
     };
     let extra = columns.as_ref().map(Columns::names).unwrap_or_default();
-    let stream = args
-        .out
-        .as_deref()
-        .map(|p| csv::CsvStream::create_with(p, sys, &extra))
-        .transpose()?;
+    crate::limits::check_steps(t_end, config.h)?;
+    let every = args.builtin.is_none().then_some(model.every);
+    let fields = csv::header(sys).len() + extra.len();
+    crate::check_output(args.out.as_deref(), fields, (t_end, config.h), every)?;
+    let stream = crate::open_output(args.out.as_deref(), sys, &extra)?;
     let columns = columns.as_ref().map(|c| c as &dyn Columns);
     let mut output = RunOutput::new(stream, columns, model.every, t_end);
     let config_used = config.clone();
@@ -171,12 +165,12 @@ fn run_model(args: &RunArgs) -> Result<()> {
         _ => (integrate(sys, start, &|_| Ok(()), &mut output), None),
     };
     output.progress.finish_and_clear();
-    let (stats, t, wall, result) = outcome?;
+    let (stats, t, wall, ended) = outcome?;
     print_summary(stats, t, &output, wall);
     if let Some(w) = mstar::accuracy::warning(&stats, &config_used, &|i| sys.coord_name(i)) {
         eprintln!("{w}");
     }
-    finish(output, args.out.as_deref(), result)?;
+    crate::output::conclude(output.stream, args.out.as_deref(), ended, t)?;
     // The samples are written; they are wrong from the drift on.
     if let (Some(mstar::run::RunError::RedundancyChanged { t, .. }), Some(out)) =
         (&drift, &args.out)
@@ -226,12 +220,7 @@ fn independent_rows(model: &Loaded) -> Result<Option<mstar::redundant::Rows>> {
 }
 
 /// A run's statistics, end time, wall time and outcome.
-type Outcome = (
-    mstar::RunStats,
-    f64,
-    f64,
-    Result<mstar::RunStats, IntegrationError>,
-);
+type Outcome = (mstar::RunStats, f64, f64, Result<(), Stop>);
 
 /// Integrates `sys` from `(u0, v0)` to `t_end`, every sample to `observer`,
 /// once `check_start` accepts the start state.
@@ -249,40 +238,11 @@ fn integrate<S: System + ?Sized>(
         integ.newton()
     );
     let clock = Instant::now();
-    let result = integ.run(t_end, observer);
+    let result = crate::output::drive(&mut integ, t_end, &mut |integ| {
+        observer.observe(&integ.view());
+    });
     let wall = clock.elapsed().as_secs_f64();
     Ok((integ.stats(), integ.time(), wall, result))
-}
-
-/// Keeps the samples on success, or in `<name>.partial.csv` on a failure.
-fn finish(
-    output: RunOutput,
-    out: Option<&Path>,
-    result: Result<mstar::RunStats, IntegrationError>,
-) -> Result<()> {
-    let (Some(stream), Some(out)) = (output.stream, out) else {
-        result?;
-        return Ok(());
-    };
-    match result {
-        Ok(_) => {
-            stream.finish()?;
-            println!("wrote {} ({} rows)", out.display(), output.written);
-            Ok(())
-        }
-        Err(e) => {
-            let partial = crate::partial_path(out);
-            stream.finish_as(&partial)?;
-            eprintln!(
-                "note: {} was not written; {} up to the failure {} in {}",
-                out.display(),
-                crate::samples_phrase(output.written),
-                if output.written == 1 { "is" } else { "are" },
-                partial.display()
-            );
-            Err(e.into())
-        }
-    }
 }
 
 /// The model of `mstar run`: a file or a built-in.
@@ -402,7 +362,6 @@ struct RunOutput<'a> {
     extra: Vec<f64>,
     every: usize,
     seen: usize,
-    written: usize,
     t_end: f64,
     progress: ProgressBar,
     shown: bool,
@@ -430,7 +389,6 @@ impl<'a> RunOutput<'a> {
             extra: Vec::new(),
             every: every.max(1),
             seen: 0,
-            written: 0,
             t_end,
             progress,
             shown: false,
@@ -453,7 +411,7 @@ impl Observer for RunOutput<'_> {
                 columns.values(s, &mut self.extra);
             }
             stream.push_with(s, &self.extra);
-            self.written += 1;
+            crate::output::watch(stream);
         }
         self.seen += 1;
         let e = s.energy();

@@ -101,14 +101,47 @@ impl PendulumRun {
         Ok((samples, reference))
     }
 
-    /// The RK4 reference on the uniform grid `0, h, 2h, …, t_end`.
+    /// The RK4 reference on the grid `0, h, 2h, …, t_end`: it ends at `t_end`
+    /// exactly, the last step shortened when `h` does not divide `t_end` (as
+    /// the integrator's last step; a remainder below `1e-9 h` is dropped).
+    /// The caller bounds `t_end / h`: every sample is kept in memory.
     #[must_use]
     pub fn reference_on_grid(&self) -> Vec<Sample> {
+        self.reference(&self.grid())
+    }
+
+    /// The times of [`reference_on_grid`](Self::reference_on_grid).
+    #[must_use]
+    pub fn grid(&self) -> Vec<f64> {
         let h = self.config.h;
-        let steps = (self.t_end / h).round() as usize;
-        let times: Vec<f64> = (0..=steps)
-            .map(|k| (k as f64 * h).min(self.t_end))
-            .collect();
-        self.reference(&times)
+        let full = (self.t_end / h - 1e-9).ceil().max(1.0) as usize;
+        (0..full)
+            .map(|k| k as f64 * h)
+            .chain(std::iter::once(self.t_end))
+            .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(h: f64, t_end: f64) -> Vec<f64> {
+        let mut run = PendulumRun::standard();
+        run.config.h = h;
+        run.t_end = t_end;
+        run.grid()
+    }
+
+    /// The grid ends at t_end exactly, the last step shortened.
+    #[test]
+    fn grid_ends_at_t_end() {
+        assert_eq!(grid(0.03, 0.1), [0.0, 0.03, 0.06, 0.09, 0.1]);
+        assert_eq!(grid(100.0, 10.0), [0.0, 10.0]);
+        let g = grid(0.01, 0.1);
+        assert_eq!(g.len(), 11);
+        assert_eq!(g[10], 0.1);
+        assert!((g[9] - 0.09).abs() < 1e-15);
+        assert_eq!(grid(0.01, 10.0).len(), 1001);
     }
 }

@@ -167,7 +167,16 @@ fn draw_item<DB: DrawingBackend>(
 /// Runs `write` on a temporary path beside `path` (with the same extension,
 /// which the image encoder goes by) and renames it into place: `path` is
 /// written completely or not at all.
+/// A device or a FIFO is written directly, never replaced; a directory is an
+/// error (see [`mstar::csv::target`]).
 fn via_temporary(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let path = &match mstar::csv::target(path)? {
+        mstar::csv::Target::Replace(target) => target,
+        mstar::csv::Target::Stdout => return write(Path::new("/dev/stdout")),
+        mstar::csv::Target::Direct => {
+            return write(path).with_context(|| format!("could not write {}", path.display()));
+        }
+    };
     let name = path
         .file_name()
         .with_context(|| format!("{} is not a file name", path.display()))?;

@@ -1,0 +1,381 @@
+//! Runs too large to be meant, refused before they start: more steps than
+//! [`MAX_STEPS`], an output file larger than the free space of its file
+//! system, or a model larger than the memory available. Each refusal gives
+//! the estimate and values of the options that would pass.
+
+use std::path::Path;
+
+use anyhow::{Result, bail};
+
+/// The most steps one run may take: 10⁹ steps are hours of computing and,
+/// with an output file, hundreds of gigabytes; a longer run is a mistake in
+/// `--t-end` or `--h` far more often than it is meant.
+pub const MAX_STEPS: f64 = 1e9;
+
+/// Bytes a CSV field takes on average (measured: 15 to 20 for numbers in
+/// shortest round-trip form with their comma, 2 for zeros): a low estimate,
+/// so that no run that fits is refused.
+pub const BYTES_PER_FIELD: f64 = 14.0;
+
+/// The most bytes a CSV field takes (`-1.2345678901234567e-100,`): the
+/// advice of a refusal is worked out with it, so that what it suggests fits.
+pub const MAX_BYTES_PER_FIELD: f64 = 25.0;
+
+/// Memory a chain link needs with a sparse KKT solver (peak resident size
+/// over 1 000 to 300 000 links: 5.1 kB with Schur, 7.3 kB with LDLᵀ, 8.1 kB
+/// with sparse LU).
+pub const BYTES_PER_LINK: f64 = 8.1e3;
+
+/// Memory a dense KKT solver needs for `unknowns` unknowns (the matrix and
+/// its LU factors, 8-byte entries).
+pub fn dense_bytes(unknowns: f64) -> f64 {
+    16.0 * unknowns * unknowns
+}
+
+/// Bytes a pendulum sample takes in memory (the reference keeps them all):
+/// 11 numbers in four vectors, their headers and the allocator's overhead.
+pub const BYTES_PER_PENDULUM_SAMPLE: f64 = 400.0;
+
+/// A size in bytes for messages: "27.5 GB".
+pub fn bytes(x: f64) -> String {
+    let units = ["B", "kB", "MB", "GB", "TB", "PB", "EB"];
+    let mut v = x;
+    let mut unit = 0;
+    while v >= 1000.0 && unit + 1 < units.len() {
+        v /= 1000.0;
+        unit += 1;
+    }
+    if unit == units.len() - 1 && v >= 1000.0 {
+        return format!("{x:.1e} B");
+    }
+    format!("{v:.1} {}", units[unit])
+}
+
+/// A number for messages: plain from 1e-4 to 1e15, else in exponent form.
+pub fn num(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// `x` to two significant digits, rounded up (`up`) or down, as text that
+/// parses back to a value on the same side of `x`.
+pub fn round2(x: f64, up: bool) -> String {
+    if !(x.is_finite() && x > 0.0) {
+        return num(x);
+    }
+    let e = x.log10().floor();
+    let m = x / 10f64.powf(e);
+    let mut digits = if up {
+        (m * 10.0).ceil()
+    } else {
+        (m * 10.0).floor()
+    };
+    // (A digit more or less at most: the text parses to the nearest double.)
+    for _ in 0..4 {
+        let text = format!("{}e{}", digits / 10.0, e);
+        match text.parse::<f64>() {
+            Ok(v) if (up && v >= x) || (!up && v <= x) => return text,
+            _ => digits += if up { 1.0 } else { -1.0 },
+        }
+    }
+    num(x)
+}
+
+/// Refuses more than [`MAX_STEPS`] steps of `h` to `t_end` (step control
+/// only shortens steps: t_end / h is the fewest the run takes).
+///
+/// # Errors
+/// Too many steps, with the estimate and a `--h` and a `--t-end` that pass.
+pub fn check_steps(t_end: f64, h: f64) -> Result<f64> {
+    let steps = t_end / h;
+    if steps <= MAX_STEPS {
+        return Ok(steps);
+    }
+    bail!(
+        "t_end = {} s with h = {} s is about {steps:.1e} steps, more than the {MAX_STEPS:e} \
+         that mstar takes in one run: use a larger step (--h {} or more) or a shorter run \
+         (--t-end {} or less)",
+        num(t_end),
+        num(h),
+        round2(t_end / MAX_STEPS, true),
+        round2(h * MAX_STEPS, false)
+    )
+}
+
+/// The free space of the file system `path` would be written to, bytes
+/// (`None` when it cannot be told, or for standard output and devices).
+pub fn free_space(path: &Path) -> Option<f64> {
+    let mstar::csv::Target::Replace(target) = mstar::csv::target(path).ok()? else {
+        return None;
+    };
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
+    };
+    let c = std::ffi::CString::new(dir.as_os_str().as_encoded_bytes()).ok()?;
+    let mut stat = std::mem::MaybeUninit::<libc::statvfs>::zeroed();
+    // SAFETY: `c` is a NUL-terminated path, `stat` a buffer of the right type.
+    let rc = unsafe { libc::statvfs(c.as_ptr(), stat.as_mut_ptr()) };
+    if rc != 0 {
+        return None;
+    }
+    // SAFETY: statvfs filled it in.
+    let stat = unsafe { stat.assume_init() };
+    Some(stat.f_bavail as f64 * stat.f_frsize as f64)
+}
+
+/// An output's size, rows and fields a row, and the options that shrink it.
+pub struct Output<'a> {
+    /// The file.
+    pub path: &'a Path,
+    /// Rows it would get.
+    pub rows: f64,
+    /// Fields a row.
+    pub fields: usize,
+    /// The run's end time and step (for the advice).
+    pub t_end: f64,
+    /// Step size, s.
+    pub h: f64,
+    /// `mstar run`: fewer rows by `--set output.every=N` (the current N).
+    pub every: Option<usize>,
+}
+
+/// Refuses an output file larger than the free space of its file system.
+///
+/// # Errors
+/// With the estimate, the free space, and values of `--h`, `--t-end` (and
+/// `output.every`) that fit.
+pub fn check_output(o: &Output<'_>, free: Option<f64>) -> Result<()> {
+    let size = o.rows * o.fields as f64 * BYTES_PER_FIELD;
+    let Some(free) = free else {
+        return Ok(());
+    };
+    if size <= free {
+        return Ok(());
+    }
+    // What the advice must shrink the output by: from the largest size.
+    let ratio = size * MAX_BYTES_PER_FIELD / BYTES_PER_FIELD / free;
+    let every = o.every.map_or(String::new(), |n| {
+        format!(
+            ", fewer rows (--set output.every={})",
+            (n as f64 * ratio).ceil()
+        )
+    });
+    bail!(
+        "{} would take about {} ({:.1e} rows of about {}), more than the {} free on its file \
+         system: use a larger step (--h {} or more), a shorter run (--t-end {} or less){every}, \
+         or no --out",
+        o.path.display(),
+        bytes(size),
+        o.rows,
+        bytes(o.fields as f64 * BYTES_PER_FIELD),
+        bytes(free),
+        round2(o.h * ratio, true),
+        round2(o.t_end / ratio, false)
+    )
+}
+
+/// The memory a new allocation can count on, bytes: `MemAvailable` of
+/// `/proc/meminfo`, less when the address space (`ulimit -v`) or the control
+/// group (`memory.max`) allows less; `None` when none can be read.
+pub fn available_memory() -> Option<f64> {
+    let meminfo = std::fs::read_to_string("/proc/meminfo").ok().and_then(|s| {
+        s.lines()
+            .find_map(|l| l.strip_prefix("MemAvailable:"))
+            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
+            .map(|kb| kb * 1024.0)
+    });
+    let mut limit = std::mem::MaybeUninit::<libc::rlimit>::zeroed();
+    // SAFETY: `limit` is a buffer of the right type.
+    let address_space = (unsafe { libc::getrlimit(libc::RLIMIT_AS, limit.as_mut_ptr()) } == 0)
+        .then(|| {
+            // SAFETY: getrlimit filled it in.
+            let l = unsafe { limit.assume_init() };
+            (l.rlim_cur != libc::RLIM_INFINITY).then_some(l.rlim_cur as f64)
+        })
+        .flatten();
+    let cgroup = std::fs::read_to_string("/sys/fs/cgroup/memory.max")
+        .ok()
+        .and_then(|max| max.trim().parse::<f64>().ok())
+        .map(|max| {
+            let used = std::fs::read_to_string("/sys/fs/cgroup/memory.current")
+                .ok()
+                .and_then(|c| c.trim().parse::<f64>().ok())
+                .unwrap_or(0.0);
+            max - used
+        });
+    [meminfo, address_space, cgroup]
+        .into_iter()
+        .flatten()
+        .reduce(f64::min)
+}
+
+/// Refuses a chain of `links` links that will not fit in `available` bytes.
+///
+/// # Errors
+/// With the estimate and a `--links` that fits.
+pub fn check_chain(links: usize, dense: bool, available: Option<f64>) -> Result<()> {
+    let n = links as f64;
+    let need = |n: f64| BYTES_PER_LINK * n + if dense { dense_bytes(5.0 * n) } else { 0.0 };
+    let Some(available) = available else {
+        return Ok(());
+    };
+    if need(n) <= available {
+        return Ok(());
+    }
+    // The most links that fit (bisection: `need` grows with n).
+    let (mut lo, mut hi) = (0.0_f64, n);
+    while hi - lo > 1.0 {
+        let mid = (0.5 * (lo + hi)).floor();
+        if need(mid) <= available {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    bail!(
+        "a chain of {links} links needs about {} of memory{}, more than the {} available: use \
+         at most --links {lo}",
+        bytes(need(n)),
+        if dense {
+            " with the dense KKT solver"
+        } else {
+            ""
+        },
+        bytes(available)
+    )
+}
+
+/// Refuses an RK4 reference (which keeps every sample in memory) that will
+/// not fit in `available` bytes.
+///
+/// # Errors
+/// With the estimate and a `--h` and a `--t-end` that fit.
+pub fn check_reference(t_end: f64, h: f64, available: Option<f64>) -> Result<()> {
+    let samples = t_end / h + 2.0;
+    let need = samples * BYTES_PER_PENDULUM_SAMPLE;
+    let Some(available) = available else {
+        return Ok(());
+    };
+    if need <= available {
+        return Ok(());
+    }
+    let ratio = need / available;
+    bail!(
+        "the RK4 reference keeps its {samples:.1e} samples in memory, about {}, more than the {} \
+         available: use a larger step (--h {} or more) or a shorter run (--t-end {} or less)",
+        bytes(need),
+        bytes(available),
+        round2(h * ratio * 1.01, true),
+        round2(t_end / ratio * 0.99, false)
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Pulls `--opt VALUE` out of a message.
+    fn option(message: &str, opt: &str) -> f64 {
+        let after = message
+            .split(opt)
+            .nth(1)
+            .unwrap_or_else(|| panic!("no {opt} in: {message}"))
+            .trim_start_matches([' ', '=']);
+        let value = after.split([' ', ')', ',']).next().unwrap_or_default();
+        value
+            .parse()
+            .unwrap_or_else(|_| panic!("{opt} {value} in: {message}"))
+    }
+
+    /// The `--h` and `--t-end` a refusal suggests each pass the check.
+    #[test]
+    fn step_advice_passes() {
+        for (t_end, h) in [(1e308, 0.01), (1e7, 1e-3), (0.1, 1e-300), (12.3, 3.7e-9)] {
+            let e = check_steps(t_end, h).expect_err("refused").to_string();
+            assert!(e.contains("steps"), "{e}");
+            assert!(check_steps(t_end, option(&e, "--h")).is_ok(), "{e}");
+            assert!(check_steps(option(&e, "--t-end"), h).is_ok(), "{e}");
+        }
+        assert!(check_steps(10.0, 0.01).is_ok());
+        assert!(check_steps(1.0, 1e-9).is_ok());
+        assert!(check_steps(f64::INFINITY, 1.0).is_err());
+    }
+
+    #[test]
+    fn output_advice_passes() {
+        let path = Path::new("run.csv");
+        let o = Output {
+            path,
+            rows: 1e8,
+            fields: 16,
+            t_end: 1e6,
+            h: 0.01,
+            every: Some(1),
+        };
+        let free = Some(1e9);
+        let e = check_output(&o, free).expect_err("refused").to_string();
+        assert!(e.contains("22.4 GB") && e.contains("1.0 GB free"), "{e}");
+        let h = option(&e, "--h");
+        let t_end = option(&e, "--t-end");
+        let every = option(&e, "--set output.every");
+        let rows = |t_end: f64, h: f64, every: f64| t_end / h / every;
+        for (t, h, n) in [(1e6, h, 1.0), (t_end, 0.01, 1.0), (1e6, 0.01, every)] {
+            let fewer = Output {
+                rows: rows(t, h, n),
+                ..o
+            };
+            assert!(check_output(&fewer, free).is_ok(), "{t} {h} {n}: {e}");
+        }
+        assert!(check_output(&o, None).is_ok());
+    }
+
+    #[test]
+    fn chain_advice_passes() {
+        let available = Some(23e9);
+        let e = check_chain(10_000_000, false, available)
+            .expect_err("refused")
+            .to_string();
+        assert!(e.contains("81.0 GB"), "{e}");
+        let links = option(&e, "--links") as usize;
+        assert!(check_chain(links, false, available).is_ok(), "{e}");
+        assert!(check_chain(links + 2, false, available).is_err(), "{e}");
+        let e = check_chain(20_000, true, available)
+            .expect_err("dense refused")
+            .to_string();
+        let links = option(&e, "--links") as usize;
+        assert!(check_chain(links, true, available).is_ok(), "{e}");
+        assert!(check_chain(usize::MAX, false, available).is_err());
+        assert!(check_chain(1000, false, None).is_ok());
+    }
+
+    #[test]
+    fn reference_advice_passes() {
+        let available = Some(1e9);
+        let e = check_reference(1e6, 1e-3, available)
+            .expect_err("refused")
+            .to_string();
+        assert!(
+            check_reference(1e6, option(&e, "--h"), available).is_ok(),
+            "{e}"
+        );
+        assert!(
+            check_reference(option(&e, "--t-end"), 1e-3, available).is_ok(),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn sizes_read_well() {
+        assert_eq!(bytes(275.0), "275.0 B");
+        assert_eq!(bytes(27.5e9), "27.5 GB");
+        assert_eq!(round2(1.234e7, false), "1.2e7");
+        assert_eq!(round2(1.234e7, true), "1.3e7");
+        assert_eq!(round2(1e299, true), "1e299");
+        assert_eq!(num(1e308), "1e308");
+        assert_eq!(num(0.01), "0.01");
+    }
+}
