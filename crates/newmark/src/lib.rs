@@ -31,7 +31,7 @@ mod integrator;
 mod output;
 mod params;
 
-pub use error::IntegrationError;
+pub use error::{IntegrationError, Short};
 pub use integrator::{Integrator, StartReport};
 pub use output::{Observer, RunStats, Trajectory};
 pub use params::{AlphaParams, Config, Newton, Predictor, Scheme, Start};
