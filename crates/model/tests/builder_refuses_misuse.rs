@@ -65,7 +65,10 @@ fn a_torque_on_a_point_mass_is_an_error_naming_it() {
     b.torque("motor-torque", slider, TimeFunction::Constant(1.0));
     let e = b.build().err().map(|e| e.to_string()).unwrap_or_default();
     assert!(e.starts_with("motor-torque:"), "names the element: {e:?}");
-    assert!(e.contains("'slider' is a point mass"), "names the body: {e:?}");
+    assert!(
+        e.contains("'slider' is a point mass"),
+        "names the body: {e:?}"
+    );
 }
 
 #[test]
@@ -80,7 +83,10 @@ fn a_rotational_spring_on_a_point_mass_is_an_error_naming_it() {
     b.rotational_spring("coil", None, slider, spring);
     let e = b.build().err().map(|e| e.to_string()).unwrap_or_default();
     assert!(e.starts_with("coil:"), "names the element: {e:?}");
-    assert!(e.contains("'slider' is a point mass"), "names the body: {e:?}");
+    assert!(
+        e.contains("'slider' is a point mass"),
+        "names the body: {e:?}"
+    );
     // On a rigid body the same spring is accepted.
     let mut b = PlanarBuilder::new();
     let bar = b.rigid_body("bar", bar());

@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mstar::csv::Columns;
 use mstar::model::RowSubset;
 use mstar::model::file::{ModelFile, Simulation};
+use mstar::newmark::Short;
 use mstar::pendulum::PendulumRun;
 use mstar::planar::PlanarSystem;
 use mstar::redundant::Expanded;
@@ -32,10 +33,10 @@ pub struct RunArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     /// End time, s (overrides [simulation] t_end).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     t_end: Option<f64>,
     /// Step size, s (overrides [simulation] h).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     h: Option<f64>,
     /// Override a key of the file, e.g. --set simulation.rho=0.8 or
     /// --set output.every=10 (repeatable; values in TOML syntax).
@@ -90,26 +91,60 @@ impl Model {
 /// `mstar run`: exit 0 when the run reaches its end, 2 when the model file
 /// cannot be read (as `mstar check`), 1 on any other failure.
 pub fn run(args: &RunArgs) -> ExitCode {
-    match run_model(args) {
+    let model = match load(args) {
+        Ok(model) => model,
+        Err(e) => return failed(&e, None),
+    };
+    match run_model(args, &model) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            if e.downcast_ref::<mstar::model::file::FileError>().is_some() {
-                return ExitCode::from(2);
-            }
-            if let Some(hint) = e
-                .downcast_ref::<IntegrationError>()
-                .and_then(|e| crate::hint(e, true))
-            {
-                eprintln!("hint: {hint}");
-            }
-            ExitCode::FAILURE
-        }
+        Err(e) => failed(&e, Some(&model)),
     }
 }
 
-fn run_model(args: &RunArgs) -> Result<()> {
-    let model = load(args)?;
+/// Reports a failure of `mstar run` (with a hint where there is one) and
+/// its exit code.
+fn failed(e: &anyhow::Error, model: Option<&Loaded>) -> ExitCode {
+    eprintln!("error: {}", crate::report(e));
+    if e.downcast_ref::<mstar::model::file::FileError>().is_some() {
+        return ExitCode::from(2);
+    }
+    if let Some(e) = e.downcast_ref::<IntegrationError>() {
+        let hint = match model.map(|m| &m.system) {
+            Some(Model::Planar(sys)) => start_hint(sys, e),
+            _ => None,
+        };
+        if let Some(hint) = hint.or_else(|| crate::hint(e, true).map(String::from)) {
+            eprintln!("hint: {hint}");
+        }
+    }
+    ExitCode::FAILURE
+}
+
+/// What to edit in the model file when the start fails on a constraint the
+/// initial pose violates: the pose of the bodies, or the points of the
+/// joint that owns it (or the driver's function).
+fn start_hint(sys: &PlanarSystem, e: &IntegrationError) -> Option<String> {
+    let name = match e {
+        IntegrationError::ProjectionFailed { initial, .. } => initial,
+        IntegrationError::StartFailed {
+            violated: Some((name, _)),
+            ..
+        } => name,
+        _ => return None,
+    };
+    let row = (0..sys.n_constraints()).find(|&i| sys.constraint_name(i) == *name)?;
+    let owner = sys.constraint_owner(row)?;
+    let what = if sys.is_driver(owner) == Some(true) {
+        format!("or the value of driver '{owner}' at t = 0")
+    } else {
+        format!("or the points of joint '{owner}'")
+    };
+    Some(format!(
+        "'{name}' is a row of '{owner}': in the model file, fix the initial pose of the bodies it joins ([[body]] pose, [[point_mass]] position) {what}, so that it holds at t = 0; mstar check shows the initial violation"
+    ))
+}
+
+fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     let (config, t_end) = mstar::run::config(&model.simulation).map_err(anyhow::Error::msg)?;
     let sys = model.system.system();
     println!(
@@ -117,8 +152,8 @@ fn run_model(args: &RunArgs) -> Result<()> {
         model.label,
         sys.n_coords(),
         sys.n_constraints(),
-        config.h,
-        t_end
+        Short(config.h),
+        Short(t_end)
     );
     if let Model::Planar(sys) = &model.system {
         warn_far_start(sys);

@@ -209,7 +209,10 @@ fn start_failed(
              start from positions that satisfy '{constraint}' (or check how that constraint is defined)",
             Short(t)
         ),
-        None => format!("at start-up (t = {}), {context}: {cause}{unknown}", Short(t)),
+        None => format!(
+            "at start-up (t = {}), {context}: {cause}{unknown}",
+            Short(t)
+        ),
     }
 }
 

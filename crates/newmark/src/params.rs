@@ -454,7 +454,11 @@ mod tests {
             h_min: Some(1e308),
             ..Config::default()
         };
-        let e = c.validate().err().map(|e| e.to_string()).unwrap_or_default();
+        let e = c
+            .validate()
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
         assert!(e.contains("h_min = 1e308, h = 1)"), "{e}");
         let e = Scheme::Hht { alpha: -1e300 }.params().err();
         let e = e.map(|e| e.to_string()).unwrap_or_default();

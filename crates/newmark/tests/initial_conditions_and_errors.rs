@@ -217,7 +217,10 @@ fn redundant_constraint_is_named() {
             assert!(text.contains("rod.y (again)"), "{text}");
             // A consistent start: no initial violation to blame, no step size.
             assert!(text.starts_with("at start-up (t = 0), "), "{text}");
-            assert!(!text.contains("violates") && !text.contains("h ="), "{text}");
+            assert!(
+                !text.contains("violates") && !text.contains("h ="),
+                "{text}"
+            );
         }
         other => panic!("expected a start-up error, got {other:?}"),
     }
@@ -309,8 +312,8 @@ fn non_finite_times_are_errors_not_hangs() {
             "t0 = {t0}: {e:?}"
         );
     }
-    let mut integ = Integrator::new(&sys, Config::default(), 0.0, &u, &[0.0; 3])
-        .expect("a consistent start");
+    let mut integ =
+        Integrator::new(&sys, Config::default(), 0.0, &u, &[0.0; 3]).expect("a consistent start");
     for t_end in [f64::NAN, f64::INFINITY] {
         let e = integ.run(t_end, &mut Trajectory::default()).err();
         let text = e.as_ref().map(ToString::to_string).unwrap_or_default();
@@ -330,8 +333,8 @@ fn non_finite_times_are_errors_not_hangs() {
 fn a_step_to_a_time_not_ahead_is_an_error() {
     let sys = PendulumChain::paper(1.0, 1.0, 10.0);
     let u = sys.position(&[0.4]);
-    let mut integ = Integrator::new(&sys, Config::default(), 0.0, &u, &[0.0; 3])
-        .expect("a consistent start");
+    let mut integ =
+        Integrator::new(&sys, Config::default(), 0.0, &u, &[0.0; 3]).expect("a consistent start");
     assert!(integ.step(0.1).is_ok());
     let t = integ.time();
     assert!((t - 0.01).abs() < 1e-15, "one step of h = 0.01: {t}");
@@ -344,5 +347,11 @@ fn a_step_to_a_time_not_ahead_is_an_error() {
         assert_eq!(integ.time(), t, "no step was taken");
     }
     // A run to a time already passed has nothing to do.
-    assert_eq!(integ.run(0.0, &mut Trajectory::default()).map(|s| s.steps).ok(), Some(1));
+    assert_eq!(
+        integ
+            .run(0.0, &mut Trajectory::default())
+            .map(|s| s.steps)
+            .ok(),
+        Some(1)
+    );
 }

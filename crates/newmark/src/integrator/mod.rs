@@ -658,7 +658,11 @@ fn massless_coordinate<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Option
 /// singular at coordinate `i`: its first solve (the consistent accelerations,
 /// `S = M`) has no pivot. Names the backends that factor `M + BᵀB` instead
 /// (eq. 11), which a singular `M` does not stop.
-fn singular_mass_error<S: System + ?Sized>(sys: &S, backend: Backend, i: usize) -> IntegrationError {
+fn singular_mass_error<S: System + ?Sized>(
+    sys: &S,
+    backend: Backend,
+    i: usize,
+) -> IntegrationError {
     let symmetric = sys.tangent_is_symmetric();
     let working: Vec<&str> = mstar_kkt::backends()
         .iter()

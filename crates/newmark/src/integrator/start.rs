@@ -28,8 +28,14 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     fn initial_violation(&mut self) -> Option<(usize, f64)> {
         let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
         let (zeros_n, zeros_m) = (vec![0.0; n], vec![0.0; m]);
-        self.lin
-            .eval_residual(self.sys, self.t, &self.state.u, &zeros_n, &zeros_n, &zeros_m);
+        self.lin.eval_residual(
+            self.sys,
+            self.t,
+            &self.state.u,
+            &zeros_n,
+            &zeros_n,
+            &zeros_m,
+        );
         let ctol = self.config.tol * max_abs(&self.state.u).max(1.0);
         let (k, value) = argmax_abs(self.lin.phi());
         (m > 0 && value.abs() > ctol).then_some((k, value))
@@ -60,7 +66,8 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 constraint,
                 ..
             } => {
-                let (initial, initial_value) = named.unwrap_or_else(|| (constraint.clone(), residual));
+                let (initial, initial_value) =
+                    named.unwrap_or_else(|| (constraint.clone(), residual));
                 IntegrationError::ProjectionFailed {
                     t,
                     iterations,
