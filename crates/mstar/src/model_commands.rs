@@ -158,7 +158,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     if let Model::Planar(sys) = &model.system {
         warn_far_start(sys);
     }
-    let rows = independent_rows(&model)?;
+    let rows = independent_rows(model)?;
     let columns = match &model.system {
         Model::Planar(sys) => Some(ReactionColumns::new(sys)),
         Model::Other(_) => None,

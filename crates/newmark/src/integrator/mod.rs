@@ -651,7 +651,7 @@ fn massless_coordinate<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Option
             diagonal[i] += v;
         }
     }
-    diagonal.iter().position(|&d| !(d > 0.0))
+    diagonal.iter().position(|&d| d <= 0.0 || d.is_nan())
 }
 
 /// A backend that factors `S` without `BᵀB` chosen for a model whose `M` is
