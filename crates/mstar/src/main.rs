@@ -33,6 +33,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use mstar::kkt::Backend;
+use mstar::newmark::Short;
 use mstar::pendulum::PendulumRun;
 use mstar::{Config, IntegrationError, Newton, Scheme, Start, StepMode, System, csv};
 
@@ -92,7 +93,7 @@ struct ChainArgs {
     #[arg(long, value_enum, default_value_t = ChainKind::Bars)]
     kind: ChainKind,
     /// End time, s.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     t_end: f64,
     #[command(flatten)]
     integ: IntegratorArgs,
@@ -157,22 +158,22 @@ enum Reference {
 #[derive(clap::Args, Debug, Default)]
 struct IntegratorArgs {
     /// Step size h, s [default: pendulum 0.01, chain 1e-3].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     h: Option<f64>,
     /// Smallest step size for step control, s [default: h/1024; paper: h, i.e. off].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     h_min: Option<f64>,
     /// Integrator [default: generalized-alpha; paper: newmark].
     #[arg(long, value_enum)]
     integrator: Option<Integrator>,
     /// Newmark β [paper: 0.25]; implies --integrator newmark.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     beta: Option<f64>,
     /// Newmark γ [paper: 0.5]; implies --integrator newmark.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     gamma: Option<f64>,
     /// Generalized-α spectral radius ρ∞ in [0, 1] [default: 0.9].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     rho: Option<f64>,
     /// HHT α in [−1/3, 0] [default: −0.1].
     #[arg(long, allow_hyphen_values = true)]
@@ -186,7 +187,7 @@ struct IntegratorArgs {
     #[arg(long, value_parser = kkt_values())]
     kkt: Option<String>,
     /// Relative Newton tolerance on ‖r‖ and ‖Φ‖ [default: 1e-10].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     tol: Option<f64>,
     /// Newton iterations per step attempt [default: 20].
     #[arg(long)]
@@ -219,13 +220,13 @@ struct PendulumArgs {
     #[arg(long, value_enum)]
     preset: Option<Preset>,
     /// Mass m, kg [default: 1].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     m: Option<f64>,
     /// Rod length l, m [default: 1].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     l: Option<f64>,
-    /// Gravity g₀, m/s² [default: 9.81; paper: 10].
-    #[arg(long)]
+    /// Gravity g₀, m/s² [default: 9.81; paper: 10]; negative values pull up.
+    #[arg(long, allow_negative_numbers = true)]
     g: Option<f64>,
     /// Initial angle θ₀ from the downward vertical, rad [default: π/2].
     #[arg(long, allow_hyphen_values = true)]
@@ -234,7 +235,7 @@ struct PendulumArgs {
     #[arg(long, allow_hyphen_values = true)]
     omega0: Option<f64>,
     /// End time, s [default: 10].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     t_end: Option<f64>,
     #[command(flatten)]
     integ: IntegratorArgs,
@@ -276,6 +277,24 @@ fn main() -> ExitCode {
         Command::Chain(args) => chain(&args),
     };
     ExitCode::from(output::exit_code(result, false, 1))
+}
+
+/// An error and its causes on one line, `a: b: c` as `{:#}` prints them,
+/// but without a cause whose text the line already holds (a library error
+/// that quotes its solver's error would otherwise say it twice).
+pub(crate) fn report(e: &anyhow::Error) -> String {
+    let mut line = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if line.contains(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
 }
 
 /// "the sample" or "the n samples".
@@ -333,11 +352,20 @@ fn pendulum_run(args: &PendulumArgs) -> Result<PendulumRun> {
     }
     for (name, value) in [("m", run.m), ("l", run.l), ("t-end", run.t_end)] {
         if !(value > 0.0 && value.is_finite()) {
-            bail!("--{name} must be positive (got {value})");
+            bail!(
+                "--{name} must be a finite positive number (got {})",
+                Short(value)
+            );
         }
     }
-    if !(run.g0.is_finite() && run.theta0.is_finite() && run.omega0.is_finite()) {
-        bail!("--g, --theta0 and --omega0 must be finite numbers");
+    for (name, value) in [
+        ("g", run.g0),
+        ("theta0", run.theta0),
+        ("omega0", run.omega0),
+    ] {
+        if !value.is_finite() {
+            bail!("--{name} must be a finite number (got {value})");
+        }
     }
     apply_integrator(
         &args.integ,
@@ -475,21 +503,32 @@ fn apply_integrator(args: &IntegratorArgs, c: &mut Config, paper_preset: bool) -
 fn describe(run: &PendulumRun) -> String {
     let c = &run.config;
     let scheme = match c.scheme {
-        Scheme::Newmark { beta, gamma } => format!("Newmark β = {beta}, γ = {gamma}"),
-        Scheme::Hht { alpha } => format!("HHT α = {alpha}"),
-        Scheme::GeneralizedAlpha { rho_inf } => format!("generalized-α ρ∞ = {rho_inf}"),
+        Scheme::Newmark { beta, gamma } => {
+            format!("Newmark β = {}, γ = {}", Short(beta), Short(gamma))
+        }
+        Scheme::Hht { alpha } => format!("HHT α = {}", Short(alpha)),
+        Scheme::GeneralizedAlpha { rho_inf } => format!("generalized-α ρ∞ = {}", Short(rho_inf)),
     };
     let start = match &c.start {
-        Start::Paper { lambda0 } => format!("paper start (M*, λ₀ = {lambda0:?})"),
+        Start::Paper { lambda0 } => {
+            let values: Vec<String> = lambda0.iter().map(|&x| Short(x).to_string()).collect();
+            format!("paper start (M*, λ₀ = [{}])", values.join(", "))
+        }
         Start::Consistent => "consistent start".into(),
     };
     let newton = match c.newton {
         Newton::Full => "full Newton".to_string(),
-        Newton::Modified { max_rate } => format!("modified Newton (rate ≤ {max_rate})"),
+        Newton::Modified { max_rate } => format!("modified Newton (rate ≤ {})", Short(max_rate)),
     };
     format!(
         "pendulum m = {} kg, l = {} m, g = {} m/s², θ₀ = {} rad, θ̇₀ = {} rad/s; {scheme}, {start}, {newton}, h = {} s, t_end = {} s",
-        run.m, run.l, run.g0, run.theta0, run.omega0, c.h, run.t_end
+        Short(run.m),
+        Short(run.l),
+        Short(run.g0),
+        Short(run.theta0),
+        Short(run.omega0),
+        Short(c.h),
+        Short(run.t_end)
     )
 }
 
@@ -626,7 +665,10 @@ fn chain_config(args: &ChainArgs) -> Result<Config> {
         bail!("--links must be at least 1");
     }
     if !(args.t_end > 0.0 && args.t_end.is_finite()) {
-        bail!("--t-end must be positive (got {})", args.t_end);
+        bail!(
+            "--t-end must be a finite positive number (got {})",
+            Short(args.t_end)
+        );
     }
     // Full Newton: one iteration per step on chains and 1.5 times faster at
     // 10⁵ bars (docs/performance.md); the error estimate reports a whip
@@ -663,8 +705,8 @@ fn chain(args: &ChainArgs) -> Result<()> {
         },
         sys.n_coords(),
         sys.n_constraints(),
-        config.h,
-        args.t_end
+        Short(config.h),
+        Short(args.t_end)
     );
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
     let mut integ = mstar::Integrator::new(&sys, config.clone(), 0.0, &u0, &v0)?;
@@ -767,7 +809,7 @@ impl Progress {
             eprintln!(
                 "  t = {:.4} s of {} ({:.0} %), {} steps, {:.1} s elapsed",
                 t,
-                self.t_end,
+                Short(self.t_end),
                 100.0 * t / self.t_end,
                 self.steps.saturating_sub(1),
                 self.start.elapsed().as_secs_f64()
@@ -893,6 +935,32 @@ mod tests {
             }
         );
         Ok(())
+    }
+
+    /// A library error that quotes its cause is printed once, with the
+    /// context before it.
+    #[test]
+    fn a_quoted_cause_is_not_repeated() {
+        let e = IntegrationError::Kkt {
+            context: "solving with the iteration matrix",
+            t: 1.0,
+            h: 0.01,
+            unknown: None,
+            source: mstar::kkt::KktError::Singular { unknown: Some(3) },
+        };
+        let full = anyhow::Error::from(e).context("the run");
+        assert_eq!(
+            format!("{full:#}")
+                .matches("no pivot for unknown 3")
+                .count(),
+            2
+        );
+        let line = report(&full);
+        assert_eq!(line.matches("no pivot for unknown 3").count(), 1, "{line}");
+        assert!(
+            line.starts_with("the run: solving with the iteration matrix at t = 1"),
+            "{line}"
+        );
     }
 
     #[test]

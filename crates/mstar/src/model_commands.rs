@@ -9,11 +9,12 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mstar::csv::Columns;
 use mstar::model::RowSubset;
 use mstar::model::file::{ModelFile, Simulation};
+use mstar::newmark::Short;
 use mstar::pendulum::PendulumRun;
 use mstar::planar::PlanarSystem;
 use mstar::redundant::Expanded;
 use mstar::run::ReactionColumns;
-use mstar::{Integrator, Observer, SampleRef, System, csv};
+use mstar::{IntegrationError, Integrator, Observer, SampleRef, System, csv};
 
 use crate::output::Stop;
 
@@ -34,10 +35,10 @@ pub struct RunArgs {
     #[arg(long)]
     pub(crate) out: Option<PathBuf>,
     /// End time, s (overrides [simulation] t_end).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     t_end: Option<f64>,
     /// Step size, s (overrides [simulation] h).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     h: Option<f64>,
     /// Adapt the step size to the local error estimate (sets
     /// [simulation] error_control = "adaptive"; ρ∞ defaults to 0.5).
@@ -111,18 +112,64 @@ impl Model {
 /// `mstar run`: exit 0 when the run reaches its end, 2 when the model file
 /// cannot be read (as `mstar check`), 1 on any other failure.
 pub fn run(args: &RunArgs) -> ExitCode {
-    let result = run_model(args);
-    if let Err(e) = &result
-        && e.downcast_ref::<mstar::model::file::FileError>().is_some()
-    {
-        eprintln!("error: {e:#}");
-        return ExitCode::from(2);
+    let model = match load(args) {
+        Ok(model) => model,
+        Err(e) => return failed(e, None),
+    };
+    match run_model(args, &model) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => failed(e, Some(&model)),
     }
-    ExitCode::from(crate::output::exit_code(result, true, 1))
 }
 
-fn run_model(args: &RunArgs) -> Result<()> {
-    let model = load(args)?;
+/// Reports a failure of `mstar run` (with a hint where there is one) and
+/// its exit code: 2 for a file that cannot be read, 130/143 for an
+/// interrupted run (`crate::output::exit_code`), else 1.
+fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
+    if e.downcast_ref::<crate::signals::Interrupted>().is_some() {
+        return ExitCode::from(crate::output::exit_code(Err(e), true, 1));
+    }
+    eprintln!("error: {}", crate::report(&e));
+    if e.downcast_ref::<mstar::model::file::FileError>().is_some() {
+        return ExitCode::from(2);
+    }
+    if let Some(e) = e.downcast_ref::<IntegrationError>() {
+        let hint = match model.map(|m| &m.system) {
+            Some(Model::Planar(sys)) => start_hint(sys, e),
+            _ => None,
+        };
+        if let Some(hint) = hint.or_else(|| crate::hint(e, true).map(String::from)) {
+            eprintln!("hint: {hint}");
+        }
+    }
+    ExitCode::FAILURE
+}
+
+/// What to edit in the model file when the start fails on a constraint the
+/// initial pose violates: the pose of the bodies, or the points of the
+/// joint that owns it (or the driver's function).
+fn start_hint(sys: &PlanarSystem, e: &IntegrationError) -> Option<String> {
+    let name = match e {
+        IntegrationError::ProjectionFailed { initial, .. } => initial,
+        IntegrationError::StartFailed {
+            violated: Some((name, _)),
+            ..
+        } => name,
+        _ => return None,
+    };
+    let row = (0..sys.n_constraints()).find(|&i| sys.constraint_name(i) == *name)?;
+    let owner = sys.constraint_owner(row)?;
+    let what = if sys.is_driver(owner) == Some(true) {
+        format!("or the value of driver '{owner}' at t = 0")
+    } else {
+        format!("or the points of joint '{owner}'")
+    };
+    Some(format!(
+        "'{name}' is a row of '{owner}': in the model file, fix the initial pose of the bodies it joins ([[body]] pose, [[point_mass]] position) {what}, so that it holds at t = 0; mstar check shows the initial violation"
+    ))
+}
+
+fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     let (config, t_end) = mstar::run::config(&model.simulation).map_err(anyhow::Error::msg)?;
     let sys = model.system.system();
     println!(
@@ -130,13 +177,13 @@ fn run_model(args: &RunArgs) -> Result<()> {
         model.label,
         sys.n_coords(),
         sys.n_constraints(),
-        config.h,
-        t_end
+        Short(config.h),
+        Short(t_end)
     );
     if let Model::Planar(sys) = &model.system {
         warn_far_start(sys);
     }
-    let rows = independent_rows(&model)?;
+    let rows = independent_rows(model)?;
     let columns = match &model.system {
         Model::Planar(sys) => Some(ReactionColumns::new(sys)),
         Model::Other(_) => None,

@@ -192,7 +192,7 @@ pub fn exit_code(result: anyhow::Result<()>, files: bool, failure: u8) -> u8 {
         }
         return i.code();
     }
-    note(format_args!("error: {e:#}"));
+    note(format_args!("error: {}", crate::report(&e)));
     if let Some(hint) = e
         .downcast_ref::<IntegrationError>()
         .and_then(|e| crate::hint(e, files))

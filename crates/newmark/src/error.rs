@@ -40,8 +40,11 @@ pub enum IntegrationError {
     },
     /// Projection of the initial positions onto `Φ = 0` did not converge.
     #[error(
-        "could not project the initial state onto the constraints at t = {t}: ‖Φ‖∞ = {residual:.3e} after {iterations} \
-         Newton iterations (most violated: '{constraint}'); start closer to an assembled configuration"
+        "at start-up (t = {}): the initial state violates constraint '{initial}' by {initial_value:.3e}, and \
+         projecting it onto the constraints did not converge (‖Φ‖∞ = {residual:.3e} after {iterations} Newton \
+         iterations, most violated: '{constraint}'); start from positions that satisfy '{initial}' \
+         (or check how that constraint is defined)",
+        Short(*.t)
     )]
     ProjectionFailed {
         /// Time.
@@ -50,8 +53,29 @@ pub enum IntegrationError {
         iterations: usize,
         /// Final `‖Φ‖∞`.
         residual: f64,
-        /// The most violated constraint.
+        /// The most violated constraint after the last iteration.
         constraint: String,
+        /// The constraint the given state violated most, before projection.
+        initial: String,
+        /// Its violation.
+        initial_value: f64,
+    },
+    /// A linear solve of the start-up failed: projecting the initial state,
+    /// or solving for the initial accelerations and multipliers.
+    #[error("{}", start_failed(*.t, context, unknown, violated, cause))]
+    StartFailed {
+        /// Time.
+        t: f64,
+        /// Which solve.
+        context: &'static str,
+        /// The named unknown without a pivot, when known.
+        unknown: Option<String>,
+        /// The constraint the given state violated most and by how much,
+        /// when projection moved it: the likely fault rather than the
+        /// unknown without a pivot, which is where the projected state ended.
+        violated: Option<(String, f64)>,
+        /// The solver's error (part of this message, not a separate cause).
+        cause: KktError,
     },
     /// The KKT matrix could not be factored or solved.
     #[error("{context} at t = {t} s (h = {h:e}): {source}{}", describe_unknown(.unknown))]
@@ -132,6 +156,19 @@ pub enum IntegrationError {
         /// What to try.
         advice: String,
     },
+    /// A time given to [`Integrator::new`](crate::Integrator::new),
+    /// [`run`](crate::Integrator::run) or [`step`](crate::Integrator::step)
+    /// cannot be integrated from or to: not finite, or (for `step`) not after
+    /// the current time.
+    #[error("{what} = {} cannot be used: {why}", Short(*.value))]
+    Time {
+        /// Which argument: `"t0"` or `"t_end"`.
+        what: &'static str,
+        /// Its value.
+        value: f64,
+        /// Why, with the current time where it matters.
+        why: String,
+    },
     /// NaN or infinity appeared in the state.
     #[error(
         "NaN or infinity in {what} at t = {t} s; the step size may be too large for the model's stiffness"
@@ -142,6 +179,63 @@ pub enum IntegrationError {
         /// Where (e.g. "the forces g, coordinate 'theta'").
         what: String,
     },
+}
+
+/// A number for a message: at most 6 significant digits, in exponent form
+/// outside `[1e-4, 1e6)`, so that no value prints as the hundreds of digits
+/// that `{}` gives `1e308` (`Short(0.1 + 0.2)` is `0.3`, `Short(1e308)` is
+/// `1e308`).
+///
+/// ```
+/// use mstar_newmark::Short;
+/// assert_eq!(Short(0.1 + 0.2).to_string(), "0.3");
+/// assert_eq!(Short(1e308).to_string(), "1e308");
+/// assert_eq!(Short(-2.5e-7).to_string(), "-2.5e-7");
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Short(pub f64);
+
+impl std::fmt::Display for Short {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let x = self.0;
+        if x == 0.0 {
+            return f.write_str("0");
+        }
+        if !x.is_finite() {
+            return write!(f, "{x}");
+        }
+        // Rounded to 6 significant digits, then printed as the shortest
+        // decimal that reads back as that value.
+        let rounded: f64 = format!("{x:.5e}").parse().unwrap_or(x);
+        if (1e-4..1e6).contains(&rounded.abs()) {
+            write!(f, "{rounded}")
+        } else {
+            write!(f, "{rounded:e}")
+        }
+    }
+}
+
+/// The message of [`IntegrationError::StartFailed`].
+fn start_failed(
+    t: f64,
+    context: &str,
+    unknown: &Option<String>,
+    violated: &Option<(String, f64)>,
+    cause: &KktError,
+) -> String {
+    let unknown = describe_unknown(unknown);
+    match violated {
+        Some((constraint, value)) => format!(
+            "at start-up (t = {}): the initial state violates constraint '{constraint}' by {value:.3e}, and \
+             {context} failed: {cause}{unknown}. Projection moved the state to where the system is singular: \
+             start from positions that satisfy '{constraint}' (or check how that constraint is defined)",
+            Short(t)
+        ),
+        None => format!(
+            "at start-up (t = {}), {context}: {cause}{unknown}",
+            Short(t)
+        ),
+    }
 }
 
 fn describe_unknown(unknown: &Option<String>) -> String {
@@ -178,6 +272,22 @@ mod tests {
                 iterations: 50,
                 residual: 1.0,
                 constraint: "pin.x".into(),
+                initial: "crank-pin.y".into(),
+                initial_value: 0.2,
+            },
+            IntegrationError::StartFailed {
+                t: 0.0,
+                context: "solving for consistent initial accelerations",
+                unknown: Some("the multiplier of constraint 'motor'".into()),
+                violated: Some(("crank-pin.y".into(), 0.2)),
+                cause: KktError::Singular { unknown: Some(7) },
+            },
+            IntegrationError::StartFailed {
+                t: 0.0,
+                context: "solving for consistent initial accelerations",
+                unknown: None,
+                violated: None,
+                cause: KktError::Singular { unknown: None },
             },
             IntegrationError::Kkt {
                 context: "solving with the iteration matrix",
@@ -206,6 +316,11 @@ mod tests {
                 t: 1.0,
                 what: "the forces g".into(),
             },
+            IntegrationError::Time {
+                what: "t_end",
+                value: f64::NAN,
+                why: "the end time must be finite".into(),
+            },
         ]
     }
 
@@ -219,5 +334,27 @@ mod tests {
             assert!(!text.contains("--"), "{text}");
             assert!(!text.contains("  "), "a run of spaces: {text}");
         }
+    }
+
+    /// Start-up errors say "at start-up", give no step size, and lead with
+    /// the constraint the given state violated, not the unknown without a
+    /// pivot; their solver error is part of the message, not a repeated
+    /// cause.
+    #[test]
+    fn start_up_errors_name_the_violated_constraint_once() {
+        use std::error::Error as _;
+        let e = IntegrationError::StartFailed {
+            t: 0.0,
+            context: "solving for consistent initial accelerations",
+            unknown: Some("the multiplier of constraint 'motor'".into()),
+            violated: Some(("crank-pin.y".into(), 0.2)),
+            cause: KktError::Singular { unknown: Some(7) },
+        };
+        let text = e.to_string();
+        assert!(text.starts_with("at start-up (t = 0): the initial state violates constraint 'crank-pin.y' by 2.000e-1"), "{text}");
+        assert!(text.contains("satisfy 'crank-pin.y'"), "{text}");
+        assert!(!text.contains("h ="), "{text}");
+        assert!(e.source().is_none(), "the cause is not printed twice");
+        assert_eq!(text.matches("singular (no pivot").count(), 1, "{text}");
     }
 }

@@ -32,7 +32,7 @@ mod output;
 mod params;
 mod resample;
 
-pub use error::IntegrationError;
+pub use error::{IntegrationError, Short};
 pub use integrator::{Integrator, StartReport};
 pub use output::{ErrorReport, Observer, RunStats, Trajectory};
 pub use params::{AlphaParams, Config, ErrorControl, Newton, Predictor, Scheme, Start, StepMode};

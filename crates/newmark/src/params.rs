@@ -3,7 +3,7 @@
 use mstar_kkt::KktOptions;
 use mstar_linearize::Coefficients;
 
-use crate::IntegrationError;
+use crate::{IntegrationError, Short};
 
 /// The time-integration scheme. All three are members of the generalized-α
 /// family in the form of Arnold & Brüls (2007):
@@ -103,10 +103,8 @@ impl Scheme {
         let bad = |s: String| Err(IntegrationError::Config(s));
         match *self {
             Self::Newmark { beta, gamma } => {
-                if !(beta > 0.0 && beta.is_finite() && gamma > 0.0 && gamma.is_finite()) {
-                    return bad(format!(
-                        "Newmark needs β > 0 and γ > 0 (got β = {beta}, γ = {gamma}); the paper uses β = 0.25, γ = 0.5"
-                    ));
+                if let Some(why) = newmark_instability(beta, gamma) {
+                    return bad(why);
                 }
                 Ok(AlphaParams {
                     alpha_m: 0.0,
@@ -118,7 +116,8 @@ impl Scheme {
             Self::Hht { alpha } => {
                 if !(-1.0 / 3.0..=0.0).contains(&alpha) {
                     return bad(format!(
-                        "HHT needs α in [−1/3, 0] (got {alpha}); α = 0 is the trapezoidal rule, α = −0.1 a common choice"
+                        "HHT needs α in [−1/3, 0] (got {}); α = 0 is the trapezoidal rule, α = −0.1 a common choice",
+                        Short(alpha)
                     ));
                 }
                 let alpha_f = -alpha;
@@ -133,7 +132,8 @@ impl Scheme {
             Self::GeneralizedAlpha { rho_inf } => {
                 if !(0.0..=1.0).contains(&rho_inf) {
                     return bad(format!(
-                        "generalized-α needs ρ∞ in [0, 1] (got {rho_inf}); 1 is the trapezoidal rule, 0.9 the default"
+                        "generalized-α needs ρ∞ in [0, 1] (got {}); 1 is the trapezoidal rule, 0.9 the default",
+                        Short(rho_inf)
                     ));
                 }
                 let alpha_m = (2.0 * rho_inf - 1.0) / (rho_inf + 1.0);
@@ -148,6 +148,36 @@ impl Scheme {
             }
         }
     }
+}
+
+/// Why Newmark(β, γ) is refused, if it is: outside the range where the
+/// scheme is unconditionally stable on linear undamped oscillators,
+/// `γ ≥ ½` and `β ≥ γ/2` (Hughes, *The Finite Element Method*, §9.1). With
+/// `γ < ½` the scheme adds energy (negative numerical damping) and every
+/// mode grows, whatever `h`; with `β < γ/2` it is stable only for `ω h`
+/// below a bound, which the stiff modes of a constrained system (and the
+/// constraint directions themselves, of infinite frequency) exceed.
+fn newmark_instability(beta: f64, gamma: f64) -> Option<String> {
+    let (b, g) = (Short(beta), Short(gamma));
+    if !(beta > 0.0 && beta.is_finite() && gamma.is_finite()) {
+        return Some(format!(
+            "Newmark needs a finite β > 0 (got β = {b}, γ = {g}); the paper uses β = 0.25, γ = 0.5"
+        ));
+    }
+    if gamma < 0.5 {
+        return Some(format!(
+            "Newmark with γ = {g} < 1/2 is unstable (it adds energy at every step, whatever h): use γ ≥ 0.5 and β ≥ γ/2, e.g. β = 0.25, γ = 0.5"
+        ));
+    }
+    // (γ/2 is exact in binary: β = 0.3, γ = 0.6 passes.)
+    if beta < 0.5 * gamma {
+        return Some(format!(
+            "Newmark with β = {b} < γ/2 = {} is only conditionally stable, and a constrained system's stiff modes exceed its bound on h: use β ≥ γ/2, e.g. β = (γ + 1/2)²/4 = {}",
+            Short(0.5 * gamma),
+            Short(0.25 * (gamma + 0.5) * (gamma + 0.5))
+        ));
+    }
+    None
 }
 
 /// How the step's Newton iteration starts (the predictor).
@@ -321,20 +351,24 @@ impl Config {
     pub fn validate(&self) -> Result<AlphaParams, IntegrationError> {
         let bad = |s: String| Err(IntegrationError::Config(s));
         if !(self.h > 0.0 && self.h.is_finite()) {
-            return bad(format!("the step size h must be positive (got {})", self.h));
+            return bad(format!(
+                "the step size h must be positive (got {})",
+                Short(self.h)
+            ));
         }
         if let Some(h_min) = self.h_min
             && !(h_min > 0.0 && h_min <= self.h)
         {
             return bad(format!(
-                "h_min must be in (0, h] (got h_min = {h_min}, h = {})",
-                self.h
+                "h_min must be in (0, h] (got h_min = {}, h = {})",
+                Short(h_min),
+                Short(self.h)
             ));
         }
         if !(self.tol > 0.0 && self.tol < 1.0) {
             return bad(format!(
                 "the Newton tolerance must be in (0, 1) (got {})",
-                self.tol
+                Short(self.tol)
             ));
         }
         self.error.validate(self.h)?;
@@ -345,7 +379,8 @@ impl Config {
             && !(max_rate > 0.0 && max_rate < 1.0)
         {
             return bad(format!(
-                "the modified-Newton contraction rate must be in (0, 1) (got {max_rate})"
+                "the modified-Newton contraction rate must be in (0, 1) (got {})",
+                Short(max_rate)
             ));
         }
         self.scheme.params()
@@ -477,5 +512,44 @@ mod tests {
             ..Config::default()
         };
         assert!(c.validate().is_err());
+    }
+
+    /// Newmark outside `γ ≥ ½, β ≥ γ/2` is refused with the reason, and the
+    /// parameters the message suggests are accepted.
+    #[test]
+    fn unstable_newmark_parameters_are_refused_with_working_advice() {
+        let newmark = |beta, gamma| Scheme::Newmark { beta, gamma }.params();
+        let e = newmark(0.25, 0.4).err().map(|e| e.to_string());
+        let e = e.unwrap_or_default();
+        assert!(e.contains("γ = 0.4 < 1/2") && e.contains("unstable"), "{e}");
+        assert!(newmark(0.25, 0.5).is_ok(), "the advised β = 0.25, γ = 0.5");
+        let e = newmark(0.2, 0.6).err().map(|e| e.to_string());
+        let e = e.unwrap_or_default();
+        assert!(e.contains("β = 0.2 < γ/2 = 0.3"), "{e}");
+        // The advice: β = (γ + 1/2)²/4 = 0.3025 for γ = 0.6.
+        assert!(e.contains("= 0.3025"), "{e}");
+        assert!(newmark(0.3025, 0.6).is_ok());
+        // β = γ/2 exactly is the stability limit, accepted.
+        assert!(newmark(0.3, 0.6).is_ok());
+        assert!(newmark(f64::NAN, 0.5).is_err());
+    }
+
+    /// Echoed values are short, whatever their size.
+    #[test]
+    fn configuration_errors_print_short_numbers() {
+        let c = Config {
+            h: 1.0,
+            h_min: Some(1e308),
+            ..Config::default()
+        };
+        let e = c
+            .validate()
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(e.contains("h_min = 1e308, h = 1)"), "{e}");
+        let e = Scheme::Hht { alpha: -1e300 }.params().err();
+        let e = e.map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.contains("(got -1e300)"), "{e}");
     }
 }

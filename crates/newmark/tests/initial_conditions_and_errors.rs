@@ -212,11 +212,17 @@ fn redundant_constraint_is_named() {
     let sys = Redundant(PendulumChain::paper(1.0, 1.0, 10.0));
     let u = sys.0.position(&[0.4]);
     match Integrator::new(&sys, Config::default(), 0.0, &u, &[0.0; 3]) {
-        Err(e @ IntegrationError::Kkt { .. }) => {
+        Err(e @ IntegrationError::StartFailed { .. }) => {
             let text = e.to_string();
             assert!(text.contains("rod.y (again)"), "{text}");
+            // A consistent start: no initial violation to blame, no step size.
+            assert!(text.starts_with("at start-up (t = 0), "), "{text}");
+            assert!(
+                !text.contains("violates") && !text.contains("h ="),
+                "{text}"
+            );
         }
-        other => panic!("expected a KKT error, got {other:?}"),
+        other => panic!("expected a start-up error, got {other:?}"),
     }
 }
 
@@ -293,4 +299,59 @@ fn step_control_rescues_a_too_large_step() {
     assert!(stats.rejected > 0, "{stats:?}");
     assert!(stats.h_min_used < 0.2);
     assert!((stats.t - 2.0).abs() < 1e-12);
+}
+
+#[test]
+fn non_finite_times_are_errors_not_hangs() {
+    let sys = PendulumChain::paper(1.0, 1.0, 10.0);
+    let u = sys.position(&[0.4]);
+    for t0 in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        let e = Integrator::new(&sys, Config::default(), t0, &u, &[0.0; 3]).err();
+        assert!(
+            matches!(e, Some(IntegrationError::Time { what: "t0", .. })),
+            "t0 = {t0}: {e:?}"
+        );
+    }
+    let mut integ =
+        Integrator::new(&sys, Config::default(), 0.0, &u, &[0.0; 3]).expect("a consistent start");
+    for t_end in [f64::NAN, f64::INFINITY] {
+        let e = integ.run(t_end, &mut Trajectory::default()).err();
+        let text = e.as_ref().map(ToString::to_string).unwrap_or_default();
+        assert!(
+            matches!(e, Some(IntegrationError::Time { what: "t_end", .. })),
+            "run({t_end}): {e:?}"
+        );
+        assert!(text.contains("finite") && text.contains("t = 0)"), "{text}");
+    }
+    // Nothing was integrated: the next finite run starts from t = 0.
+    assert_eq!(integ.time(), 0.0);
+    let stats = integ.run(0.05, &mut Trajectory::default());
+    assert_eq!(stats.map(|s| s.steps).ok(), Some(5));
+}
+
+#[test]
+fn a_step_to_a_time_not_ahead_is_an_error() {
+    let sys = PendulumChain::paper(1.0, 1.0, 10.0);
+    let u = sys.position(&[0.4]);
+    let mut integ =
+        Integrator::new(&sys, Config::default(), 0.0, &u, &[0.0; 3]).expect("a consistent start");
+    assert!(integ.step(0.1).is_ok());
+    let t = integ.time();
+    assert!((t - 0.01).abs() < 1e-15, "one step of h = 0.01: {t}");
+    for t_end in [t, t - 0.5, f64::NAN] {
+        let e = integ.step(t_end).err();
+        assert!(
+            matches!(e, Some(IntegrationError::Time { what: "t_end", .. })),
+            "step({t_end}) at t = {t}: {e:?}"
+        );
+        assert_eq!(integ.time(), t, "no step was taken");
+    }
+    // A run to a time already passed has nothing to do.
+    assert_eq!(
+        integ
+            .run(0.0, &mut Trajectory::default())
+            .map(|s| s.steps)
+            .ok(),
+        Some(1)
+    );
 }

@@ -306,6 +306,26 @@ impl PlanarBuilder {
         }
     }
 
+    /// " ('a' is a point mass)" for the point masses an element is attached
+    /// to (empty when there are none): which body a torque or a rotational
+    /// spring must not act on.
+    fn point_masses_among(&self, at: [At; 2]) -> String {
+        let names: Vec<String> = at
+            .iter()
+            .filter_map(|a| match a {
+                At::Body(id, _) => self.own(*id).map(|i| &self.bodies[i]),
+                At::Ground(_) => None,
+            })
+            .filter(|b| b.inertia.is_none())
+            .map(|b| format!("'{}' is a point mass", b.name))
+            .collect();
+        if names.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", names.join(", "))
+        }
+    }
+
     fn angle(&self, at: At) -> f64 {
         match at {
             At::Body(id, _) => self
@@ -507,7 +527,7 @@ impl PlanarBuilder {
         if let Some(why) = element.problem(&anchors) {
             return Err(ModelError::Invalid {
                 element: name.to_string(),
-                what: why,
+                what: format!("{why}{}", self.point_masses_among(at)),
             });
         }
         Ok(Force::new(name.to_string(), element.clone(), anchors))

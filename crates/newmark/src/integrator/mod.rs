@@ -153,8 +153,9 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     ///
     /// # Errors
     /// [`IntegrationError`] for an invalid configuration or structure, wrong
-    /// dimensions, an inconsistent initial state (with projection off), or a
-    /// singular initial system.
+    /// dimensions, a non-finite `t0`, an inconsistent initial state (with
+    /// projection off), or a singular initial system (reported "at start-up",
+    /// naming the constraint the given state violated most).
     pub fn new(
         sys: &'s S,
         config: Config,
@@ -162,6 +163,13 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         u0: &[f64],
         v0: &[f64],
     ) -> Result<Self, IntegrationError> {
+        if !t0.is_finite() {
+            return Err(IntegrationError::Time {
+                what: "t0",
+                value: t0,
+                why: "the start time must be finite".into(),
+            });
+        }
         let p = config.validate()?;
         let (n, m) = (sys.n_coords(), sys.n_constraints());
         for (what, got) in [("u0", u0.len()), ("v0", v0.len())] {
@@ -216,8 +224,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         this.state.u.copy_from_slice(u0);
         this.state.v.copy_from_slice(v0);
         this.check_finite_start()?;
-        this.make_consistent()?;
-        this.initial_acceleration()?;
+        this.start_up()?;
         // The state's own residual and constraint norms, for the t0 sample.
         let s = &this.state;
         this.lin.eval_residual(sys, t0, &s.u, &s.v, &s.a, &s.lambda);
@@ -314,11 +321,17 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     /// # Errors
     /// The first [`IntegrationError`] of a step that even step control could not
     /// save; every step accepted before it has been observed.
+    /// [`IntegrationError::Time`] for a `t_end` that is not finite (one at or
+    /// before the current time returns at once, with nothing to do).
     pub fn run(
         &mut self,
         t_end: f64,
         observer: &mut dyn Observer,
     ) -> Result<RunStats, IntegrationError> {
+        // (NaN is never reached and +∞ only after forever.)
+        if !t_end.is_finite() {
+            return Err(self.bad_end(t_end, "the end time must be finite"));
+        }
         let energy = observer.reads_energy();
         if !self.observed_start {
             observer.observe(&self.view_with(energy));
@@ -344,8 +357,14 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     /// # Errors
     /// [`IntegrationError::NewtonFailed`], [`IntegrationError::NonFinite`] or
     /// [`IntegrationError::Kkt`] when step control is off (`h_min = h`), and
-    /// [`IntegrationError::StepSizeTooSmall`] when it gives up.
+    /// [`IntegrationError::StepSizeTooSmall`] when it gives up;
+    /// [`IntegrationError::Time`] for a `t_end` that is not finite or not
+    /// after the current time (within `1e-9 h`, as [`reached`](Self::reached)).
     pub fn step(&mut self, t_end: f64) -> Result<(), IntegrationError> {
+        // A step towards a t_end at or before t would be of size ≤ 0.
+        if !t_end.is_finite() || self.reached(t_end) {
+            return Err(self.bad_end(t_end, "step needs a finite end time after the current one"));
+        }
         let h_min = self.config.h_min();
         let mut h = self.h;
         let mut retried_fresh = false;
@@ -397,6 +416,15 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                     return Err(self.failure_error(failure, h_try, h_min));
                 }
             }
+        }
+    }
+
+    /// A `t_end` that `run` or `step` cannot integrate to.
+    fn bad_end(&self, t_end: f64, why: &str) -> IntegrationError {
+        IntegrationError::Time {
+            what: "t_end",
+            value: t_end,
+            why: format!("{why} (the integration is at t = {})", crate::Short(self.t)),
         }
     }
 
@@ -621,8 +649,13 @@ fn linear_algebra<S: System + ?Sized>(
                  dense backend, or the automatic choice"
             )));
         }
-        if auto && !structure.augmented && !mass_diagonal_positive(sys, t0, u0) {
-            continue;
+        if !structure.augmented
+            && let Some(i) = massless_coordinate(sys, t0, u0)
+        {
+            if auto {
+                continue;
+            }
+            return Err(singular_mass_error(sys, backend, i));
         }
         let lin = Linearization::with_structure(sys, structure)?;
         let single = mstar_kkt::KktOptions { backend, ..options };
@@ -650,9 +683,9 @@ fn analysis_error(t: f64, h: f64, source: KktError) -> IntegrationError {
     }
 }
 
-/// Whether every diagonal entry of `M(u₀)` is positive (necessary for a
-/// positive definite `M`).
-fn mass_diagonal_positive<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> bool {
+/// The first coordinate whose diagonal entry of `M(u₀)` is not positive
+/// (`None` when all are: necessary for a positive definite `M`).
+fn massless_coordinate<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Option<usize> {
     let pattern = sys.mass_pattern();
     let mut mass = vec![0.0; pattern.len()];
     sys.mass_into(t, u, &mut mass);
@@ -662,5 +695,33 @@ fn mass_diagonal_positive<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> boo
             diagonal[i] += v;
         }
     }
-    diagonal.iter().all(|&d| d > 0.0)
+    diagonal.iter().position(|&d| d <= 0.0 || d.is_nan())
+}
+
+/// A backend that factors `S` without `BᵀB` chosen for a model whose `M` is
+/// singular at coordinate `i`: its first solve (the consistent accelerations,
+/// `S = M`) has no pivot. Names the backends that factor `M + BᵀB` instead
+/// (eq. 11), which a singular `M` does not stop.
+fn singular_mass_error<S: System + ?Sized>(
+    sys: &S,
+    backend: Backend,
+    i: usize,
+) -> IntegrationError {
+    let symmetric = sys.tangent_is_symmetric();
+    let working: Vec<&str> = mstar_kkt::backends()
+        .iter()
+        .filter(|r| r.structure.augmented && (symmetric || !r.symmetric))
+        .map(|r| r.backend.name())
+        .collect();
+    IntegrationError::Config(format!(
+        "the {backend} KKT backend needs a mass matrix with a positive diagonal (it factors M without \
+         the BᵀB term), and this model's has none for coordinate '{}' (the paper's singular M); \
+         use the {} backend, or the automatic choice, which factor M + BᵀB",
+        sys.coord_name(i),
+        match working.split_last() {
+            Some((last, [])) => (*last).to_string(),
+            Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+            None => "lu".to_string(),
+        }
+    ))
 }

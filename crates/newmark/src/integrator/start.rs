@@ -10,6 +10,77 @@ use super::Integrator;
 use crate::{AlphaParams, IntegrationError, Start};
 
 impl<S: System + ?Sized> Integrator<'_, S> {
+    /// The whole start (§3, §6): the state made consistent, then the initial
+    /// accelerations and multipliers. Its errors say "at start-up", not a
+    /// step size, and, when projection had to move the given state, name the
+    /// constraint that state violated most: the likely fault, where a
+    /// failure after projection would only name where the projected state
+    /// ended (a singular configuration), not why it went there.
+    pub(super) fn start_up(&mut self) -> Result<(), IntegrationError> {
+        let violated = self.initial_violation();
+        self.make_consistent()
+            .and_then(|()| self.initial_acceleration())
+            .map_err(|e| self.at_start_up(e, violated))
+    }
+
+    /// The constraint the given positions violate most and by how much,
+    /// when that is beyond the tolerance (projection will move them).
+    fn initial_violation(&mut self) -> Option<(usize, f64)> {
+        let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
+        let (zeros_n, zeros_m) = (vec![0.0; n], vec![0.0; m]);
+        self.lin.eval_residual(
+            self.sys,
+            self.t,
+            &self.state.u,
+            &zeros_n,
+            &zeros_n,
+            &zeros_m,
+        );
+        let ctol = self.config.tol * max_abs(&self.state.u).max(1.0);
+        let (k, value) = argmax_abs(self.lin.phi());
+        (m > 0 && value.abs() > ctol).then_some((k, value))
+    }
+
+    /// A start-up error with the initial violation `violated` (from
+    /// [`initial_violation`](Self::initial_violation)) and without a step size.
+    fn at_start_up(&self, e: IntegrationError, violated: Option<(usize, f64)>) -> IntegrationError {
+        let named = violated.map(|(k, value)| (self.sys.constraint_name(k), value));
+        match e {
+            IntegrationError::Kkt {
+                context,
+                t,
+                unknown,
+                source,
+                ..
+            } => IntegrationError::StartFailed {
+                t,
+                context,
+                unknown,
+                violated: named,
+                cause: source,
+            },
+            IntegrationError::ProjectionFailed {
+                t,
+                iterations,
+                residual,
+                constraint,
+                ..
+            } => {
+                let (initial, initial_value) =
+                    named.unwrap_or_else(|| (constraint.clone(), residual));
+                IntegrationError::ProjectionFailed {
+                    t,
+                    iterations,
+                    residual,
+                    constraint,
+                    initial,
+                    initial_value,
+                }
+            }
+            other => other,
+        }
+    }
+
     /// Checks `Φ(u₀) = 0` and `B u̇₀ + Φ_t = 0`; projects (minimum-norm Newton
     /// on `[I Bᵀ; B 0]`) when allowed, else reports the most violated
     /// constraint; records the corrections in the start report.
@@ -49,11 +120,15 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                     return Ok(());
                 }
                 let (k, _) = argmax_abs(self.lin.phi());
+                let constraint = self.sys.constraint_name(k);
                 return Err(IntegrationError::ProjectionFailed {
                     t,
                     iterations,
                     residual: phi,
-                    constraint: self.sys.constraint_name(k),
+                    // (`start_up` puts the given state's violation here.)
+                    initial: constraint.clone(),
+                    initial_value: phi,
+                    constraint,
                 });
             }
             self.lin.kkt_rhs(0.0, &mut self.rhs);
