@@ -31,7 +31,18 @@ pub fn warning(
         short(e.t_max)
     );
     let newton_first = e.newton_exceeded > 0;
+    let undamped = config
+        .scheme
+        .params()
+        .is_ok_and(|p| (p.gamma - 0.5).abs() < 1e-12);
     let (what, advice) = match e.coordinate.filter(|_| !newton_first) {
+        Some(i) if undamped => (
+            format!("the estimated local error exceeded the tolerance ({tolerance}) {steps}, in '{}'", coord_name(i)),
+            "the scheme is undamped (γ = 1/2): on an index-3 system its period-2h oscillation of ü \
+             and λ grows, which the estimate sees, and a smaller h makes it grow sooner; rerun with \
+             --integrator generalized-alpha"
+                .to_string(),
+        ),
         Some(i) => (
             format!(
                 "the estimated local error exceeded the tolerance ({tolerance}) {steps}, in '{}'",

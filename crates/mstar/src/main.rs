@@ -100,6 +100,10 @@ struct ChainArgs {
     /// Write every step to this CSV file (streamed; complete or not at all).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Write the state every DT seconds instead of every step (interpolated
+    /// within the steps: cubic Hermite on u and u̇), and the last state.
+    #[arg(long, value_name = "DT")]
+    output_every: Option<f64>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -251,6 +255,10 @@ struct PendulumArgs {
     /// Write every step to this CSV file (complete or not at all).
     #[arg(long)]
     out: Option<PathBuf>,
+    /// Write the state every DT seconds instead of every step (interpolated
+    /// within the steps: cubic Hermite on u and u̇), and the last state.
+    #[arg(long, value_name = "DT")]
+    output_every: Option<f64>,
 }
 
 fn main() -> ExitCode {
@@ -319,9 +327,15 @@ pub(crate) fn hint(e: &IntegrationError, files: bool) -> Option<&'static str> {
         (IntegrationError::StepSizeTooSmall { .. }, true) => Some(
             "the step size is --h (or [simulation] h), the smallest step size --set simulation.h_min=…",
         ),
-        (IntegrationError::StepSizeTooSmall { .. }, false) => {
-            Some("the step size is --h, the smallest step size --h-min")
-        }
+        (IntegrationError::StepSizeTooSmall { .. }, false) => Some(
+            "the step size is --h, adaptive steps --adaptive, the smallest step size --h-min, the Newton tolerance --tol, the scheme --integrator",
+        ),
+        (IntegrationError::ErrorTooLarge { .. }, true) => Some(
+            "adaptive steps are --adaptive (or [simulation] error_control = \"adaptive\"), the step size --h, the tolerances --rtol and --atol",
+        ),
+        (IntegrationError::ErrorTooLarge { .. }, false) => Some(
+            "adaptive steps are --adaptive, the step size --h, the tolerances --rtol and --atol, the smallest step size --h-min",
+        ),
         _ => None,
     }
 }
@@ -596,14 +610,18 @@ fn pendulum(args: &PendulumArgs) -> Result<()> {
     let clock = Instant::now();
     let mut integ = mstar::Integrator::new(&sys, run.config.clone(), 0.0, &u0, &v0)?;
     let mut summary = summary::Summary::new();
+    let mut grid = output::Grid::new(args.output_every)?;
     let ended = output::drive(&mut integ, run.t_end, &mut |integ| {
         let s = integ.view();
         summary.push(&s);
         if let Some(stream) = stream.as_mut() {
-            stream.push(&s);
+            grid.rows(&s, &mut |row| stream.push(row));
             output::watch(stream);
         }
     });
+    if let Some(stream) = stream.as_mut() {
+        grid.finish(&mut |row| stream.push(row));
+    }
     let wall = clock.elapsed();
     summary.print();
     if ended.is_ok() {
@@ -723,13 +741,17 @@ fn chain(args: &ChainArgs) -> Result<()> {
     let mut progress = Progress::new(args.t_end);
     // Without a file, the samples' energies are not evaluated (see
     // `Observer::reads_energy`): the progress report reads only t.
+    let mut grid = output::Grid::new(args.output_every)?;
     let ended = output::drive(&mut integ, args.t_end, &mut |integ| {
         if let Some(stream) = stream.as_mut() {
-            stream.push(&integ.view());
+            grid.rows(&integ.view(), &mut |row| stream.push(row));
             output::watch(stream);
         }
         progress.tick(integ.time());
     });
+    if let Some(stream) = stream.as_mut() {
+        grid.finish(&mut |row| stream.push(row));
+    }
     if ended.is_ok() {
         chain_summary(&integ, &sys, n, (setup, clock.elapsed().as_secs_f64()))?;
     }

@@ -59,6 +59,10 @@ pub struct RunArgs {
     /// Newton tolerance (overrides [simulation] tol).
     #[arg(long)]
     tol: Option<f64>,
+    /// Write the state every DT seconds instead of every step, interpolated
+    /// within the steps (overrides [output] every_time and every).
+    #[arg(long, value_name = "DT")]
+    output_every: Option<f64>,
     /// Override a key of the file, e.g. --set simulation.rho=0.8 or
     /// --set output.every=10 (repeatable; values in TOML syntax).
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -92,6 +96,8 @@ struct Loaded {
     v0: Vec<f64>,
     simulation: Simulation,
     every: usize,
+    /// `[output] every_time`, s.
+    every_time: Option<f64>,
 }
 
 /// A planar model (whose CSV has reaction columns) or another system.
@@ -170,6 +176,10 @@ fn start_hint(sys: &PlanarSystem, e: &IntegrationError) -> Option<String> {
 }
 
 fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
+    let (every, every_time) = match args.output_every {
+        Some(dt) => (1, Some(dt)),
+        None => (model.every, model.every_time),
+    };
     let (config, t_end) = mstar::run::config(&model.simulation).map_err(anyhow::Error::msg)?;
     let sys = model.system.system();
     println!(
@@ -190,12 +200,17 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     };
     let extra = columns.as_ref().map(Columns::names).unwrap_or_default();
     crate::limits::check_steps(t_end, config.h)?;
-    let every = args.builtin.is_none().then_some(model.every);
     let fields = csv::header(sys).len() + extra.len();
-    crate::check_output(args.out.as_deref(), fields, (t_end, config.h), every)?;
+    crate::check_output(
+        args.out.as_deref(),
+        fields,
+        (t_end, config.h),
+        args.builtin.is_none().then_some(every),
+    )?;
     let stream = crate::open_output(args.out.as_deref(), sys, &extra)?;
     let columns = columns.as_ref().map(|c| c as &dyn Columns);
-    let mut output = RunOutput::new(stream, columns, model.every, t_end);
+    let grid = crate::output::Grid::new(every_time)?;
+    let mut output = RunOutput::new(stream, columns, (every, grid), t_end);
     let config_used = config.clone();
     let start = (config, &model.u0[..], &model.v0[..], t_end);
     let (outcome, drift) = match (&model.system, rows) {
@@ -212,6 +227,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         _ => (integrate(sys, start, &|_| Ok(()), &mut output), None),
     };
     output.progress.finish_and_clear();
+    output.finish_rows();
     let (stats, t, wall, ended) = outcome?;
     print_summary(stats, t, &output, wall);
     if let Some(w) = mstar::accuracy::warning(&stats, &config_used, &|i| sys.coord_name(i)) {
@@ -321,6 +337,7 @@ fn load(args: &RunArgs) -> Result<Loaded> {
         u0: file.system.initial_position(),
         v0: file.system.initial_velocity(),
         every: file.output.every,
+        every_time: file.output.every_time,
         simulation: file.simulation,
         system: Model::Planar(Box::new(file.system)),
     })
@@ -384,6 +401,7 @@ fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
                 system: Model::Other(Box::new(sys)),
                 simulation,
                 every: 1,
+                every_time: None,
             }
         }
         Builtin::Chain => {
@@ -395,6 +413,7 @@ fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
                 system: Model::Planar(Box::new(sys)),
                 simulation,
                 every: 1,
+                every_time: None,
             }
         }
     })
@@ -408,6 +427,8 @@ struct RunOutput<'a> {
     columns: Option<&'a dyn Columns>,
     extra: Vec<f64>,
     every: usize,
+    /// The rows of `[output] every_time` (every step when not given).
+    grid: crate::output::Grid,
     seen: usize,
     t_end: f64,
     progress: ProgressBar,
@@ -422,7 +443,7 @@ impl<'a> RunOutput<'a> {
     fn new(
         stream: Option<csv::CsvStream>,
         columns: Option<&'a dyn Columns>,
-        every: usize,
+        (every, grid): (usize, crate::output::Grid),
         t_end: f64,
     ) -> Self {
         let progress = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::hidden());
@@ -435,6 +456,7 @@ impl<'a> RunOutput<'a> {
             columns,
             extra: Vec::new(),
             every: every.max(1),
+            grid,
             seen: 0,
             t_end,
             progress,
@@ -447,18 +469,46 @@ impl<'a> RunOutput<'a> {
     }
 }
 
+impl RunOutput<'_> {
+    /// Writes the rows that the state `s` completes (`[output] every_time`),
+    /// with the model's extra columns.
+    fn write(&mut self, s: &SampleRef<'_>) {
+        let Some(stream) = self.stream.as_mut() else {
+            return;
+        };
+        let (columns, extra) = (self.columns, &mut self.extra);
+        self.grid.rows(s, &mut |row| {
+            extra.clear();
+            if let Some(columns) = columns {
+                columns.values(row, extra);
+            }
+            stream.push_with(row, extra);
+        });
+        crate::output::watch(stream);
+    }
+
+    /// Writes the last state reached when `[output] every_time` left it out.
+    fn finish_rows(&mut self) {
+        let grid = std::mem::replace(&mut self.grid, crate::output::Grid::every_step());
+        let (Some(stream), columns, extra) = (self.stream.as_mut(), self.columns, &mut self.extra)
+        else {
+            return;
+        };
+        grid.finish(&mut |row| {
+            extra.clear();
+            if let Some(columns) = columns {
+                columns.values(row, extra);
+            }
+            stream.push_with(row, extra);
+        });
+    }
+}
+
 impl Observer for RunOutput<'_> {
     fn observe(&mut self, s: &SampleRef<'_>) {
         let last = s.t >= self.t_end * (1.0 - 1e-12);
-        if let Some(stream) = self.stream.as_mut()
-            && (self.seen.is_multiple_of(self.every) || last)
-        {
-            self.extra.clear();
-            if let Some(columns) = self.columns {
-                columns.values(s, &mut self.extra);
-            }
-            stream.push_with(s, &self.extra);
-            crate::output::watch(stream);
+        if self.seen.is_multiple_of(self.every) || last {
+            self.write(s);
         }
         self.seen += 1;
         let e = s.energy();

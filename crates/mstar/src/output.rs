@@ -201,3 +201,57 @@ pub fn exit_code(result: anyhow::Result<()>, files: bool, failure: u8) -> u8 {
     }
     failure
 }
+
+/// The rows of a run's CSV file: every step, or with `--output-every` /
+/// `[output] every_time` the state at every multiple of Δt, interpolated
+/// within the steps ([`mstar::Resample`]), and the last state reached.
+pub struct Grid(Option<mstar::Resample<mstar::Trajectory>>);
+
+impl Grid {
+    /// Every step (`None`) or every `every_time` seconds.
+    ///
+    /// # Errors
+    /// A Δt that is not positive and finite.
+    pub fn new(every_time: Option<f64>) -> anyhow::Result<Self> {
+        match every_time {
+            None => Ok(Self(None)),
+            Some(dt) if dt > 0.0 && dt.is_finite() => Ok(Self(Some(mstar::Resample::new(
+                dt,
+                mstar::Trajectory::default(),
+            )))),
+            Some(dt) => {
+                anyhow::bail!("--output-every must be a positive number of seconds (got {dt})")
+            }
+        }
+    }
+
+    /// Every step.
+    #[must_use]
+    pub fn every_step() -> Self {
+        Self(None)
+    }
+
+    /// Hands `row` the rows that the state `s` completes.
+    pub fn rows(&mut self, s: &mstar::SampleRef<'_>, row: &mut dyn FnMut(&mstar::SampleRef<'_>)) {
+        use mstar::Observer as _;
+        match &mut self.0 {
+            None => row(s),
+            Some(grid) => {
+                grid.observe(s);
+                for sample in grid.inner_mut().samples.drain(..) {
+                    row(&sample.view());
+                }
+            }
+        }
+    }
+
+    /// Hands `row` the last state reached when it is not on the grid (at the
+    /// end of a run, also of one that stopped early).
+    pub fn finish(self, row: &mut dyn FnMut(&mstar::SampleRef<'_>)) {
+        if let Some(grid) = self.0 {
+            for sample in grid.finish().samples {
+                row(&sample.view());
+            }
+        }
+    }
+}

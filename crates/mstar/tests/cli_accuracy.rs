@@ -103,3 +103,137 @@ fn strict_is_an_error_that_keeps_the_samples() {
     assert!(!stderr.contains("warning"), "{stderr}");
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// The times of a CSV file's rows.
+fn times(path: &std::path::Path) -> Vec<f64> {
+    let text = std::fs::read_to_string(path).expect("the CSV file");
+    text.lines()
+        .skip(1)
+        .map(|l| {
+            l.split(',')
+                .next()
+                .and_then(|t| t.parse().ok())
+                .expect("a time")
+        })
+        .collect()
+}
+
+#[test]
+fn output_every_writes_the_requested_times() {
+    let dir = scratch("every");
+    let expect = |path: &std::path::Path, dt: f64, t_end: f64| {
+        let t = times(path);
+        let n = (t_end / dt).round() as usize;
+        assert_eq!(t.len(), n + 1, "{}: {t:?}", path.display());
+        for (k, &tk) in t.iter().enumerate() {
+            assert!(
+                (tk - dt * k as f64).abs() < 1e-9,
+                "{}: row {k} at {tk}",
+                path.display()
+            );
+        }
+    };
+    let csv = dir.join("p.csv");
+    let p = csv.display().to_string();
+    let (code, stderr) = run(&[
+        "pendulum",
+        "--h",
+        "0.0137",
+        "--t-end",
+        "2",
+        "--output-every",
+        "0.25",
+        "--out",
+        &p,
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    expect(&csv, 0.25, 2.0);
+    let (code, stderr) = run(&[
+        "chain",
+        "--links",
+        "3",
+        "--adaptive",
+        "--output-every",
+        "0.1",
+        "--out",
+        &p,
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    expect(&csv, 0.1, 1.0);
+    // A model file's [output] every_time, and --output-every over it.
+    let model_path = dir.join("m.toml");
+    let text = std::fs::read_to_string(model("four-bar.toml")).expect("four-bar.toml");
+    std::fs::write(
+        &model_path,
+        format!("{text}\n[output]\nevery_time = 0.05\n"),
+    )
+    .expect("write");
+    let m = model_path.display().to_string();
+    let (code, stderr) = run(&["run", &m, "--t-end", "0.5", "--out", &p]);
+    assert_eq!(code, Some(0), "{stderr}");
+    expect(&csv, 0.05, 0.5);
+    let (code, stderr) = run(&[
+        "run",
+        &m,
+        "--t-end",
+        "0.5",
+        "--output-every",
+        "0.125",
+        "--out",
+        &p,
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    expect(&csv, 0.125, 0.5);
+    let (code, stderr) = run(&["pendulum", "--output-every", "0", "--out", &p]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.contains("--output-every"), "{stderr}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// A failed step's advice follows its diagnosed cause, and works: a
+/// tolerance below round-off asks for a reachable one; the trapezoidal
+/// rule's growing λ mode (the paper's preset) asks for generalized-α, not
+/// for a smaller h (which makes it fail sooner: 3.47 s at h = 0.005 against
+/// 5.92 s at 0.01).
+#[test]
+fn a_failed_step_s_advice_follows_its_cause() {
+    let (code, stderr) = run(&["pendulum", "--tol", "1e-300"]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("below what double precision reaches"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("use tol = 1e-14 or more"), "{stderr}");
+    let (code, stderr) = run(&["pendulum", "--tol", "1e-14"]);
+    assert_eq!(code, Some(0), "{stderr}");
+
+    let (code, stderr) = run(&["pendulum", "--preset", "paper"]);
+    assert_eq!(code, Some(1), "{stderr}");
+    let error = stderr
+        .lines()
+        .find(|l| l.starts_with("error:"))
+        .unwrap_or_default();
+    assert!(
+        error.contains("undamped") && error.contains("use generalized-α"),
+        "{stderr}"
+    );
+    assert!(!error.contains("smaller step size"), "{stderr}");
+    let warning = stderr
+        .lines()
+        .find(|l| l.starts_with("warning: the est"))
+        .unwrap_or_default();
+    assert!(
+        warning.contains("--integrator generalized-alpha"),
+        "{stderr}"
+    );
+    assert!(!warning.contains("--h "), "{stderr}");
+    let (code, stderr) = run(&[
+        "pendulum",
+        "--preset",
+        "paper",
+        "--integrator",
+        "generalized-alpha",
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(!stderr.contains("warning"), "{stderr}");
+}

@@ -95,8 +95,7 @@ pub enum IntegrationError {
     #[error(
         "Newton iteration did not converge at t = {t} s (h = {h:e}): after {iterations} iterations \
          ‖r‖∞ = {residual:.3e} (tolerance {residual_tol:.3e}) and ‖Φ‖∞ = {constraint:.3e} (tolerance {constraint_tol:.3e}). \
-         Try a smaller step size h or a looser tolerance; with the trapezoidal rule (Newmark γ = 1/2) this is \
-         usually the growing period-2h oscillation of λ, which generalized-α (the default scheme) damps"
+         {advice}"
     )]
     NewtonFailed {
         /// Time of the failed step's end.
@@ -113,14 +112,14 @@ pub enum IntegrationError {
         constraint: f64,
         /// Tolerance on `‖Φ‖∞`.
         constraint_tol: f64,
+        /// What to try, from what the run knows (the scheme, the
+        /// tolerance, the error estimate so far).
+        advice: String,
     },
     /// Step control reached the smallest allowed step.
     #[error(
         "step size too small at t = {t} s: the step with h = {h:e} failed and h/2 would be below h_min = {h_min:e} \
-         (‖r‖∞ = {residual:.3e}, ‖Φ‖∞ = {constraint:.3e}). If even tiny steps fail, the state reached at t was \
-         already wrong: steps are only rejected when Newton fails (there is no local error estimate), so a fast \
-         motion (a whip) can be under-resolved before it breaks Newton: integrate again with a smaller step size h. \
-         Otherwise the model may be singular here (a lock-up of the constraints), or lower h_min"
+         (‖r‖∞ = {residual:.3e}, ‖Φ‖∞ = {constraint:.3e}). {advice}"
     )]
     StepSizeTooSmall {
         /// Time at the start of the failed step.
@@ -133,6 +132,8 @@ pub enum IntegrationError {
         residual: f64,
         /// Final `‖Φ‖∞` of the last attempt.
         constraint: f64,
+        /// What to try, from what the run knows.
+        advice: String,
     },
     /// The local error estimate exceeded the tolerance: a step in strict
     /// mode, or adaptive stepping at its smallest step size.
@@ -304,6 +305,7 @@ mod tests {
                 residual_tol: 1e-10,
                 constraint: 1.0,
                 constraint_tol: 1e-10,
+                advice: "Try a smaller step size h".into(),
             },
             IntegrationError::StepSizeTooSmall {
                 t: 1.0,
@@ -311,6 +313,7 @@ mod tests {
                 h_min: 1e-5,
                 residual: 1.0,
                 constraint: 1.0,
+                advice: "Try a smaller step size h".into(),
             },
             IntegrationError::NonFinite {
                 t: 1.0,

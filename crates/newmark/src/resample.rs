@@ -149,6 +149,11 @@ impl<O: Observer> Resample<O> {
         &self.inner
     }
 
+    /// The inner observer, mutably (to drain what it collected).
+    pub fn inner_mut(&mut self) -> &mut O {
+        &mut self.inner
+    }
+
     fn grid_time(&self, t0: f64) -> f64 {
         t0 + self.k as f64 * self.dt
     }

@@ -20,7 +20,7 @@
 use mstar_model::System;
 
 use super::{Failure, Integrator};
-use crate::{ErrorControl, IntegrationError, StepMode};
+use crate::{ErrorControl, IntegrationError, Short, StepMode};
 
 /// A converged step's estimate, as a ratio to the tolerance.
 #[derive(Clone, Copy, Debug)]
@@ -49,6 +49,9 @@ const SHRINK_MAX: f64 = 0.2;
 /// Changes of `h` smaller than this keep `h` (and modified Newton's
 /// factorization) as it is.
 const GROW_MIN: f64 = 1.25;
+/// Newton tolerances below this cannot be met in double precision (the
+/// pendulum converges at 1e-15 and not at 1e-16).
+const ROUND_OFF_TOL: f64 = 1e-15;
 
 impl<S: System + ?Sized> Integrator<'_, S> {
     /// Estimates the converged trial step's local error and decides: `Some`
@@ -173,6 +176,38 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             *e -= y;
         }
         Ok(())
+    }
+
+    /// Why a step's Newton iteration may have failed, and what to try, from
+    /// what the run knows: a tolerance below round-off, the trapezoidal
+    /// rule's growing period-2h mode, a motion the estimate already found
+    /// under-resolved, else a smaller step or a singular position.
+    pub(super) fn diagnose_failure(&self) -> String {
+        if self.config.tol < ROUND_OFF_TOL {
+            return format!(
+                "The Newton tolerance tol = {} is below what double precision reaches (about 1e-15 \
+                 of the forces): use tol = 1e-14 or more",
+                Short(self.config.tol)
+            );
+        }
+        if (self.p.gamma - 0.5).abs() < 1e-12 {
+            return "The scheme is undamped (γ = 1/2: the trapezoidal rule, HHT α = 0 or generalized-α \
+                    ρ∞ = 1): on an index-3 system its period-2h oscillation of ü and λ grows until Newton \
+                    fails, and a smaller h makes it grow sooner; use generalized-α with ρ∞ < 1 (the \
+                    default scheme)"
+                .to_string();
+        }
+        if let Some(t) = self.stats.error.first_exceeded {
+            return format!(
+                "The estimated local error exceeded the tolerance from t = {} s on: the motion was \
+                 under-resolved before Newton failed; integrate again with a smaller step size h, or \
+                 with adaptive steps",
+                Short(t)
+            );
+        }
+        "Try a smaller step size h; if even tiny steps fail here, the model may be singular at this \
+         position (a lock-up of the constraints), or lower h_min"
+            .to_string()
     }
 
     /// The error for an estimate beyond the tolerance, with what to try.

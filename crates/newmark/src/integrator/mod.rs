@@ -450,6 +450,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                         h_min,
                         residual,
                         constraint,
+                        advice: self.diagnose_failure(),
                     }
                 } else {
                     IntegrationError::NewtonFailed {
@@ -460,6 +461,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                         residual_tol,
                         constraint,
                         constraint_tol,
+                        advice: self.diagnose_failure(),
                     }
                 }
             }
