@@ -4,6 +4,25 @@
 
 use mstar_newmark::{Config, RunStats};
 
+/// The exit code of a run that reached its end with steps whose estimated
+/// error exceeded the tolerance: its output is complete, and not accurate
+/// to the tolerance (0 means both).
+pub const EXIT_INACCURATE: u8 = 3;
+
+/// A run that reached its end with steps beyond the error tolerance (the
+/// warning says where): exit code [`EXIT_INACCURATE`].
+#[derive(Debug, thiserror::Error)]
+#[error("the run reached its end, but its estimated error exceeded the tolerance")]
+pub struct Inaccurate;
+
+/// `Err(Inaccurate)` when a warning was given.
+///
+/// # Errors
+/// [`Inaccurate`] when `warned`.
+pub fn verdict(warned: bool) -> Result<(), Inaccurate> {
+    if warned { Err(Inaccurate) } else { Ok(()) }
+}
+
 /// The warning for `stats` of a run with `config` (`None` when every step
 /// was within tolerance). `coord_name` names a coordinate. The advice names
 /// the options that `mstar pendulum`, `mstar chain` and `mstar run` share:
@@ -74,7 +93,7 @@ pub fn warning(
         ),
     };
     Some(format!(
-        "warning: {what}: the results are not accurate to that tolerance; {advice} (--strict makes this an error)"
+        "warning: {what}: the results are not accurate to that tolerance (exit code 3); {advice} (--strict stops at the first such step)"
     ))
 }
 

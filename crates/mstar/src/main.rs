@@ -51,6 +51,9 @@ struct Cli {
 enum Command {
     /// Run a model file (TOML or JSON; docs/model-format.md) or a built-in
     /// model, with a progress bar on long runs and a summary at the end.
+    /// Exit 0 when it reaches its end within the error tolerance, 3 when it
+    /// reaches its end beyond it (a warning says where), 2 when the file
+    /// cannot be read, 130/143 after SIGINT/SIGTERM, 1 on other failures.
     Run(model_commands::RunArgs),
     /// Check a model file without integrating it: coordinates, constraints,
     /// degrees of freedom, redundant constraints by name, and how far the
@@ -642,10 +645,23 @@ fn pendulum(args: &PendulumArgs) -> Result<()> {
         );
     }
     // Also after a failure: the samples kept are as inaccurate as it says.
-    if let Some(w) = mstar::accuracy::warning(&integ.stats(), &run.config, &|i| sys.coord_name(i)) {
+    let warned = warn_accuracy(&integ.stats(), &run.config, &sys);
+    output::conclude(stream, out, ended, integ.time())?;
+    Ok(mstar::accuracy::verdict(warned)?)
+}
+
+/// Prints the accuracy warning of a run (`mstar::accuracy::warning`), if
+/// any; returns whether it did.
+pub(crate) fn warn_accuracy<S: System + ?Sized>(
+    stats: &mstar::RunStats,
+    config: &Config,
+    sys: &S,
+) -> bool {
+    let warning = mstar::accuracy::warning(stats, config, &|i| sys.coord_name(i));
+    if let Some(w) = &warning {
         eprintln!("{w}");
     }
-    output::conclude(stream, out, ended, integ.time())
+    warning.is_some()
 }
 
 /// `--reference rk4`: the RK4 solution on the grid `0, h, 2h, …, t_end` (the
@@ -755,10 +771,9 @@ fn chain(args: &ChainArgs) -> Result<()> {
     if ended.is_ok() {
         chain_summary(&integ, &sys, n, (setup, clock.elapsed().as_secs_f64()))?;
     }
-    if let Some(w) = mstar::accuracy::warning(&integ.stats(), &config, &|i| sys.coord_name(i)) {
-        eprintln!("{w}");
-    }
-    output::conclude(stream, out, ended, integ.time())
+    let warned = warn_accuracy(&integ.stats(), &config, &sys);
+    output::conclude(stream, out, ended, integ.time())?;
+    Ok(mstar::accuracy::verdict(warned)?)
 }
 
 /// The chain's timing summary and where its tip ended.

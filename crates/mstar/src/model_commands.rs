@@ -115,8 +115,10 @@ impl Model {
     }
 }
 
-/// `mstar run`: exit 0 when the run reaches its end, 2 when the model file
-/// cannot be read (as `mstar check`), 1 on any other failure.
+/// `mstar run`: exit 0 when the run reaches its end within the error
+/// tolerance, 3 when it reaches its end beyond it (`mstar::accuracy`), 2 when
+/// the model file cannot be read (as `mstar check`), 130/143 after SIGINT /
+/// SIGTERM, 1 on any other failure.
 pub fn run(args: &RunArgs) -> ExitCode {
     let model = match load(args) {
         Ok(model) => model,
@@ -132,6 +134,9 @@ pub fn run(args: &RunArgs) -> ExitCode {
 /// its exit code: 2 for a file that cannot be read, 130/143 for an
 /// interrupted run (`crate::output::exit_code`), else 1.
 fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
+    if e.downcast_ref::<mstar::accuracy::Inaccurate>().is_some() {
+        return ExitCode::from(mstar::accuracy::EXIT_INACCURATE);
+    }
     if e.downcast_ref::<crate::signals::Interrupted>().is_some() {
         return ExitCode::from(crate::output::exit_code(Err(e), true, 1));
     }
@@ -230,9 +235,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     output.finish_rows();
     let (stats, t, wall, ended) = outcome?;
     print_summary(stats, t, &output, wall);
-    if let Some(w) = mstar::accuracy::warning(&stats, &config_used, &|i| sys.coord_name(i)) {
-        eprintln!("{w}");
-    }
+    let warned = crate::warn_accuracy(&stats, &config_used, sys);
     crate::output::conclude(output.stream, args.out.as_deref(), ended, t)?;
     // The samples are written; they are wrong from the drift on.
     if let (Some(mstar::run::RunError::RedundancyChanged { t, .. }), Some(out)) =
@@ -243,7 +246,10 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
             out.display()
         );
     }
-    drift.map_or(Ok(()), |e| Err(e.into()))
+    if let Some(e) = drift {
+        return Err(e.into());
+    }
+    Ok(mstar::accuracy::verdict(warned)?)
 }
 
 /// Names the joint an initial pose is far from, before the start projects

@@ -186,6 +186,10 @@ pub fn exit_code(result: anyhow::Result<()>, files: bool, failure: u8) -> u8 {
     let Err(e) = result else {
         return 0;
     };
+    // The warning has said why.
+    if e.downcast_ref::<mstar::accuracy::Inaccurate>().is_some() {
+        return mstar::accuracy::EXIT_INACCURATE;
+    }
     if let Some(i) = e.downcast_ref::<Interrupted>() {
         if i.signal != libc::SIGPIPE {
             note(format_args!("mstar: {i}"));

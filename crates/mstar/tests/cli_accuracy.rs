@@ -25,7 +25,7 @@ fn advised(stderr: &str, option: &str) -> Option<String> {
 /// returns how many reruns that took (at most `limit`).
 fn follow_h_advice(args: &[&str], limit: usize) -> usize {
     let (code, mut stderr) = run(args);
-    assert_eq!(code, Some(0), "{stderr}");
+    assert_eq!(code, Some(3), "a warned run exits with 3: {stderr}");
     assert!(
         stderr.contains("warning: the estimated local error"),
         "{args:?}: {stderr}"
@@ -36,10 +36,11 @@ fn follow_h_advice(args: &[&str], limit: usize) -> usize {
         let at = again.iter().position(|a| *a == "--h").expect("--h given");
         again[at + 1] = &h;
         let (code, next) = run(&again);
-        assert_eq!(code, Some(0), "{next}");
         if !next.contains("warning: the estimated") {
+            assert_eq!(code, Some(0), "{next}");
             return rerun;
         }
+        assert_eq!(code, Some(3), "{next}");
         stderr = next;
     }
     panic!("{args:?}: still a warning after {limit} reruns: {stderr}");
@@ -68,7 +69,7 @@ fn a_step_too_large_warns_and_its_advice_works() {
 #[test]
 fn a_loose_newton_tolerance_is_named_and_the_advised_one_works() {
     let (code, stderr) = run(&["pendulum", "--tol", "0.1"]);
-    assert_eq!(code, Some(0), "{stderr}");
+    assert_eq!(code, Some(3), "{stderr}");
     assert!(stderr.contains("constraint violation"), "{stderr}");
     let tol = advised(&stderr, "--tol").unwrap_or_else(|| panic!("no --tol advice: {stderr}"));
     let (code, stderr) = run(&["pendulum", "--tol", &tol]);
@@ -92,8 +93,18 @@ fn strict_is_an_error_that_keeps_the_samples() {
     );
     // A model file: the same warning, and the same options.
     let pendulum = model("pendulum.toml");
-    let (code, stderr) = run(&["run", &pendulum, "--h", "0.05"]);
-    assert_eq!(code, Some(0), "{stderr}");
+    let out_arg = dir.join("r.csv").display().to_string();
+    let (code, stderr) = run(&["run", &pendulum, "--h", "0.05", "--out", &out_arg]);
+    assert_eq!(code, Some(3), "{stderr}");
+    // Complete (the run reached its end), in place.
+    let rows = std::fs::read_to_string(&out_arg).expect("the CSV file");
+    assert!(
+        rows.lines()
+            .last()
+            .is_some_and(|l| l.starts_with("10,") || l.starts_with("1e1,")),
+        "{}",
+        rows.lines().last().unwrap_or("")
+    );
     assert!(
         stderr.contains("warning: the estimated local error"),
         "{stderr}"
