@@ -310,6 +310,10 @@ fn integrate<S: System + ?Sized>(
     let result = crate::output::drive(&mut integ, t_end, &mut |integ| {
         observer.observe(&integ.view());
     });
+    if result.is_err() {
+        // The last state reached, which `[output] every` may have skipped.
+        observer.observe(&integ.view());
+    }
     let wall = clock.elapsed().as_secs_f64();
     Ok((integ.stats(), integ.time(), wall, result))
 }
@@ -436,6 +440,9 @@ struct RunOutput<'a> {
     /// The rows of `[output] every_time` (every step when not given).
     grid: crate::output::Grid,
     seen: usize,
+    /// The time of the last state observed, and of the last one written.
+    last_seen: f64,
+    last_written: Option<f64>,
     t_end: f64,
     progress: ProgressBar,
     shown: bool,
@@ -464,6 +471,8 @@ impl<'a> RunOutput<'a> {
             every: every.max(1),
             grid,
             seen: 0,
+            last_seen: f64::NAN,
+            last_written: None,
             t_end,
             progress,
             shown: false,
@@ -479,6 +488,7 @@ impl RunOutput<'_> {
     /// Writes the rows that the state `s` completes (`[output] every_time`),
     /// with the model's extra columns.
     fn write(&mut self, s: &SampleRef<'_>) {
+        self.last_written = Some(s.t);
         let Some(stream) = self.stream.as_mut() else {
             return;
         };
@@ -512,11 +522,21 @@ impl RunOutput<'_> {
 
 impl Observer for RunOutput<'_> {
     fn observe(&mut self, s: &SampleRef<'_>) {
+        // The last state observed again after a run that stopped early
+        // (`integrate`): written if `every` skipped it, so that nothing the
+        // run computed is lost.
+        if self.seen > 0 && s.t == self.last_seen {
+            if self.last_written != Some(s.t) {
+                self.write(s);
+            }
+            return;
+        }
         let last = s.t >= self.t_end * (1.0 - 1e-12);
         if self.seen.is_multiple_of(self.every) || last {
             self.write(s);
         }
         self.seen += 1;
+        self.last_seen = s.t;
         let e = s.energy();
         let e0 = *self.energy0.get_or_insert(e);
         self.drift = if (e - e0).abs() > self.drift || e.is_nan() {

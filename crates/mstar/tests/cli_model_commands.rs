@@ -97,6 +97,40 @@ fn run_writes_the_csv_and_keeps_a_failed_run_s_samples() {
         "{}",
         text(&failed.stderr)
     );
+    // With `[output] every` skipping steps, the last state reached is still
+    // kept: the same last row as with every step written (a strict run that
+    // stops at t ≈ 0.5 s).
+    let last_time = |csv: &str| {
+        csv.lines()
+            .last()
+            .and_then(|l| l.split(',').next())
+            .map(str::to_string)
+    };
+    let strict = |every: &str| {
+        let out = dir.join(format!("strict-{every}.csv"));
+        let run = mstar(&[
+            "run",
+            &model("pendulum.toml"),
+            "--h",
+            "0.03",
+            "--strict",
+            "--set",
+            &format!("output.every={every}"),
+            "--out",
+            &out.display().to_string(),
+        ]);
+        assert_eq!(run.status.code(), Some(1), "{}", text(&run.stderr));
+        std::fs::read_to_string(dir.join(format!("strict-{every}.partial.csv")))
+            .expect("the partial file")
+    };
+    let (dense, sparse) = (strict("1"), strict("1000"));
+    assert!(dense.lines().count() > 5, "{dense}");
+    assert_eq!(
+        sparse.lines().count(),
+        3,
+        "header, t = 0 and the last state: {sparse}"
+    );
+    assert_eq!(last_time(&sparse), last_time(&dense));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
