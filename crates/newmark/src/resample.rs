@@ -1,6 +1,6 @@
 //! Output at requested times, whatever steps the integrator took.
 
-use mstar_model::SampleRef;
+use mstar_model::{Sample, SampleRef};
 
 use crate::Observer;
 
@@ -37,87 +37,54 @@ pub struct Resample<O: Observer> {
     t0: Option<f64>,
     k: u64,
     /// The last observed state (the left end of the next step).
-    last: Owned,
+    last: Sample,
     /// Whether `last` was handed on as it is.
     last_emitted: bool,
     /// The interpolated state handed on.
-    out: Owned,
+    out: Sample,
 }
 
-/// An owned sample's vectors and scalars.
-#[derive(Clone, Debug, Default)]
-struct Owned {
-    t: f64,
-    u: Vec<f64>,
-    v: Vec<f64>,
-    a: Vec<f64>,
-    lambda: Vec<f64>,
-    kinetic: f64,
-    potential: f64,
-    iterations: usize,
-    residual: f64,
-    constraint: f64,
+/// Copies `s` into `out`, reusing its buffers.
+fn copy_from(out: &mut Sample, s: &SampleRef<'_>) {
+    out.t = s.t;
+    for (dst, src) in [
+        (&mut out.u, s.u),
+        (&mut out.v, s.v),
+        (&mut out.a, s.a),
+        (&mut out.lambda, s.lambda),
+    ] {
+        dst.clear();
+        dst.extend_from_slice(src);
+    }
+    (out.kinetic, out.potential) = (s.kinetic, s.potential);
+    (out.iterations, out.residual, out.constraint) = (s.iterations, s.residual, s.constraint);
 }
 
-impl Owned {
-    fn copy_from(&mut self, s: &SampleRef<'_>) {
-        self.t = s.t;
-        for (dst, src) in [
-            (&mut self.u, s.u),
-            (&mut self.v, s.v),
-            (&mut self.a, s.a),
-            (&mut self.lambda, s.lambda),
-        ] {
-            dst.clear();
-            dst.extend_from_slice(src);
-        }
-        (self.kinetic, self.potential) = (s.kinetic, s.potential);
-        (self.iterations, self.residual, self.constraint) =
-            (s.iterations, s.residual, s.constraint);
+/// The state at `t` in `[l.t, r.t]` into `out`, by the rules of [`Resample`].
+fn interpolate(out: &mut Sample, l: &Sample, r: &SampleRef<'_>, t: f64) {
+    let h = r.t - l.t;
+    let x = ((t - l.t) / h).clamp(0.0, 1.0);
+    // Cubic Hermite basis on [0, 1].
+    let (x2, x3) = (x * x, x * x * x);
+    let h00 = 2.0 * x3 - 3.0 * x2 + 1.0;
+    let h10 = x3 - 2.0 * x2 + x;
+    let h01 = -2.0 * x3 + 3.0 * x2;
+    let h11 = x3 - x2;
+    let hermite =
+        |p0: f64, d0: f64, p1: f64, d1: f64| h00 * p0 + h10 * h * d0 + h01 * p1 + h11 * h * d1;
+    let linear = |p0: f64, p1: f64| p0 + x * (p1 - p0);
+    out.t = t;
+    for i in 0..l.u.len() {
+        out.u[i] = hermite(l.u[i], l.v[i], r.u[i], r.v[i]);
+        out.v[i] = hermite(l.v[i], l.a[i], r.v[i], r.a[i]);
+        out.a[i] = linear(l.a[i], r.a[i]);
     }
-
-    fn view(&self) -> SampleRef<'_> {
-        SampleRef {
-            t: self.t,
-            u: &self.u,
-            v: &self.v,
-            a: &self.a,
-            lambda: &self.lambda,
-            kinetic: self.kinetic,
-            potential: self.potential,
-            iterations: self.iterations,
-            residual: self.residual,
-            constraint: self.constraint,
-        }
+    for (i, x) in out.lambda.iter_mut().enumerate() {
+        *x = linear(l.lambda[i], r.lambda[i]);
     }
-
-    /// The state at `t` in `[l.t, r.t]`, by the rules of [`Resample`].
-    fn interpolate(&mut self, l: &Owned, r: &SampleRef<'_>, t: f64) {
-        let h = r.t - l.t;
-        let x = ((t - l.t) / h).clamp(0.0, 1.0);
-        // Cubic Hermite basis on [0, 1].
-        let (x2, x3) = (x * x, x * x * x);
-        let h00 = 2.0 * x3 - 3.0 * x2 + 1.0;
-        let h10 = x3 - 2.0 * x2 + x;
-        let h01 = -2.0 * x3 + 3.0 * x2;
-        let h11 = x3 - x2;
-        let hermite =
-            |p0: f64, d0: f64, p1: f64, d1: f64| h00 * p0 + h10 * h * d0 + h01 * p1 + h11 * h * d1;
-        let linear = |p0: f64, p1: f64| p0 + x * (p1 - p0);
-        self.t = t;
-        for i in 0..l.u.len() {
-            self.u[i] = hermite(l.u[i], l.v[i], r.u[i], r.v[i]);
-            self.v[i] = hermite(l.v[i], l.a[i], r.v[i], r.a[i]);
-            self.a[i] = linear(l.a[i], r.a[i]);
-        }
-        for (i, x) in self.lambda.iter_mut().enumerate() {
-            *x = linear(l.lambda[i], r.lambda[i]);
-        }
-        self.kinetic = linear(l.kinetic, r.kinetic);
-        self.potential = linear(l.potential, r.potential);
-        (self.iterations, self.residual, self.constraint) =
-            (r.iterations, r.residual, r.constraint);
-    }
+    out.kinetic = linear(l.kinetic, r.kinetic);
+    out.potential = linear(l.potential, r.potential);
+    (out.iterations, out.residual, out.constraint) = (r.iterations, r.residual, r.constraint);
 }
 
 impl<O: Observer> Resample<O> {
@@ -129,9 +96,9 @@ impl<O: Observer> Resample<O> {
             dt,
             t0: None,
             k: 0,
-            last: Owned::default(),
+            last: Sample::default(),
             last_emitted: false,
-            out: Owned::default(),
+            out: Sample::default(),
         }
     }
 
@@ -166,8 +133,8 @@ impl<O: Observer> Observer for Resample<O> {
             self.t0 = Some(s.t);
             self.inner.observe(s);
             self.k = 1;
-            self.last.copy_from(s);
-            self.out.copy_from(s);
+            copy_from(&mut self.last, s);
+            copy_from(&mut self.out, s);
             self.last_emitted = true;
             return;
         };
@@ -180,12 +147,12 @@ impl<O: Observer> Observer for Resample<O> {
                 self.inner.observe(s);
                 self.last_emitted = true;
             } else {
-                self.out.interpolate(&self.last, s, t);
+                interpolate(&mut self.out, &self.last, s, t);
                 self.inner.observe(&self.out.view());
             }
             self.k += 1;
         }
-        self.last.copy_from(s);
+        copy_from(&mut self.last, s);
     }
 
     fn reads_energy(&self) -> bool {
