@@ -164,6 +164,16 @@ fn edit_distance(a: &str, b: &str) -> usize {
     row[b.len()]
 }
 
+/// `x` as written in a message: exponent form outside [1e-4, 1e6), so that
+/// 1e308 is not 309 digits.
+pub(crate) fn short(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-4..1e6).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
 /// A finite number.
 pub(crate) fn number(node: &Node) -> Result<f64, String> {
     match node.value {
@@ -183,7 +193,7 @@ pub(crate) fn number_in(
         if ok(x) {
             Ok(x)
         } else {
-            Err(format!("must be {range} (got {x})"))
+            Err(format!("must be {range} (got {})", short(x)))
         }
     }
 }
@@ -196,7 +206,8 @@ pub(crate) fn count(min: usize) -> impl Fn(&Node) -> Result<usize, String> {
             integer: true,
         } if value >= min as f64 && value < 1e15 => Ok(value as usize),
         Value::Num { value, .. } => Err(format!(
-            "must be a whole number of at least {min} (got {value})"
+            "must be a whole number of at least {min} (got {})",
+            short(value)
         )),
         ref v => Err(format!("expected a whole number, found {}", v.kind())),
     }
@@ -270,6 +281,14 @@ pub(crate) fn two_names(node: &Node) -> Result<[&str; 2], String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn huge_and_tiny_numbers_are_short() {
+        assert_eq!(short(1e308), "1e308");
+        assert_eq!(short(-2.5e-300), "-2.5e-300");
+        assert_eq!(short(0.25), "0.25");
+        assert_eq!(short(0.0), "0");
+    }
 
     #[test]
     fn a_typo_suggests_the_closest_key() {
