@@ -2,7 +2,7 @@
 //! a fixed-step run whose estimate exceeded the tolerance, with the option
 //! that fixes it (`docs/reliability.md`).
 
-use mstar_newmark::{Config, RunStats};
+use mstar_newmark::{Config, RunStats, Scheme};
 
 /// The exit code of a run that reached its end with steps whose estimated
 /// error exceeded the tolerance: its output is complete, and not accurate
@@ -25,13 +25,15 @@ pub fn verdict(warned: bool) -> Result<(), Inaccurate> {
 
 /// The warning for `stats` of a run with `config` (`None` when every step
 /// was within tolerance). `coord_name` names a coordinate. The advice names
-/// the options that `mstar pendulum`, `mstar chain` and `mstar run` share:
-/// `--h`, `--adaptive`, `--tol`, `--strict`.
+/// the options that `mstar pendulum`, `mstar chain` and `mstar run` share
+/// (`--h`, `--adaptive`, `--tol`, `--strict`), and the scheme's in the form
+/// of `mstar run` when `files` (`--set simulation.…`).
 #[must_use]
 pub fn warning(
     stats: &RunStats,
     config: &Config,
     coord_name: &dyn Fn(usize) -> String,
+    files: bool,
 ) -> Option<String> {
     let e = &stats.error;
     if !e.exceeded_tolerance() {
@@ -56,11 +58,16 @@ pub fn warning(
         .is_ok_and(|p| (p.gamma - 0.5).abs() < 1e-12);
     let (what, advice) = match e.coordinate.filter(|_| !newton_first) {
         Some(i) if undamped => (
-            format!("the estimated local error exceeded the tolerance ({tolerance}) {steps}, in '{}'", coord_name(i)),
-            "the scheme is undamped (γ = 1/2): on an index-3 system its period-2h oscillation of ü \
-             and λ grows, which the estimate sees, and a smaller h makes it grow sooner; rerun with \
-             --integrator generalized-alpha"
-                .to_string(),
+            format!(
+                "the estimated local error exceeded the tolerance ({tolerance}) {steps}, in '{}'",
+                coord_name(i)
+            ),
+            format!(
+                "the scheme is undamped (γ = 1/2): on an index-3 system its period-2h oscillation \
+                 of ü and λ grows, which the estimate sees, and a smaller h makes it grow sooner; \
+                 rerun with {}",
+                damped_scheme(config, files)
+            ),
         ),
         Some(i) => (
             format!(
@@ -93,7 +100,7 @@ pub fn warning(
         ),
     };
     Some(format!(
-        "warning: {what}: the results are not accurate to that tolerance (exit code 3); {advice} (--strict stops at the first such step)"
+        "warning: {what}: the results are not accurate to that tolerance; {advice} (--strict stops at the first such step)"
     ))
 }
 
@@ -102,6 +109,19 @@ pub fn warning(
 /// second look; within it one rerun at the suggested `h` passes
 /// (`tests/cli_accuracy.rs`).
 const FAR: f64 = 100.0;
+
+/// The option that damps an undamped scheme: ρ∞ < 1 for generalized-α,
+/// α < 0 for HHT, generalized-α instead of the trapezoidal rule.
+fn damped_scheme(config: &Config, files: bool) -> &'static str {
+    match (config.scheme, files) {
+        (Scheme::GeneralizedAlpha { .. }, false) => "--rho 0.9",
+        (Scheme::GeneralizedAlpha { .. }, true) => "--set simulation.rho=0.9",
+        (Scheme::Hht { .. }, false) => "--alpha -0.1",
+        (Scheme::Hht { .. }, true) => "--set simulation.alpha=-0.1",
+        (Scheme::Newmark { .. }, false) => "--integrator generalized-alpha",
+        (Scheme::Newmark { .. }, true) => "--set simulation.integrator=generalized-alpha",
+    }
+}
 
 /// A Newton tolerance that keeps the converged `‖Φ‖∞ ≤ tol·max(1, ‖u‖∞)`
 /// a hundred times below the error tolerance.

@@ -141,6 +141,9 @@ pub struct Output<'a> {
     pub h: f64,
     /// `mstar run`: fewer rows by `--set output.every=N` (the current N).
     pub every: Option<usize>,
+    /// Rows every Δt seconds (`--output-every`, `[output] every_time`)
+    /// instead of every step: then the advice is a larger Δt.
+    pub every_time: Option<f64>,
 }
 
 /// Refuses an output file larger than the free space of its file system.
@@ -158,6 +161,20 @@ pub fn check_output(o: &Output<'_>, free: Option<f64>) -> Result<()> {
     }
     // What the advice must shrink the output by: from the largest size.
     let ratio = size * MAX_BYTES_PER_FIELD / BYTES_PER_FIELD / free;
+    if let Some(dt) = o.every_time {
+        bail!(
+            "{} would take about {} ({:.1e} rows of about {}), more than the {} free on its file \
+             system: write fewer rows (--output-every {} or more), a shorter run (--t-end {} or \
+             less), or no --out",
+            o.path.display(),
+            bytes(size),
+            o.rows,
+            bytes(o.fields as f64 * BYTES_PER_FIELD),
+            bytes(free),
+            round2(dt * ratio, true),
+            round2(o.t_end / ratio, false)
+        );
+    }
     let every = o.every.map_or(String::new(), |n| {
         format!(
             ", fewer rows (--set output.every={})",
@@ -315,6 +332,7 @@ mod tests {
             t_end: 1e6,
             h: 0.01,
             every: Some(1),
+            every_time: None,
         };
         let free = Some(1e9);
         let e = check_output(&o, free).expect_err("refused").to_string();
@@ -331,6 +349,25 @@ mod tests {
             assert!(check_output(&fewer, free).is_ok(), "{t} {h} {n}: {e}");
         }
         assert!(check_output(&o, None).is_ok());
+        // Rows every Δt: the advice is a larger Δt (or a shorter run).
+        let grid = Output {
+            rows: 1e6 / 1e-2 + 2.0,
+            every: None,
+            every_time: Some(1e-2),
+            ..o
+        };
+        let e = check_output(&grid, free).expect_err("refused").to_string();
+        assert!(!e.contains("--h ") && !e.contains("output.every"), "{e}");
+        let dt = option(&e, "--output-every");
+        let t_end = option(&e, "--t-end");
+        for (t, dt) in [(1e6, dt), (t_end, 1e-2)] {
+            let fewer = Output {
+                rows: t / dt + 2.0,
+                every_time: Some(dt),
+                ..grid
+            };
+            assert!(check_output(&fewer, free).is_ok(), "{t} {dt}: {e}");
+        }
     }
 
     #[test]

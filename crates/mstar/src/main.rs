@@ -167,7 +167,8 @@ struct IntegratorArgs {
     /// Step size h, s [default: pendulum 0.01, chain 1e-3].
     #[arg(long, allow_negative_numbers = true)]
     h: Option<f64>,
-    /// Smallest step size for step control, s [default: h/1024; paper: h, i.e. off].
+    /// Smallest step size for step control, s [default: h/1024; with
+    /// --adaptive h·1e-6; paper: h, i.e. off].
     #[arg(long, allow_negative_numbers = true)]
     h_min: Option<f64>,
     /// Integrator [default: generalized-alpha; paper: newmark].
@@ -260,7 +261,7 @@ struct PendulumArgs {
     out: Option<PathBuf>,
     /// Write the state every DT seconds instead of every step (interpolated
     /// within the steps: cubic Hermite on u and u̇), and the last state.
-    #[arg(long, value_name = "DT")]
+    #[arg(long, value_name = "DT", conflicts_with = "reference")]
     output_every: Option<f64>,
 }
 
@@ -555,19 +556,24 @@ fn check_output(
     out: Option<&Path>,
     fields: usize,
     (t_end, h): (f64, f64),
-    every: Option<usize>,
+    (every, every_time): (Option<usize>, Option<f64>),
 ) -> Result<()> {
     let Some(path) = out else {
         return Ok(());
     };
-    let rows = t_end / h / every.unwrap_or(1) as f64 + 1.0;
+    let rows = match every_time {
+        // The grid's rows and the last state.
+        Some(dt) => t_end / dt + 2.0,
+        None => t_end / h / every.unwrap_or(1) as f64 + 1.0,
+    };
     let o = limits::Output {
         path,
         rows,
         fields,
         t_end,
         h,
-        every,
+        every: every.filter(|_| every_time.is_none()),
+        every_time,
     };
     limits::check_output(&o, limits::free_space(path))
 }
@@ -601,7 +607,7 @@ fn pendulum(args: &PendulumArgs) -> Result<()> {
         out,
         csv::header(&sys).len(),
         (run.t_end, run.config.h),
-        None,
+        (None, args.output_every),
     )?;
     if args.reference == Some(Reference::Rk4) {
         return pendulum_reference(args, &run);
@@ -645,7 +651,7 @@ fn pendulum(args: &PendulumArgs) -> Result<()> {
         );
     }
     // Also after a failure: the samples kept are as inaccurate as it says.
-    let warned = warn_accuracy(&integ.stats(), &run.config, &sys);
+    let warned = warn_accuracy(&integ.stats(), &run.config, &sys, false);
     output::conclude(stream, out, ended, integ.time())?;
     Ok(mstar::accuracy::verdict(warned)?)
 }
@@ -656,8 +662,9 @@ pub(crate) fn warn_accuracy<S: System + ?Sized>(
     stats: &mstar::RunStats,
     config: &Config,
     sys: &S,
+    files: bool,
 ) -> bool {
-    let warning = mstar::accuracy::warning(stats, config, &|i| sys.coord_name(i));
+    let warning = mstar::accuracy::warning(stats, config, &|i| sys.coord_name(i), files);
     if let Some(w) = &warning {
         eprintln!("{w}");
     }
@@ -729,7 +736,12 @@ fn chain(args: &ChainArgs) -> Result<()> {
         ChainKind::Points => mstar::planar::point_mass_chain(n),
     };
     let out = args.out.as_deref();
-    check_output(out, csv::header(&sys).len(), (args.t_end, config.h), None)?;
+    check_output(
+        out,
+        csv::header(&sys).len(),
+        (args.t_end, config.h),
+        (None, args.output_every),
+    )?;
     let mut stream = open_output(out, &sys, &[])?;
     println!(
         "{n}-link chain of {} ({} coordinates, {} constraints); h = {} s, t_end = {} s",
@@ -771,7 +783,7 @@ fn chain(args: &ChainArgs) -> Result<()> {
     if ended.is_ok() {
         chain_summary(&integ, &sys, n, (setup, clock.elapsed().as_secs_f64()))?;
     }
-    let warned = warn_accuracy(&integ.stats(), &config, &sys);
+    let warned = warn_accuracy(&integ.stats(), &config, &sys, false);
     output::conclude(stream, out, ended, integ.time())?;
     Ok(mstar::accuracy::verdict(warned)?)
 }

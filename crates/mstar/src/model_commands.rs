@@ -181,6 +181,15 @@ fn start_hint(sys: &PlanarSystem, e: &IntegrationError) -> Option<String> {
 }
 
 fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
+    if let (Some(out), Some(file)) = (&args.out, &args.model)
+        && std::fs::canonicalize(out).ok() == std::fs::canonicalize(file).ok()
+        && out.exists()
+    {
+        bail!(
+            "--out {} names the model file itself: name another file for the results",
+            out.display()
+        );
+    }
     let (every, every_time) = match args.output_every {
         Some(dt) => (1, Some(dt)),
         None => (model.every, model.every_time),
@@ -210,7 +219,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         args.out.as_deref(),
         fields,
         (t_end, config.h),
-        args.builtin.is_none().then_some(every),
+        (args.builtin.is_none().then_some(every), every_time),
     )?;
     let stream = crate::open_output(args.out.as_deref(), sys, &extra)?;
     let columns = columns.as_ref().map(|c| c as &dyn Columns);
@@ -235,7 +244,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     output.finish_rows();
     let (stats, t, wall, ended) = outcome?;
     print_summary(stats, t, &output, wall);
-    let warned = crate::warn_accuracy(&stats, &config_used, sys);
+    let warned = crate::warn_accuracy(&stats, &config_used, sys, true);
     crate::output::conclude(output.stream, args.out.as_deref(), ended, t)?;
     // The samples are written; they are wrong from the drift on.
     if let (Some(mstar::run::RunError::RedundancyChanged { t, .. }), Some(out)) =
@@ -362,7 +371,8 @@ fn builtin_setting(simulation: &mut Simulation, assignment: &str) -> Result<()> 
         simulation.error_control = Some(match value {
             "adaptive" => mstar_model::file::ErrorControlChoice::Adaptive,
             "strict" => mstar_model::file::ErrorControlChoice::Strict,
-            _ => mstar_model::file::ErrorControlChoice::Monitor,
+            "monitor" => mstar_model::file::ErrorControlChoice::Monitor,
+            _ => bail!("{key}: expected monitor, strict or adaptive, got '{value}'"),
         });
         return Ok(());
     }

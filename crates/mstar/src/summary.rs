@@ -135,7 +135,8 @@ impl Summary {
         {
             println!(
                 "warning: the period-2h oscillation of λ grew from {early:.3e} in the first second to {late:.3e} in the last: \
-                 the multipliers are not trustworthy (trapezoidal rule on an index-3 system); use generalized-α"
+                 the multipliers are not trustworthy (an undamped scheme on an index-3 system, or a step \
+                 too large for it: see the accuracy warning, if any); use generalized-α with ρ∞ < 1"
             );
         }
     }

@@ -248,3 +248,45 @@ fn a_failed_step_s_advice_follows_its_cause() {
     assert_eq!(code, Some(0), "{stderr}");
     assert!(!stderr.contains("warning"), "{stderr}");
 }
+
+/// The accuracy warning's scheme advice in the form of the command that
+/// ran: `--rho 0.9` for generalized-α with ρ∞ = 1, `--set
+/// simulation.integrator=generalized-alpha` for `mstar run` (which has no
+/// `--integrator`); and a failed step that a loose `--tol` caused is blamed
+/// on it, not on the step size.
+#[test]
+fn advice_names_the_option_of_the_command_that_ran() {
+    let (code, stderr) = run(&["pendulum", "--rho", "1", "--t-end", "5"]);
+    assert_eq!(code, Some(3), "{stderr}");
+    assert!(stderr.contains("rerun with --rho 0.9"), "{stderr}");
+    let (code, stderr) = run(&["pendulum", "--rho", "0.9", "--t-end", "5"]);
+    assert_eq!(code, Some(0), "{stderr}");
+
+    let pendulum = model("pendulum.toml");
+    let newmark = [
+        "run",
+        &pendulum,
+        "--set",
+        "simulation.integrator=newmark",
+        "--t-end",
+        "5",
+    ];
+    let (code, stderr) = run(&newmark);
+    assert_eq!(code, Some(3), "{stderr}");
+    let advice = "--set simulation.integrator=generalized-alpha";
+    assert!(stderr.contains(advice), "{stderr}");
+    let mut again = newmark.to_vec();
+    again.extend(advice.split(' '));
+    let (code, stderr) = run(&again);
+    assert_eq!(code, Some(0), "{stderr}");
+
+    let double = model("double-pendulum.toml");
+    let (code, stderr) = run(&["run", &double, "--tol", "0.1"]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains("a smaller step cannot help; use tol = 1e-8 or less"),
+        "{stderr}"
+    );
+    let (code, stderr) = run(&["run", &double, "--tol", "1e-8"]);
+    assert_eq!(code, Some(0), "{stderr}");
+}

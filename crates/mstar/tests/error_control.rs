@@ -287,3 +287,44 @@ fn resampled_output_is_as_accurate_as_the_steps() {
         );
     }
 }
+
+/// Adaptive steps stay within `[h_min, h_max]` (the last one, shortened to
+/// land on `t_end`, excepted), and a step that needs less than `h_min` is
+/// an error that says so.
+#[test]
+fn adaptive_steps_respect_h_min_and_h_max() {
+    let sys = PendulumChain::paper(1.0, 1.0, 9.81);
+    let u0 = sys.position(&[2.0]);
+    let run = |h_min: f64, h_max: f64| {
+        let config = Config {
+            h: 0.05,
+            h_min: Some(h_min),
+            error: ErrorControl {
+                mode: StepMode::Adaptive,
+                h_max: Some(h_max),
+                ..ErrorControl::default()
+            },
+            ..Config::default()
+        };
+        let mut integ = Integrator::new(&sys, config, 0.0, &u0, &[0.0; 3]).expect("start");
+        let mut times = vec![0.0];
+        let result = integ.run(3.0, &mut |s: &mstar::SampleRef<'_>| times.push(s.t));
+        let steps: Vec<f64> = times[1..].windows(2).map(|w| w[1] - w[0]).collect();
+        (result, steps)
+    };
+    let (result, steps) = run(1e-3, 0.06);
+    assert!(result.is_ok(), "{result:?}");
+    let inner = &steps[..steps.len() - 1];
+    assert!(
+        inner
+            .iter()
+            .all(|&h| (1e-3 - 1e-12..=0.06 + 1e-12).contains(&h)),
+        "{steps:?}"
+    );
+    let (result, steps) = run(0.04, 0.06);
+    assert!(steps.iter().all(|&h| h >= 0.04 - 1e-12), "{steps:?}");
+    let Err(e) = result else {
+        panic!("h_min = 0.04 is too large for rtol = 1e-3 here");
+    };
+    assert!(e.to_string().contains("below h_min"), "{e}");
+}

@@ -121,8 +121,16 @@ impl<O: Observer> Resample<O> {
         &mut self.inner
     }
 
+    /// `t₀ + k Δt`, as `t₀ + k / n` when `Δt = 1/n` for a whole `n` (so that
+    /// 0.1 s steps give 0.3, not 0.30000000000000004).
     fn grid_time(&self, t0: f64) -> f64 {
-        t0 + self.k as f64 * self.dt
+        let per_second = 1.0 / self.dt;
+        let n = per_second.round();
+        if n >= 1.0 && (per_second - n).abs() <= 1e-9 * n {
+            t0 + self.k as f64 / n
+        } else {
+            t0 + self.k as f64 * self.dt
+        }
     }
 }
 
@@ -144,7 +152,8 @@ impl<O: Observer> Observer for Resample<O> {
         while self.grid_time(t0) <= s.t + eps {
             let t = self.grid_time(t0);
             if (t - s.t).abs() <= eps {
-                self.inner.observe(s);
+                // The step's own state, at the grid's time to the digit.
+                self.inner.observe(&SampleRef { t, ..*s });
                 self.last_emitted = true;
             } else {
                 interpolate(&mut self.out, &self.last, s, t);

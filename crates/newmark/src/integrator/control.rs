@@ -71,11 +71,12 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             StepMode::Adaptive if estimate.truncation <= 1.0 => Ok(Some(estimate)),
             StepMode::Adaptive => {
                 let factor = (SAFETY * estimate.truncation.powf(-1.0 / 3.0)).max(SHRINK_MAX);
-                let h_new = h * factor;
                 let h_min = self.config.h_min();
-                if h_new.is_nan() || h_new < h_min * (1.0 - 1e-12) {
+                // Down to h_min, then an error once h_min itself fails.
+                if h.is_nan() || h <= h_min * (1.0 + 1e-12) {
                     return Err(self.too_large(h, &estimate, Some(h_min)));
                 }
+                let h_new = (h * factor).max(h_min);
                 self.h = h_new;
                 self.rejected_last = true;
                 self.stats.rejected += 1;
@@ -103,7 +104,11 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             proposed
         };
         if nominal < self.h || nominal >= GROW_MIN * self.h {
-            self.h = nominal.min(self.config.error.h_max.unwrap_or(f64::INFINITY));
+            // Within [h_min, h_max]: a step the estimate would take below
+            // h_min is tried at h_min and judged (`judge`).
+            self.h = nominal
+                .min(self.config.error.h_max.unwrap_or(f64::INFINITY))
+                .max(self.config.h_min());
         }
     }
 
@@ -197,6 +202,9 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                     default scheme)"
                 .to_string();
         }
+        if let Some(advice) = self.loose_newton() {
+            return advice;
+        }
         if let Some(t) = self.stats.error.first_exceeded {
             return format!(
                 "The estimated local error exceeded the tolerance from t = {} s on: the motion was \
@@ -208,6 +216,30 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         "Try a smaller step size h; if even tiny steps fail here, the model may be singular at this \
          position (a lock-up of the constraints), or lower h_min"
             .to_string()
+    }
+
+    /// The advice for a Newton tolerance too loose for the error tolerance,
+    /// when accepted steps showed it (their converged `‖Φ‖∞` beyond
+    /// `atol + rtol‖u‖∞`): a smaller step cannot help then.
+    fn loose_newton(&self) -> Option<String> {
+        let e = &self.stats.error;
+        if e.newton_exceeded == 0 {
+            return None;
+        }
+        let ErrorControl { rtol, atol, .. } = self.config.error;
+        let floor = [rtol, atol]
+            .into_iter()
+            .filter(|&x| x > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        Some(format!(
+            "The converged constraint violation exceeded the error tolerance on {} steps (up to \
+             {:.3} times): the Newton tolerance tol = {} is too loose, the state drifts off the \
+             constraints and a smaller step cannot help; use tol = {} or less",
+            e.newton_exceeded,
+            e.newton_max_ratio,
+            Short(self.config.tol),
+            Short(0.01 * floor)
+        ))
     }
 
     /// The error for an estimate beyond the tolerance, with what to try.
@@ -224,10 +256,13 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             (Some(_), None) => "Let the step size adapt (adaptive stepping), or reduce h: \
                  the local error falls like h³ (halving h divides it by about 8)"
                 .to_string(),
-            (Some(_), Some(h_min)) => format!(
-                "Adaptive stepping would need a step below h_min = {h_min:e}: the motion is too fast \
-                 for the tolerance here (a whip or an impact); loosen rtol and atol, or lower h_min"
-            ),
+            (Some(_), Some(h_min)) => self.loose_newton().unwrap_or_else(|| {
+                format!(
+                    "Adaptive stepping would need a step below h_min = {h_min:e}: the motion is too \
+                     fast for the tolerance here (a whip or an impact); loosen rtol and atol, or \
+                     lower h_min"
+                )
+            }),
         };
         IntegrationError::ErrorTooLarge {
             t: self.step_end(h),
