@@ -23,7 +23,15 @@
 //! let tension = (t0.lambda[0].powi(2) + t0.lambda[1].powi(2)).sqrt();
 //! assert!((tension - 10.0 * 0.1f64.cos()).abs() < 1e-12);
 //! ```
+//!
+//! [`Index1Rk4`] is the general reference for any [`System`](mstar_model::System):
+//! RK4 on the index-1 form, the acceleration-level KKT system solved at every
+//! stage and the state projected onto the constraints after every step.
 #![deny(missing_docs)]
+
+mod index1;
+
+pub use index1::{Index1Rk4, State};
 
 use mstar_model::{PendulumChain, Sample};
 use nalgebra::{DMatrix, DVector};
