@@ -58,7 +58,7 @@ enum Command {
     /// Check a model file without integrating it: coordinates, constraints,
     /// degrees of freedom, redundant constraints by name, and how far the
     /// initial state is from the constraints. Exit 0 when it can run as
-    /// written, 1 when it cannot, 2 when the file cannot be read.
+    /// written, 1 when it cannot, 2 when the file cannot be read or holds a value out of range (an unknown KKT solver too).
     Check(model_commands::CheckArgs),
     /// Draw a model moving through the results of `mstar run`: an animated
     /// GIF, a self-contained HTML page (play/pause, time slider) or one frame

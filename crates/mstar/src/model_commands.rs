@@ -141,7 +141,11 @@ fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
         return ExitCode::from(crate::output::exit_code(Err(e), true, 1));
     }
     eprintln!("error: {}", crate::report(&e));
-    if e.downcast_ref::<mstar::model::file::FileError>().is_some() {
+    let settings = matches!(
+        e.downcast_ref::<mstar::run::RunError>(),
+        Some(mstar::run::RunError::Settings(_))
+    );
+    if settings || e.downcast_ref::<mstar::model::file::FileError>().is_some() {
         return ExitCode::from(2);
     }
     if let Some(e) = e.downcast_ref::<IntegrationError>() {
@@ -194,7 +198,8 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         Some(dt) => (1, Some(dt)),
         None => (model.every, model.every_time),
     };
-    let (config, t_end) = mstar::run::config(&model.simulation).map_err(anyhow::Error::msg)?;
+    let (config, t_end) =
+        mstar::run::config(&model.simulation).map_err(mstar::run::RunError::Settings)?;
     let sys = model.system.system();
     println!(
         "{}: {} coordinates, {} constraints; h = {} s, t_end = {} s",
@@ -597,7 +602,7 @@ fn print_summary(st: mstar::RunStats, t: f64, out: &RunOutput<'_>, wall: f64) {
 }
 
 /// `mstar check`: exit 0 when the model can run as written, 1 when it
-/// cannot, 2 when the file cannot be read.
+/// cannot, 2 when the file cannot be read or holds a value out of range.
 pub fn check(args: &CheckArgs) -> ExitCode {
     let file = match ModelFile::load_with(&args.model, &args.set) {
         Ok(file) => file,
@@ -608,9 +613,10 @@ pub fn check(args: &CheckArgs) -> ExitCode {
     };
     let config = match mstar::run::config(&file.simulation) {
         Ok((config, _)) => config,
+        // A setting out of range, as a value the file cannot hold: 2.
         Err(e) => {
             eprintln!("error: {}: {e}", args.model.display());
-            return ExitCode::from(1);
+            return ExitCode::from(2);
         }
     };
     let redundant = file.simulation.redundant.unwrap_or_default();

@@ -30,6 +30,19 @@ fn check_exits_with_what_it_found() {
         e.contains("bad.toml:6:11: body 'b': inertia: must be positive"),
         "{e}"
     );
+    // A setting no backend or scheme has is a value out of range, as in
+    // the file's own checks: 2, for check and run alike.
+    for command in ["check", "run"] {
+        let bad_kkt = mstar(&[
+            command,
+            &model("four-bar.toml"),
+            "--set",
+            "simulation.kkt=foo",
+        ]);
+        let e = text(&bad_kkt.stderr);
+        assert_eq!(bad_kkt.status.code(), Some(2), "{command}: {e}");
+        assert!(e.contains("no KKT solver is called 'foo'"), "{e}");
+    }
     // Two pins where one does: the second is redundant, the model cannot run.
     let redundant = dir.join("redundant.toml");
     std::fs::write(
