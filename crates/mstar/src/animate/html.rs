@@ -361,7 +361,6 @@ const SCRIPT: &str = r#"
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mstar::planar::{At, PlanarBuilder, RigidBody};
 
     #[test]
     fn placeholders_are_filled_once() {
@@ -379,18 +378,7 @@ mod tests {
 
     #[test]
     fn the_page_carries_every_frame_and_only_moving_items_in_them() {
-        let mut b = PlanarBuilder::new();
-        let bar = b.rigid_body(
-            "<bar>",
-            RigidBody {
-                mass: 1.0,
-                inertia: 0.1,
-                pose: [0.5, 0.0, 0.0],
-                velocity: [0.0; 3],
-            },
-        );
-        b.revolute("hinge", At::Ground([0.0, 0.0]), At::Body(bar, [-0.5, 0.0]));
-        let sys = b.build().expect("valid");
+        let sys = crate::animate::hinged_bar("<bar>");
         let u0 = sys.initial_position();
         // The bar swung down by a quarter turn about the hinge.
         let u1 = vec![0.0, -0.5, -std::f64::consts::FRAC_PI_2];

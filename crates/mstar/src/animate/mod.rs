@@ -271,6 +271,25 @@ impl GifPlan {
     }
 }
 
+/// A 1 m bar named `name`, hinged at the origin, lying along +x: the model
+/// of the drawing tests.
+#[cfg(test)]
+pub(crate) fn hinged_bar(name: &str) -> mstar::planar::PlanarSystem {
+    use mstar::planar::{At, PlanarBuilder, RigidBody};
+    let mut b = PlanarBuilder::new();
+    let bar = b.rigid_body(
+        name,
+        RigidBody {
+            mass: 1.0,
+            inertia: 0.1,
+            pose: [0.5, 0.0, 0.0],
+            velocity: [0.0; 3],
+        },
+    );
+    b.revolute("hinge", At::Ground([0.0, 0.0]), At::Body(bar, [-0.5, 0.0]));
+    b.build().expect("valid")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

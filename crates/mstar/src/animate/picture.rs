@@ -253,22 +253,10 @@ pub fn write_png(path: &Path, canvas: &Canvas<'_>, t: f64, u: &[f64]) -> Result<
 mod tests {
     use super::*;
     use crate::animate::scene::Bounds;
-    use mstar::planar::{At, PlanarBuilder, RigidBody};
 
     #[test]
     fn a_frame_shows_the_body_in_its_colour() {
-        let mut b = PlanarBuilder::new();
-        let bar = b.rigid_body(
-            "bar",
-            RigidBody {
-                mass: 1.0,
-                inertia: 0.1,
-                pose: [0.5, 0.0, 0.0],
-                velocity: [0.0; 3],
-            },
-        );
-        b.revolute("hinge", At::Ground([0.0, 0.0]), At::Body(bar, [-0.5, 0.0]));
-        let sys = b.build().expect("valid");
+        let sys = crate::animate::hinged_bar("bar");
         let u = sys.initial_position();
         let scene = Scene::new(sys.sketch(), std::slice::from_ref(&u));
         let view = View::fit(
