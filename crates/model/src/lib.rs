@@ -27,6 +27,7 @@ mod pattern;
 mod pendulum;
 pub mod planar;
 mod sample;
+pub mod spatial;
 mod subset;
 mod system;
 

@@ -36,14 +36,19 @@ impl<'a, S: System + ?Sized> Index1Rk4<'a, S> {
         }
     }
 
-    /// Integrates from `(u₀, u̇₀)` at `t = 0` and returns the state at every
-    /// time of `times` (non-negative, non-decreasing).
+    /// Integrates from `(u₀, u̇₀)` at `t = 0` (projected onto the position
+    /// and velocity constraints first) and returns the state at every time of
+    /// `times` (non-negative, non-decreasing).
     ///
     /// # Errors
     /// A message when the KKT matrix or `B Bᵀ` is singular (redundant
     /// constraints, a singular position), or a time is negative or out of order.
     pub fn solve(&self, u0: &[f64], v0: &[f64], times: &[f64]) -> Result<Vec<State>, String> {
         let (mut t, mut u, mut v) = (0.0, u0.to_vec(), v0.to_vec());
+        // An inconsistent start is projected before the first step: else the
+        // projection after it would move the state by O(1), differently for
+        // every step size (a first-order error).
+        self.project(t, &mut u, &mut v)?;
         let mut out = Vec::with_capacity(times.len());
         for &target in times {
             if target.is_nan() || target < t {

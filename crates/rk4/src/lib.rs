@@ -30,6 +30,9 @@
 #![deny(missing_docs)]
 
 mod index1;
+/// Closed-form references for spatial rigid-body validation: the torque-free
+/// asymmetric body and the heavy symmetric top, with their textbook sources.
+pub mod rigid;
 
 pub use index1::{Index1Rk4, State};
 

@@ -1,0 +1,684 @@
+//! [`SpatialSystem`]: the assembled model and its [`System`] implementation.
+
+use std::sync::Arc;
+
+use super::SpatialBody;
+use super::body::Inertia;
+use super::builder::normalized;
+use super::evaluate::{SIDE, d15, d28, frames, global, jet, joint_patterns, load_patterns};
+use super::frame::D28;
+use super::joints::SpatialJoint;
+use super::loads::SpatialLoad;
+use super::real::{Jet, Real, TIME};
+use super::rotation::rates_of_omega;
+use crate::{Pattern, System};
+
+/// A body as assembled.
+#[derive(Clone, Debug)]
+pub(crate) struct BodyData {
+    pub(crate) name: String,
+    pub(crate) mass: f64,
+    /// `None` for a point mass.
+    pub(crate) inertia: Option<Inertia>,
+    /// Its first coordinate.
+    pub(crate) x: usize,
+    u0: [f64; 7],
+    v0: [f64; 7],
+}
+
+impl BodyData {
+    pub(crate) fn new(name: String, b: &SpatialBody, inertia: Option<Inertia>, x: usize) -> Self {
+        let p = normalized(b.orientation);
+        let pd = rates_of_omega(&p, b.angular_velocity);
+        let [x0, y0, z0] = b.position;
+        let [vx, vy, vz] = b.velocity;
+        Self {
+            name,
+            mass: b.mass,
+            inertia,
+            x,
+            u0: [x0, y0, z0, p[0], p[1], p[2], p[3]],
+            v0: [vx, vy, vz, pd[0], pd[1], pd[2], pd[3]],
+        }
+    }
+
+    /// Its number of coordinates: 7 for a rigid body, 3 for a point mass.
+    pub(crate) fn count(&self) -> usize {
+        if self.inertia.is_some() { 7 } else { 3 }
+    }
+
+    pub(crate) fn is_rigid(&self) -> bool {
+        self.inertia.is_some()
+    }
+}
+
+/// A joint or driver as assembled: its rows, its structural entries and where
+/// its values go.
+#[derive(Clone, Debug)]
+pub(crate) struct JointData {
+    pub(crate) name: String,
+    pub(crate) sides: [Option<usize>; 2],
+    pub(crate) element: Arc<dyn SpatialJoint>,
+    pub(crate) row0: usize,
+    /// `(row, local variable)` of its entries of `B`, in value order.
+    b_local: Vec<(usize, usize)>,
+    /// Local pairs of its Hessian entries, in value order.
+    h_local: Vec<(usize, usize)>,
+    b_off: usize,
+    h_off: usize,
+}
+
+impl JointData {
+    pub(crate) fn new(
+        name: String,
+        sides: [Option<usize>; 2],
+        element: Arc<dyn SpatialJoint>,
+    ) -> Self {
+        Self {
+            name,
+            sides,
+            element,
+            row0: 0,
+            b_local: Vec::new(),
+            h_local: Vec::new(),
+            b_off: 0,
+            h_off: 0,
+        }
+    }
+
+    pub(crate) fn rows(&self) -> usize {
+        self.element.row_names().len()
+    }
+}
+
+/// A load as assembled.
+#[derive(Clone, Debug)]
+pub(crate) struct LoadData {
+    pub(crate) name: String,
+    pub(crate) sides: [Option<usize>; 2],
+    pub(crate) element: Arc<dyn SpatialLoad>,
+}
+
+impl LoadData {
+    /// The number of coordinates of each side (0 for the ground).
+    pub(crate) fn counts(&self, bodies: &[BodyData]) -> [usize; 2] {
+        self.sides.map(|s| s.map_or(0, |i| bodies[i].count()))
+    }
+}
+
+/// A load's structural entries and value offsets.
+#[derive(Clone, Debug)]
+struct LoadSlots {
+    du: Vec<(usize, usize)>,
+    dv: Vec<(usize, usize)>,
+    du_off: usize,
+    dv_off: usize,
+}
+
+/// The reaction of a joint on one of its bodies: force and torque about the
+/// body's centre of mass, global axes (from `−Bᵀλ` of the joint's rows).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpatialReaction<'a> {
+    /// The body the reaction acts on: the joint's second, or its first when
+    /// the second is the ground.
+    pub body: &'a str,
+    /// Force, N.
+    pub force: [f64; 3],
+    /// Moment about the body's centre of mass, N m.
+    pub torque: [f64; 3],
+}
+
+/// A spatial multibody system assembled by
+/// [`SpatialBuilder`](super::SpatialBuilder).
+#[derive(Clone, Debug)]
+pub struct SpatialSystem {
+    gravity: [f64; 3],
+    pub(crate) bodies: Vec<BodyData>,
+    pub(crate) joints: Vec<JointData>,
+    loads: Vec<LoadData>,
+    load_slots: Vec<LoadSlots>,
+    /// `(row, body)` of every normalization constraint.
+    norms: Vec<(usize, usize)>,
+    n: usize,
+    m: usize,
+    constraint_names: Vec<String>,
+    patterns: Patterns,
+    /// Offsets of the normalization rows' entries in `B`.
+    norm_b_off: usize,
+    norm_h_off: usize,
+}
+
+#[derive(Clone, Debug)]
+struct Patterns {
+    mass: Pattern,
+    b: Pattern,
+    hessian: Pattern,
+    g_u: Pattern,
+    g_v: Pattern,
+    mass_du: Pattern,
+}
+
+/// The rows in order: each rigid body's normalization row just before the
+/// first joint that touches it (a chain's rows stay banded), then the rest.
+fn row_order(bodies: &[BodyData], joints: &[JointData]) -> Vec<Result<usize, usize>> {
+    let mut placed = vec![false; bodies.len()];
+    let mut order = Vec::new();
+    for (k, j) in joints.iter().enumerate() {
+        for &b in j.sides.iter().flatten() {
+            if bodies[b].is_rigid() && !std::mem::replace(&mut placed[b], true) {
+                order.push(Err(b));
+            }
+        }
+        order.push(Ok(k));
+    }
+    for (b, body) in bodies.iter().enumerate() {
+        if body.is_rigid() && !placed[b] {
+            order.push(Err(b));
+        }
+    }
+    order
+}
+
+impl SpatialSystem {
+    pub(crate) fn assemble(
+        gravity: [f64; 3],
+        bodies: Vec<BodyData>,
+        mut joints: Vec<JointData>,
+        loads: Vec<LoadData>,
+    ) -> Self {
+        let n = bodies.iter().map(BodyData::count).sum();
+        let mut names = Vec::new();
+        let mut norms = Vec::new();
+        for item in row_order(&bodies, &joints) {
+            match item {
+                Err(b) => {
+                    norms.push((names.len(), b));
+                    names.push(format!("{}.norm", bodies[b].name));
+                }
+                Ok(k) => {
+                    let j = &mut joints[k];
+                    j.row0 = names.len();
+                    for s in j.element.row_names() {
+                        names.push(format!("{}{s}", j.name));
+                    }
+                }
+            }
+        }
+        let m = names.len();
+        let mut sys = Self {
+            gravity,
+            bodies,
+            joints,
+            loads,
+            load_slots: Vec::new(),
+            norms,
+            n,
+            m,
+            constraint_names: names,
+            patterns: Patterns {
+                mass: Pattern::new(n, n),
+                b: Pattern::new(m, n),
+                hessian: Pattern::new(n, n),
+                g_u: Pattern::new(n, n),
+                g_v: Pattern::new(n, n),
+                mass_du: Pattern::new(n, n),
+            },
+            norm_b_off: 0,
+            norm_h_off: 0,
+        };
+        sys.build_patterns();
+        sys
+    }
+
+    fn rigid_blocks(&self) -> impl Iterator<Item = (usize, &BodyData)> {
+        self.bodies
+            .iter()
+            .filter(|b| b.is_rigid())
+            .map(|b| (b.x + 3, b))
+    }
+
+    fn build_patterns(&mut self) {
+        let n = self.n;
+        let mut p = self.patterns.clone();
+        for b in &self.bodies {
+            for k in 0..3 {
+                p.mass.push(b.x + k, b.x + k);
+            }
+            if b.is_rigid() {
+                push_block(&mut p.mass, b.x + 3);
+            }
+        }
+        let blocks: Vec<usize> = self.rigid_blocks().map(|(x, _)| x).collect();
+        for &x in &blocks {
+            push_block(&mut p.mass_du, x);
+            push_block(&mut p.g_u, x);
+            push_block(&mut p.g_v, x);
+        }
+        for j in &mut self.joints {
+            let (bl, hl) = joint_patterns(&self.bodies, j, n);
+            (j.b_off, j.h_off) = (p.b.len(), p.hessian.len());
+            for &(r, a) in &bl {
+                p.b.push(j.row0 + r, global(&self.bodies, j.sides, a).unwrap_or(0));
+            }
+            for &(a, b) in &hl {
+                let g = |k| global(&self.bodies, j.sides, k).unwrap_or(0);
+                p.hessian.push(g(a), g(b));
+            }
+            (j.b_local, j.h_local) = (bl, hl);
+        }
+        (self.norm_b_off, self.norm_h_off) = (p.b.len(), p.hessian.len());
+        for &(row, b) in &self.norms {
+            let x = self.bodies[b].x + 3;
+            for k in 0..4 {
+                p.b.push(row, x + k);
+                p.hessian.push(x + k, x + k);
+            }
+        }
+        for l in &self.loads {
+            let (du, dv) = load_patterns(&self.bodies, l, n);
+            let g = |k| global(&self.bodies, l.sides, k).unwrap_or(0);
+            let slots = LoadSlots {
+                du_off: p.g_u.len(),
+                dv_off: p.g_v.len(),
+                du,
+                dv,
+            };
+            slots
+                .du
+                .iter()
+                .for_each(|&(r, a)| _ = p.g_u.push(g(r), g(a)));
+            slots
+                .dv
+                .iter()
+                .for_each(|&(r, a)| _ = p.g_v.push(g(r), g(a)));
+            self.load_slots.push(slots);
+        }
+        self.patterns = p;
+    }
+
+    /// Initial coordinates `u₀` (unit Euler parameters).
+    #[must_use]
+    pub fn initial_position(&self) -> Vec<f64> {
+        self.initial(|b| b.u0)
+    }
+
+    /// Initial velocities `u̇₀` (`ṗ = ½ Eᵀ ω`).
+    #[must_use]
+    pub fn initial_velocity(&self) -> Vec<f64> {
+        self.initial(|b| b.v0)
+    }
+
+    fn initial(&self, f: impl Fn(&BodyData) -> [f64; 7]) -> Vec<f64> {
+        let mut u = vec![0.0; self.n];
+        for b in &self.bodies {
+            u[b.x..b.x + b.count()].copy_from_slice(&f(b)[..b.count()]);
+        }
+        u
+    }
+
+    /// Number of bodies.
+    #[must_use]
+    pub fn n_bodies(&self) -> usize {
+        self.bodies.len()
+    }
+
+    /// The first coordinate of the body `name` and whether it is rigid.
+    #[must_use]
+    pub fn body(&self, name: &str) -> Option<(usize, bool)> {
+        let b = self.bodies.iter().find(|b| b.name == name)?;
+        Some((b.x, b.is_rigid()))
+    }
+
+    /// The names of the bodies, in order.
+    pub fn body_names(&self) -> impl Iterator<Item = &str> {
+        self.bodies.iter().map(|b| b.name.as_str())
+    }
+
+    /// The names of the joints and drivers, in order.
+    pub fn joint_names(&self) -> impl Iterator<Item = &str> {
+        self.joints.iter().map(|j| j.name.as_str())
+    }
+
+    /// The type of the joint `name` (`"revolute"`, `"angle driver"`, …).
+    #[must_use]
+    pub fn joint_kind(&self, name: &str) -> Option<&'static str> {
+        let j = self.joints.iter().find(|j| j.name == name)?;
+        Some(j.element.kind())
+    }
+
+    /// The names and types of the loads, in order.
+    pub fn loads(&self) -> impl Iterator<Item = (&str, &'static str)> {
+        self.loads
+            .iter()
+            .map(|l| (l.name.as_str(), l.element.kind()))
+    }
+
+    /// Whether the joint `name` is a driver (`None`: no such joint).
+    #[must_use]
+    pub fn is_driver(&self, name: &str) -> Option<bool> {
+        let j = self.joints.iter().find(|j| j.name == name)?;
+        Some(j.element.is_driver())
+    }
+
+    /// The constraint rows of the joint `name`.
+    #[must_use]
+    pub fn joint_rows(&self, name: &str) -> Option<std::ops::Range<usize>> {
+        let j = self.joints.iter().find(|j| j.name == name)?;
+        Some(j.row0..j.row0 + j.rows())
+    }
+
+    /// The joint or body whose constraint row `row` is.
+    #[must_use]
+    pub fn constraint_owner(&self, row: usize) -> Option<&str> {
+        if let Some(j) = self
+            .joints
+            .iter()
+            .find(|j| (j.row0..j.row0 + j.rows()).contains(&row))
+        {
+            return Some(&j.name);
+        }
+        let &(_, b) = self.norms.iter().find(|&&(r, _)| r == row)?;
+        Some(&self.bodies[b].name)
+    }
+
+    /// The reaction of the joint `name` (see [`SpatialReaction`]).
+    #[must_use]
+    pub fn reaction(
+        &self,
+        name: &str,
+        t: f64,
+        u: &[f64],
+        lambda: &[f64],
+    ) -> Option<SpatialReaction<'_>> {
+        let j = self.joints.iter().find(|j| j.name == name)?;
+        let side = usize::from(j.sides[1].is_some());
+        let body = &self.bodies[j.sides[side]?];
+        let f = frames(&self.bodies, j.sides, u, None, d15);
+        let mut out = vec![d15(0.0, TIME); j.rows()];
+        j.element.eval_dual(d15(t, TIME), &f[0], &f[1], &mut out);
+        let q: [f64; SIDE] = std::array::from_fn(|k| {
+            let a = SIDE * side + k;
+            -(0..j.rows())
+                .map(|r| out[r].g[a] * lambda[j.row0 + r])
+                .sum::<f64>()
+        });
+        let torque = if body.is_rigid() {
+            let x = body.x + 3;
+            let p = [u[x], u[x + 1], u[x + 2], u[x + 3]];
+            // n = ½ E(p) Q_p.
+            let e = [p[1], p[2], p[3]];
+            let qv = [q[4], q[5], q[6]];
+            let c = super::rotation::cross(e, qv);
+            std::array::from_fn(|i| 0.5 * (-e[i] * q[3] + p[0] * qv[i] + c[i]))
+        } else {
+            [0.0; 3]
+        };
+        Some(SpatialReaction {
+            body: &body.name,
+            force: [q[0], q[1], q[2]],
+            torque,
+        })
+    }
+}
+
+/// Pushes the dense 4 × 4 block at `(x, x)`, row by row.
+fn push_block(p: &mut Pattern, x: usize) {
+    for r in 0..4 {
+        for c in 0..4 {
+            p.push(x + r, x + c);
+        }
+    }
+}
+
+impl System for SpatialSystem {
+    fn n_coords(&self) -> usize {
+        self.n
+    }
+
+    fn n_constraints(&self) -> usize {
+        self.m
+    }
+
+    fn coord_name(&self, i: usize) -> String {
+        const NAMES: [&str; 7] = ["x", "y", "z", "e0", "e1", "e2", "e3"];
+        let b = self
+            .bodies
+            .iter()
+            .rfind(|b| b.x <= i)
+            .unwrap_or(&self.bodies[0]);
+        format!("{}.{}", b.name, NAMES[(i - b.x).min(6)])
+    }
+
+    fn constraint_name(&self, i: usize) -> String {
+        self.constraint_names[i].clone()
+    }
+
+    fn mass_pattern(&self) -> Pattern {
+        self.patterns.mass.clone()
+    }
+
+    fn mass_into(&self, _t: f64, u: &[f64], mass: &mut [f64]) {
+        let mut k = 0;
+        for b in &self.bodies {
+            mass[k..k + 3].fill(b.mass);
+            k += 3;
+            if let Some(j) = &b.inertia {
+                j.mass(&u[b.x + 3..b.x + 7], &mut mass[k..k + 16]);
+                k += 16;
+            }
+        }
+    }
+
+    fn forces_into(&self, t: f64, u: &[f64], v: &[f64], g: &mut [f64]) {
+        for b in &self.bodies {
+            for k in 0..3 {
+                g[b.x + k] = b.mass * self.gravity[k];
+            }
+            if let Some(j) = &b.inertia {
+                let x = b.x + 3;
+                let q = j.quadratic_force(&u[x..x + 4], &v[x..x + 4]);
+                g[x..x + 4].copy_from_slice(&q);
+            }
+        }
+        for l in &self.loads {
+            let f = frames(&self.bodies, l.sides, u, Some(v), |x, _| x);
+            let mut out = [[0.0; SIDE]; 2];
+            let c = l.counts(&self.bodies);
+            let [ga, gb] = &mut out;
+            l.element
+                .eval_f64(t, &f[0], &f[1], &mut ga[..c[0]], &mut gb[..c[1]]);
+            for s in 0..2 {
+                for k in 0..c[s] {
+                    if let Some(i) = global(&self.bodies, l.sides, SIDE * s + k) {
+                        g[i] += out[s][k];
+                    }
+                }
+            }
+        }
+    }
+
+    fn forces_du_pattern(&self) -> Pattern {
+        self.patterns.g_u.clone()
+    }
+
+    fn forces_du_into(&self, t: f64, u: &[f64], v: &[f64], g_u: &mut [f64]) {
+        self.force_jacobian(t, u, v, false, g_u);
+    }
+
+    fn forces_dv_pattern(&self) -> Pattern {
+        self.patterns.g_v.clone()
+    }
+
+    fn forces_dv_into(&self, t: f64, u: &[f64], v: &[f64], g_v: &mut [f64]) {
+        self.force_jacobian(t, u, v, true, g_v);
+    }
+
+    fn mass_du_pattern(&self) -> Pattern {
+        self.patterns.mass_du.clone()
+    }
+
+    fn mass_du_into(&self, _t: f64, u: &[f64], w: &[f64], out: &mut [f64]) {
+        for (k, (x, b)) in self.rigid_blocks().enumerate() {
+            if let Some(j) = &b.inertia {
+                j.mass_du(&u[x..x + 4], &w[x..x + 4], &mut out[16 * k..16 * k + 16]);
+            }
+        }
+    }
+
+    fn phi_into(&self, t: f64, u: &[f64], phi: &mut [f64]) {
+        for &(row, b) in &self.norms {
+            let x = self.bodies[b].x + 3;
+            phi[row] = u[x..x + 4].iter().map(|e| e * e).sum::<f64>() - 1.0;
+        }
+        for j in &self.joints {
+            let f = frames(&self.bodies, j.sides, u, None, |x, _| x);
+            j.element
+                .eval_f64(t, &f[0], &f[1], &mut phi[j.row0..j.row0 + j.rows()]);
+        }
+    }
+
+    fn b_pattern(&self) -> Pattern {
+        self.patterns.b.clone()
+    }
+
+    fn b_into(&self, t: f64, u: &[f64], b: &mut [f64]) {
+        let mut phi = vec![0.0; self.m];
+        self.phi_b(t, u, &mut phi, b);
+    }
+
+    fn phi_b_into(&self, t: f64, u: &[f64], phi: &mut [f64], b: &mut [f64], _work: &mut [f64]) {
+        self.phi_b(t, u, phi, b);
+    }
+
+    fn phi_t_into(&self, t: f64, u: &[f64], phi_t: &mut [f64]) {
+        phi_t.fill(0.0);
+        for j in &self.joints {
+            let f = frames(&self.bodies, j.sides, u, None, d15);
+            let mut out = [d15(0.0, TIME); 6];
+            let rows = j.rows();
+            j.element
+                .eval_dual(d15(t, TIME), &f[0], &f[1], &mut out[..rows]);
+            for r in 0..rows {
+                phi_t[j.row0 + r] = out[r].g[TIME];
+            }
+        }
+    }
+
+    fn hessian_pattern(&self) -> Pattern {
+        self.patterns.hessian.clone()
+    }
+
+    fn hessian_into(&self, t: f64, u: &[f64], mu: &[f64], out: &mut [f64]) {
+        for j in &self.joints {
+            let o = self.joint_jet(j, t, u);
+            for (k, &(a, b)) in j.h_local.iter().enumerate() {
+                out[j.h_off + k] = (0..j.rows()).map(|r| mu[j.row0 + r] * o[r].h[a][b]).sum();
+            }
+        }
+        for (k, &(row, _)) in self.norms.iter().enumerate() {
+            out[self.norm_h_off + 4 * k..self.norm_h_off + 4 * k + 4].fill(2.0 * mu[row]);
+        }
+    }
+
+    fn accel_rhs_into(&self, t: f64, u: &[f64], v: &[f64], c: &mut [f64]) {
+        for &(row, b) in &self.norms {
+            let x = self.bodies[b].x + 3;
+            c[row] = -2.0 * v[x..x + 4].iter().map(|e| e * e).sum::<f64>();
+        }
+        for j in &self.joints {
+            let o = self.joint_jet(j, t, u);
+            let vl: [f64; TIME] =
+                std::array::from_fn(|a| global(&self.bodies, j.sides, a).map_or(0.0, |i| v[i]));
+            for r in 0..j.rows() {
+                let h = &o[r].h;
+                let mut q = h[TIME][TIME];
+                for a in 0..TIME {
+                    let row: f64 = (0..TIME).map(|b| h[a][b] * vl[b]).sum();
+                    q += vl[a] * (row + 2.0 * h[a][TIME]);
+                }
+                c[j.row0 + r] = -q;
+            }
+        }
+    }
+
+    fn potential_energy(&self, t: f64, u: &[f64]) -> f64 {
+        let _ = t;
+        let gravity: f64 = self
+            .bodies
+            .iter()
+            .map(|b| -b.mass * (0..3).map(|k| self.gravity[k] * u[b.x + k]).sum::<f64>())
+            .sum();
+        let loads: f64 = self
+            .loads
+            .iter()
+            .map(|l| {
+                let f = frames(&self.bodies, l.sides, u, None, |x, _| x);
+                l.element.potential(&f[0], &f[1])
+            })
+            .sum();
+        gravity + loads
+    }
+}
+
+impl SpatialSystem {
+    fn phi_b(&self, t: f64, u: &[f64], phi: &mut [f64], b: &mut [f64]) {
+        for (k, &(row, body)) in self.norms.iter().enumerate() {
+            let x = self.bodies[body].x + 3;
+            let p = &u[x..x + 4];
+            phi[row] = p.iter().map(|e| e * e).sum::<f64>() - 1.0;
+            for i in 0..4 {
+                b[self.norm_b_off + 4 * k + i] = 2.0 * p[i];
+            }
+        }
+        for j in &self.joints {
+            let f = frames(&self.bodies, j.sides, u, None, d15);
+            let mut out = [d15(0.0, TIME); 6];
+            let rows = j.rows();
+            j.element
+                .eval_dual(d15(t, TIME), &f[0], &f[1], &mut out[..rows]);
+            for r in 0..rows {
+                phi[j.row0 + r] = out[r].v;
+            }
+            for (k, &(r, a)) in j.b_local.iter().enumerate() {
+                b[j.b_off + k] = out[r].g[a];
+            }
+        }
+    }
+
+    fn joint_jet(&self, j: &JointData, t: f64, u: &[f64]) -> Vec<Jet> {
+        let f = frames(&self.bodies, j.sides, u, None, jet);
+        let mut out = vec![Jet::cst(0.0); j.rows()];
+        j.element
+            .eval_jet(Jet::var(t, TIME), &f[0], &f[1], &mut out);
+        out
+    }
+
+    fn force_jacobian(&self, t: f64, u: &[f64], v: &[f64], rates: bool, out: &mut [f64]) {
+        for (k, (x, b)) in self.rigid_blocks().enumerate() {
+            if let Some(j) = &b.inertia {
+                let block = &mut out[16 * k..16 * k + 16];
+                if rates {
+                    j.quadratic_dv(&u[x..x + 4], &v[x..x + 4], block);
+                } else {
+                    j.quadratic_du(&v[x..x + 4], block);
+                }
+            }
+        }
+        for (l, s) in self.loads.iter().zip(&self.load_slots) {
+            let f = frames(&self.bodies, l.sides, u, Some(v), d28);
+            let mut g = [[D28::cst(0.0); SIDE]; 2];
+            let c = l.counts(&self.bodies);
+            let [ga, gb] = &mut g;
+            l.element
+                .eval_dual(t, &f[0], &f[1], &mut ga[..c[0]], &mut gb[..c[1]]);
+            let (list, off, shift) = if rates {
+                (&s.dv, s.dv_off, 2 * SIDE)
+            } else {
+                (&s.du, s.du_off, 0)
+            };
+            for (k, &(r, a)) in list.iter().enumerate() {
+                out[off + k] = g[r / SIDE][r % SIDE].g[shift + a];
+            }
+        }
+    }
+}
