@@ -8,12 +8,11 @@ use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mstar::csv::Columns;
 use mstar::model::RowSubset;
-use mstar::model::file::{ModelFile, Simulation};
+use mstar::model::file::{Mechanism, MechanismFile, Simulation};
 use mstar::newmark::Short;
 use mstar::pendulum::PendulumRun;
-use mstar::planar::PlanarSystem;
 use mstar::redundant::Expanded;
-use mstar::run::ReactionColumns;
+use mstar::run::{ModelLookup, ReactionColumns};
 use mstar::{IntegrationError, Integrator, Observer, SampleRef, System, csv};
 
 use crate::output::Stop;
@@ -100,17 +99,26 @@ struct Loaded {
     every_time: Option<f64>,
 }
 
-/// A planar model (whose CSV has reaction columns) or another system.
+/// A model file's mechanism, planar or spatial (whose CSV has reaction
+/// columns), or another system.
 enum Model {
-    Planar(Box<PlanarSystem>),
+    Named(Box<Mechanism>),
     Other(Box<dyn System>),
 }
 
 impl Model {
     fn system(&self) -> &(dyn System + 'static) {
         match self {
-            Self::Planar(sys) => sys.as_ref(),
+            Self::Named(m) => m.system(),
             Self::Other(sys) => sys.as_ref(),
+        }
+    }
+
+    /// The mechanism with its joints by name, when it is a model file's.
+    fn named(&self) -> Option<&dyn ModelLookup> {
+        match self {
+            Self::Named(m) => Some(mstar::run::lookup(m)),
+            Self::Other(_) => None,
         }
     }
 }
@@ -149,10 +157,9 @@ fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
         return ExitCode::from(2);
     }
     if let Some(e) = e.downcast_ref::<IntegrationError>() {
-        let hint = match model.map(|m| &m.system) {
-            Some(Model::Planar(sys)) => start_hint(sys, e),
-            _ => None,
-        };
+        let hint = model
+            .and_then(|m| m.system.named())
+            .and_then(|sys| start_hint(sys, e));
         if let Some(hint) = hint.or_else(|| crate::hint(e, true).map(String::from)) {
             eprintln!("hint: {hint}");
         }
@@ -163,7 +170,7 @@ fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
 /// What to edit in the model file when the start fails on a constraint the
 /// initial pose violates: the pose of the bodies, or the points of the
 /// joint that owns it (or the driver's function).
-fn start_hint(sys: &PlanarSystem, e: &IntegrationError) -> Option<String> {
+fn start_hint(sys: &dyn ModelLookup, e: &IntegrationError) -> Option<String> {
     let name = match e {
         IntegrationError::ProjectionFailed { initial, .. } => initial,
         IntegrationError::StartFailed {
@@ -180,7 +187,8 @@ fn start_hint(sys: &PlanarSystem, e: &IntegrationError) -> Option<String> {
         format!("or the points of joint '{owner}'")
     };
     Some(format!(
-        "'{name}' is a row of '{owner}': in the model file, fix the initial pose of the bodies it joins ([[body]] pose, [[point_mass]] position) {what}, so that it holds at t = 0; mstar check shows the initial violation"
+        "'{name}' is a row of '{owner}': in the model file, fix the initial pose of the bodies it joins ({}) {what}, so that it holds at t = 0; mstar check shows the initial violation",
+        sys.pose_keys()
     ))
 }
 
@@ -209,14 +217,11 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         Short(config.h),
         Short(t_end)
     );
-    if let Model::Planar(sys) = &model.system {
+    if let Some(sys) = model.system.named() {
         warn_far_start(sys);
     }
     let rows = independent_rows(model)?;
-    let columns = match &model.system {
-        Model::Planar(sys) => Some(ReactionColumns::new(sys)),
-        Model::Other(_) => None,
-    };
+    let columns = model.system.named().map(ReactionColumns::new);
     let extra = columns.as_ref().map(Columns::names).unwrap_or_default();
     crate::limits::check_steps(t_end, config.h)?;
     let fields = csv::header(sys).len() + extra.len();
@@ -232,15 +237,15 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     let mut output = RunOutput::new(stream, columns, (every, grid), t_end);
     let config_used = config.clone();
     let start = (config, &model.u0[..], &model.v0[..], t_end);
-    let (outcome, drift) = match (&model.system, rows) {
-        (Model::Planar(planar), Some(rows)) => {
+    let (outcome, drift) = match (model.system.named(), rows) {
+        (Some(named), Some(rows)) => {
             let subset = RowSubset::new(sys, rows.kept.clone());
-            let hold = |u: &[f64]| mstar::run::left_out_rows_hold(planar, &rows, u);
+            let hold = |u: &[f64]| mstar::run::left_out_rows_hold(named, &rows, u);
             let mut expanded = Expanded::new(&subset, &mut output);
             let outcome = integrate(&subset, start, &hold, &mut expanded);
             let drift = expanded
                 .drifted()
-                .map(|d| mstar::run::redundancy_changed(planar, d));
+                .map(|d| mstar::run::redundancy_changed(named, d));
             (outcome, drift)
         }
         _ => (integrate(sys, start, &|_| Ok(()), &mut output), None),
@@ -268,7 +273,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
 
 /// Names the joint an initial pose is far from, before the start projects
 /// the state onto the constraints (and, if that fails, explains why).
-fn warn_far_start(sys: &PlanarSystem) {
+fn warn_far_start(sys: &dyn ModelLookup) {
     if let Some((owner, row, value)) = mstar::run::initial_violation(sys)
         && value > FAR
     {
@@ -288,7 +293,7 @@ const FAR: f64 = 1e-6;
 /// Redundant constraints in a model that does not ask for them, by name,
 /// with what to do.
 fn independent_rows(model: &Loaded) -> Result<Option<mstar::redundant::Rows>> {
-    let Model::Planar(sys) = &model.system else {
+    let Some(sys) = model.system.named() else {
         return Ok(None);
     };
     let choice = model.simulation.redundant.unwrap_or_default();
@@ -355,15 +360,19 @@ fn load(args: &RunArgs) -> Result<Loaded> {
         return builtin_model(builtin, &set);
     }
     let path = args.model.as_deref().context("a model file or --builtin")?;
-    let file = ModelFile::load_with(path, &set)?;
+    let file = MechanismFile::load_with(path, &set)?;
+    for w in &file.warnings {
+        eprintln!("warning: {w}");
+    }
+    let sys = mstar::run::lookup(&file.mechanism);
     Ok(Loaded {
         label: path.display().to_string(),
-        u0: file.system.initial_position(),
-        v0: file.system.initial_velocity(),
+        u0: sys.initial_position(),
+        v0: sys.initial_velocity(),
         every: file.output.every,
         every_time: file.output.every_time,
         simulation: file.simulation,
-        system: Model::Planar(Box::new(file.system)),
+        system: Model::Named(Box::new(file.mechanism)),
     })
 }
 
@@ -435,7 +444,7 @@ fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
                 label: "built-in 10-bar chain".to_string(),
                 u0: sys.initial_position(),
                 v0: sys.initial_velocity(),
-                system: Model::Planar(Box::new(sys)),
+                system: Model::Named(Box::new(Mechanism::Planar(sys))),
                 simulation,
                 every: 1,
                 every_time: None,
@@ -604,7 +613,7 @@ fn print_summary(st: mstar::RunStats, t: f64, out: &RunOutput<'_>, wall: f64) {
 /// `mstar check`: exit 0 when the model can run as written, 1 when it
 /// cannot, 2 when the file cannot be read or holds a value out of range.
 pub fn check(args: &CheckArgs) -> ExitCode {
-    let file = match ModelFile::load_with(&args.model, &args.set) {
+    let file = match MechanismFile::load_with(&args.model, &args.set) {
         Ok(file) => file,
         Err(e) => {
             eprintln!("error: {e}");
@@ -620,7 +629,10 @@ pub fn check(args: &CheckArgs) -> ExitCode {
         }
     };
     let redundant = file.simulation.redundant.unwrap_or_default();
-    let report = mstar::run::check(&file.system, &config, redundant);
+    for w in &file.warnings {
+        eprintln!("warning: {w}");
+    }
+    let report = mstar::run::check(mstar::run::lookup(&file.mechanism), &config, redundant);
     print!("{report}");
     if report.can_run() {
         ExitCode::SUCCESS

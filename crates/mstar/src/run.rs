@@ -4,10 +4,12 @@
 //! the initial state is from the constraints).
 
 use mstar_kkt::{Backend, MaxAbs, argmax_abs};
+use mstar_model::file::Mechanism;
 use mstar_model::file::{
     ErrorControlChoice, IntegratorChoice, NewtonChoice, RedundantChoice, Simulation,
 };
 use mstar_model::planar::PlanarSystem;
+use mstar_model::spatial::SpatialSystem;
 use mstar_model::{RowSubset, System};
 use mstar_newmark::{
     Config, IntegrationError, Integrator, Newton, Observer, RunStats, Scheme, StepMode,
@@ -148,8 +150,8 @@ pub enum RunError {
 ///
 /// # Errors
 /// [`RunError::Redundant`] when it has redundant constraints and does not.
-pub fn solve_rows(
-    sys: &PlanarSystem,
+pub fn solve_rows<S: ModelLookup + ?Sized>(
+    sys: &S,
     u0: &[f64],
     choice: RedundantChoice,
 ) -> Result<Option<Rows>, RunError> {
@@ -169,7 +171,11 @@ pub fn solve_rows(
 ///
 /// # Errors
 /// [`RunError::Contradicting`] with the joints of the violated rows.
-pub fn left_out_rows_hold(sys: &PlanarSystem, rows: &Rows, u: &[f64]) -> Result<(), RunError> {
+pub fn left_out_rows_hold<S: ModelLookup + ?Sized>(
+    sys: &S,
+    rows: &Rows,
+    u: &[f64],
+) -> Result<(), RunError> {
     let mut phi = vec![0.0; sys.n_constraints()];
     sys.phi_into(0.0, u, &mut phi);
     let scale = u.iter().fold(1.0f64, |m, x| m.max(x.abs()));
@@ -191,7 +197,10 @@ pub fn left_out_rows_hold(sys: &PlanarSystem, rows: &Rows, u: &[f64]) -> Result<
 
 /// The error for rows that stopped holding.
 #[must_use]
-pub fn redundancy_changed(sys: &PlanarSystem, d: crate::redundant::Drift) -> RunError {
+pub fn redundancy_changed<S: ModelLookup + ?Sized>(
+    sys: &S,
+    d: crate::redundant::Drift,
+) -> RunError {
     RunError::RedundancyChanged {
         joints: owners(sys, &[d.row]),
         t: d.t,
@@ -206,8 +215,8 @@ pub fn redundancy_changed(sys: &PlanarSystem, d: crate::redundant::Drift) -> Run
 /// # Errors
 /// [`RunError`]: bad settings, refused redundant constraints, a start or a
 /// step that fails (the samples before it have been observed).
-pub fn simulate(
-    sys: &PlanarSystem,
+pub fn simulate<S: ModelLookup + ?Sized>(
+    sys: &S,
     sim: &Simulation,
     observer: &mut dyn Observer,
 ) -> Result<RunStats, RunError> {
@@ -263,7 +272,11 @@ pub struct CheckReport {
 /// Checks `sys` at its initial state with the integrator configuration
 /// `config`, redundant constraints handled as `redundant` says.
 #[must_use]
-pub fn check(sys: &PlanarSystem, config: &Config, redundant: RedundantChoice) -> CheckReport {
+pub fn check<S: ModelLookup + ?Sized>(
+    sys: &S,
+    config: &Config,
+    redundant: RedundantChoice,
+) -> CheckReport {
     let (n, m) = (sys.n_coords(), sys.n_constraints());
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
     let rows = crate::redundant::rows(sys, 0.0, &u0);
@@ -299,7 +312,7 @@ pub fn check(sys: &PlanarSystem, config: &Config, redundant: RedundantChoice) ->
 
 /// The joints and drivers that own `rows`, each once, in order.
 #[must_use]
-pub fn owners(sys: &PlanarSystem, rows: &[usize]) -> Vec<String> {
+pub fn owners<S: ModelLookup + ?Sized>(sys: &S, rows: &[usize]) -> Vec<String> {
     let mut names: Vec<String> = Vec::new();
     for &row in rows {
         let owner = sys.constraint_owner(row).unwrap_or("?").to_string();
@@ -313,13 +326,17 @@ pub fn owners(sys: &PlanarSystem, rows: &[usize]) -> Vec<String> {
 /// The most violated constraint row at the initial pose, by owner and row
 /// name, with `|Φ|` (`None` when every row holds exactly).
 #[must_use]
-pub fn initial_violation(sys: &PlanarSystem) -> Option<(String, String, f64)> {
+pub fn initial_violation<S: ModelLookup + ?Sized>(sys: &S) -> Option<(String, String, f64)> {
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
     violation(sys, &initial_violations(sys, &u0, &v0).0)
 }
 
 /// `Φ` and `B u̇ + Φ_t` at the initial state.
-fn initial_violations(sys: &PlanarSystem, u0: &[f64], v0: &[f64]) -> (Vec<f64>, Vec<f64>) {
+fn initial_violations<S: ModelLookup + ?Sized>(
+    sys: &S,
+    u0: &[f64],
+    v0: &[f64],
+) -> (Vec<f64>, Vec<f64>) {
     let m = sys.n_constraints();
     let mut phi = vec![0.0; m];
     sys.phi_into(0.0, u0, &mut phi);
@@ -425,7 +442,7 @@ impl std::fmt::Display for CheckReport {
 }
 
 /// The largest `|xᵢ|` by owner and row name, `None` when all are zero.
-fn violation(sys: &PlanarSystem, x: &[f64]) -> Option<(String, String, f64)> {
+fn violation<S: ModelLookup + ?Sized>(sys: &S, x: &[f64]) -> Option<(String, String, f64)> {
     let mut m = MaxAbs::new();
     x.iter().for_each(|&v| m.push(v));
     if m.value() == 0.0 {
@@ -439,26 +456,142 @@ fn violation(sys: &PlanarSystem, x: &[f64]) -> Option<(String, String, f64)> {
     ))
 }
 
-/// The reaction and effort columns of a planar model's CSV
+/// What running and checking a model needs of it beyond [`System`]: its
+/// initial state, and its joints and drivers by name with their rows and
+/// reactions. Implemented for planar and spatial models.
+pub trait ModelLookup: System {
+    /// Initial coordinates `u₀`, as the model file gives them.
+    fn initial_position(&self) -> Vec<f64>;
+    /// Initial velocities `u̇₀`.
+    fn initial_velocity(&self) -> Vec<f64>;
+    /// The joint, driver (or, for a spatial model, body: its normalization
+    /// row) whose constraint row `row` is.
+    fn constraint_owner(&self, row: usize) -> Option<&str>;
+    /// The joints and drivers, in file order.
+    fn joint_names(&self) -> Vec<&str>;
+    /// Whether the joint `name` is a driver (`None`: no such joint).
+    fn is_driver(&self, name: &str) -> Option<bool>;
+    /// The constraint rows of the joint or driver `name`.
+    fn joint_rows(&self, name: &str) -> Option<std::ops::Range<usize>>;
+    /// The suffixes of a joint's reaction columns: `fx, fy, tau` (planar) or
+    /// `fx, fy, fz, tx, ty, tz` (spatial).
+    fn reaction_components(&self) -> &'static [&'static str];
+    /// Appends the reaction of the `joint`-th joint or driver at the state
+    /// `(t, u, λ)`, one value per [`reaction_components`](Self::reaction_components)
+    /// (NaN when it has none).
+    fn reaction_into(&self, joint: usize, t: f64, u: &[f64], lambda: &[f64], out: &mut Vec<f64>);
+    /// The keys that place the bodies, for hints: what to edit when the
+    /// initial pose is off.
+    fn pose_keys(&self) -> &'static str;
+}
+
+impl ModelLookup for PlanarSystem {
+    fn initial_position(&self) -> Vec<f64> {
+        Self::initial_position(self)
+    }
+    fn initial_velocity(&self) -> Vec<f64> {
+        Self::initial_velocity(self)
+    }
+    fn constraint_owner(&self, row: usize) -> Option<&str> {
+        Self::constraint_owner(self, row)
+    }
+    fn joint_names(&self) -> Vec<&str> {
+        Self::joint_names(self).collect()
+    }
+    fn is_driver(&self, name: &str) -> Option<bool> {
+        Self::is_driver(self, name)
+    }
+    fn joint_rows(&self, name: &str) -> Option<std::ops::Range<usize>> {
+        Self::joint_rows(self, name)
+    }
+    fn reaction_components(&self) -> &'static [&'static str] {
+        &["fx", "fy", "tau"]
+    }
+    fn reaction_into(&self, joint: usize, t: f64, u: &[f64], lambda: &[f64], out: &mut Vec<f64>) {
+        match self.reaction_at(joint, t, u, lambda) {
+            Some(r) => out.extend([r.force[0], r.force[1], r.moment]),
+            None => out.extend([f64::NAN; 3]),
+        }
+    }
+    fn pose_keys(&self) -> &'static str {
+        "[[body]] pose, [[point_mass]] position"
+    }
+}
+
+impl ModelLookup for SpatialSystem {
+    fn initial_position(&self) -> Vec<f64> {
+        Self::initial_position(self)
+    }
+    fn initial_velocity(&self) -> Vec<f64> {
+        Self::initial_velocity(self)
+    }
+    fn constraint_owner(&self, row: usize) -> Option<&str> {
+        Self::constraint_owner(self, row)
+    }
+    fn joint_names(&self) -> Vec<&str> {
+        Self::joint_names(self).collect()
+    }
+    fn is_driver(&self, name: &str) -> Option<bool> {
+        Self::is_driver(self, name)
+    }
+    fn joint_rows(&self, name: &str) -> Option<std::ops::Range<usize>> {
+        Self::joint_rows(self, name)
+    }
+    fn reaction_components(&self) -> &'static [&'static str] {
+        &["fx", "fy", "fz", "tx", "ty", "tz"]
+    }
+    fn reaction_into(&self, joint: usize, t: f64, u: &[f64], lambda: &[f64], out: &mut Vec<f64>) {
+        let reaction = Self::joint_names(self)
+            .nth(joint)
+            .and_then(|name| self.reaction(name, t, u, lambda));
+        match reaction {
+            Some(r) => out.extend(r.force.into_iter().chain(r.torque)),
+            None => out.extend([f64::NAN; 6]),
+        }
+    }
+    fn pose_keys(&self) -> &'static str {
+        "[[body]] position and orientation, [[point_mass]] position"
+    }
+}
+
+/// The mechanism of a model file as a [`ModelLookup`].
+#[must_use]
+pub fn lookup(m: &Mechanism) -> &(dyn ModelLookup + 'static) {
+    match m {
+        Mechanism::Planar(s) => s,
+        Mechanism::Spatial(s) => s,
+    }
+}
+
+/// The reaction and effort columns of a model's CSV
 /// (`docs/model-format.md`, "Output"): per joint and driver, in the order of
-/// the file, `reaction:<name>.fx`, `.fy`, `.tau` — the constraint force
-/// `−Bᵀλ` its rows put on its body ([`PlanarSystem::reaction`]) — then per
-/// driver `effort:<name>` = `−λ`, the force (N) or torque (N m) the driver
-/// applies along the coordinate it drives, positive in that coordinate's
-/// direction.
-#[derive(Debug)]
+/// the file, `reaction:<name>.fx`, `.fy`, `.tau` (planar) or `.fx`, `.fy`,
+/// `.fz`, `.tx`, `.ty`, `.tz` (spatial) — the constraint force `−Bᵀλ` its
+/// rows put on its body ([`PlanarSystem::reaction`],
+/// [`SpatialSystem::reaction`]) — then per driver `effort:<name>` = `−λ`,
+/// the force (N) or torque (N m) the driver applies along the coordinate
+/// (or joint motion) it drives, positive in that coordinate's direction.
 pub struct ReactionColumns<'a> {
-    sys: &'a PlanarSystem,
+    sys: &'a dyn ModelLookup,
     /// `(joint index, first row)` of each driver.
     drivers: Vec<(usize, usize)>,
+}
+
+impl std::fmt::Debug for ReactionColumns<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ReactionColumns")
+            .field("drivers", &self.drivers)
+            .finish_non_exhaustive()
+    }
 }
 
 impl<'a> ReactionColumns<'a> {
     /// The columns of `sys`.
     #[must_use]
-    pub fn new(sys: &'a PlanarSystem) -> Self {
+    pub fn new(sys: &'a dyn ModelLookup) -> Self {
         let drivers = sys
             .joint_names()
+            .into_iter()
             .enumerate()
             .filter(|(_, name)| sys.is_driver(name) == Some(true))
             .filter_map(|(i, name)| Some((i, sys.joint_rows(name)?.start)))
@@ -469,12 +602,12 @@ impl<'a> ReactionColumns<'a> {
 
 impl crate::csv::Columns for ReactionColumns<'_> {
     fn names(&self) -> Vec<String> {
-        let mut names: Vec<String> = self
-            .sys
-            .joint_names()
-            .flat_map(|j| ["fx", "fy", "tau"].map(|c| format!("reaction:{j}.{c}")))
+        let joints = self.sys.joint_names();
+        let components = self.sys.reaction_components();
+        let mut names: Vec<String> = joints
+            .iter()
+            .flat_map(|j| components.iter().map(move |c| format!("reaction:{j}.{c}")))
             .collect();
-        let joints: Vec<&str> = self.sys.joint_names().collect();
         names.extend(
             self.drivers
                 .iter()
@@ -484,11 +617,8 @@ impl crate::csv::Columns for ReactionColumns<'_> {
     }
 
     fn values(&self, s: &mstar_model::SampleRef<'_>, out: &mut Vec<f64>) {
-        for i in 0..self.sys.joint_names().count() {
-            match self.sys.reaction_at(i, s.t, s.u, s.lambda) {
-                Some(r) => out.extend([r.force[0], r.force[1], r.moment]),
-                None => out.extend([f64::NAN; 3]),
-            }
+        for i in 0..self.sys.joint_names().len() {
+            self.sys.reaction_into(i, s.t, s.u, s.lambda, out);
         }
         out.extend(
             self.drivers

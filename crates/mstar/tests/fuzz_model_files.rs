@@ -1,5 +1,5 @@
 //! Fuzzing the model-file loader and `mstar check`: every input of the corpus
-//! (`tests/fuzz_corpus/` and `models/`), and random mutations of them, must
+//! (`tests/fuzz_corpus/`, `models/` and `models/spatial/`), and random mutations of them, must
 //! load or fail with an error that names the file — never panic, never hang
 //! — and a model that loads must go through `check` and a few steps the same
 //! way. `cargo test` runs a short pass (256 mutated documents); a longer
@@ -9,17 +9,22 @@
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
-use mstar::model::file::{Format, ModelFile};
+use mstar::model::file::{Format, MechanismFile};
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 
 fn corpus() -> Vec<(String, String)> {
     let here = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut out = Vec::new();
-    for dir in [here.join("tests/fuzz_corpus"), here.join("../../models")] {
+    for dir in [
+        here.join("tests/fuzz_corpus"),
+        here.join("../../models"),
+        here.join("../../models/spatial"),
+    ] {
         let mut paths: Vec<PathBuf> = std::fs::read_dir(&dir)
             .expect("corpus directory")
             .map(|e| e.expect("entry").path())
+            .filter(|p| p.is_file())
             .collect();
         paths.sort();
         for path in paths {
@@ -50,7 +55,7 @@ fn exercise(name: &str, text: &str) -> Result<(), String> {
     ]
     .map(String::from)
     .to_vec();
-    let file = match ModelFile::parse_with(text, name, format, &set) {
+    let file = match MechanismFile::parse_with(text, name, format, &set) {
         Ok(file) => file,
         Err(e) => {
             let message = e.to_string();
@@ -63,13 +68,10 @@ fn exercise(name: &str, text: &str) -> Result<(), String> {
     };
     if let Ok((config, _)) = mstar::run::config(&file.simulation) {
         let redundant = file.simulation.redundant.unwrap_or_default();
-        let report = mstar::run::check(&file.system, &config, redundant);
+        let sys = mstar::run::lookup(&file.mechanism);
+        let report = mstar::run::check(sys, &config, redundant);
         assert!(!report.to_string().is_empty());
-        let _ = mstar::run::simulate(
-            &file.system,
-            &file.simulation,
-            &mut |_: &mstar::SampleRef<'_>| {},
-        );
+        let _ = mstar::run::simulate(sys, &file.simulation, &mut |_: &mstar::SampleRef<'_>| {});
     }
     Ok(())
 }
@@ -118,7 +120,14 @@ const TOKENS: &[&str] = &[
     "[[joint]]",
     "[[driver]]",
     "[[force]]",
+    "[[point_mass]]",
     "[simulation]",
+    "format = \"mstar.spatial/1\"",
+    "type = \"universal\"",
+    "axes = [[0, 0, 1], [1, 0, 0]]",
+    "orientation = [0, 0, 0, 0]",
+    "inertia = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]",
+    "rotational_mass = \"regularized\"",
     "name = \"x\"",
     "type = \"weld\"",
     "bodies = [\"ground\", \"x\"]",

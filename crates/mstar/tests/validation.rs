@@ -76,8 +76,13 @@ fn every_model_with_a_reference_is_validated() {
         "parallelogram.toml",
     ];
     for entry in std::fs::read_dir(models()).expect("models/") {
+        let entry = entry.expect("entry");
+        // models/spatial/: spatial models, checked by model_files_spatial.rs
+        // (no `cargo xtask validate` case yet).
+        if entry.path().is_dir() {
+            continue;
+        }
         let name = entry
-            .expect("entry")
             .file_name()
             .to_string_lossy()
             .into_owned();

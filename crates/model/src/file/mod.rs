@@ -38,6 +38,7 @@ mod functions;
 mod node;
 mod planar;
 mod settings;
+mod spatial;
 
 use std::path::Path;
 
@@ -45,8 +46,10 @@ pub use planar::FORMAT;
 pub use settings::{
     ErrorControlChoice, IntegratorChoice, NewtonChoice, Output, RedundantChoice, Simulation,
 };
+pub use spatial::FORMAT as SPATIAL_FORMAT;
 
 use crate::planar::PlanarSystem;
+use crate::spatial::SpatialSystem;
 use fields::Doc;
 use node::Node;
 
@@ -94,8 +97,9 @@ impl Format {
     }
 }
 
-/// A model file read and checked: the mechanism, ready to integrate, and its
-/// settings.
+/// A planar model file (`format = "mstar.planar/1"`) read and checked: the
+/// mechanism, ready to integrate, and its settings. [`MechanismFile`] reads
+/// planar and spatial files alike.
 #[derive(Clone, Debug)]
 pub struct ModelFile {
     /// The mechanism.
@@ -164,18 +168,170 @@ impl ModelFile {
                 message: format!("--set {o}: {why}"),
             })?;
         }
+        let file = MechanismFile::parse_with(text, origin, format, overrides)?;
+        match file.mechanism {
+            Mechanism::Planar(system) => Ok(Self {
+                system,
+                simulation: file.simulation,
+                output: file.output,
+            }),
+            Mechanism::Spatial(_) => Err(FileError {
+                origin: origin.to_string(),
+                place: None,
+                message: format!(
+                    "a spatial model ('{SPATIAL_FORMAT}'), where a planar one ('{FORMAT}') is expected"
+                ),
+            }),
+        }
+    }
+}
+
+/// The mechanism of a model file: planar or spatial, by its `format`.
+#[derive(Clone, Debug)]
+pub enum Mechanism {
+    /// `format = "mstar.planar/1"`.
+    Planar(PlanarSystem),
+    /// `format = "mstar.spatial/1"`.
+    Spatial(SpatialSystem),
+}
+
+impl Mechanism {
+    /// The mechanism as a [`System`](crate::System).
+    #[must_use]
+    pub fn system(&self) -> &(dyn crate::System + 'static) {
+        match self {
+            Self::Planar(s) => s,
+            Self::Spatial(s) => s,
+        }
+    }
+}
+
+/// A model file of either format read and checked: the mechanism, its
+/// settings and the warnings about it.
+///
+/// ```
+/// use mstar_model::file::{Format, Mechanism, MechanismFile};
+///
+/// let text = r#"
+/// format = "mstar.spatial/1"
+///
+/// [[body]]
+/// name = "top"
+/// mass = 2.0
+/// inertia = [0.05, 0.05, 0.08]
+/// position = [0.0, 0.0, 0.25]
+/// orientation = [2.0, 0.0, 0.0, 0.0]
+///
+/// [[joint]]
+/// name = "tip"
+/// type = "spherical"
+/// bodies = ["ground", "top"]
+/// points = [[0.0, 0.0, 0.0], [0.0, 0.0, -0.25]]
+/// "#;
+/// let file = MechanismFile::parse(text, "top.toml", Format::Toml)?;
+/// assert!(matches!(file.mechanism, Mechanism::Spatial(_)));
+/// assert_eq!(file.mechanism.system().n_coords(), 7);
+/// // The orientation was normalized, with a warning that says where.
+/// assert!(file.warnings[0].starts_with("top.toml:9:15: body 'top': orientation"));
+/// # Ok::<(), mstar_model::file::FileError>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct MechanismFile {
+    /// The mechanism.
+    pub mechanism: Mechanism,
+    /// `[simulation]`: every key optional.
+    pub simulation: Simulation,
+    /// `[output]`.
+    pub output: Output,
+    /// Warnings about values the reader changed (an orientation normalized),
+    /// each `FILE:LINE:COLUMN: element: key: what`.
+    pub warnings: Vec<String>,
+}
+
+impl MechanismFile {
+    /// Reads and checks the model file at `path`, planar or spatial.
+    ///
+    /// # Errors
+    /// As [`ModelFile::load`].
+    pub fn load(path: &Path) -> Result<Self, FileError> {
+        Self::load_with(path, &[])
+    }
+
+    /// [`load`](Self::load) with overrides (as [`ModelFile::load_with`]).
+    ///
+    /// # Errors
+    /// As [`ModelFile::load_with`].
+    pub fn load_with(path: &Path, overrides: &[String]) -> Result<Self, FileError> {
+        let origin = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| FileError {
+            origin: origin.clone(),
+            place: None,
+            message: format!("cannot read the model file: {e}"),
+        })?;
+        Self::parse_with(&text, &origin, Format::of(path), overrides)
+    }
+
+    /// Reads and checks a model from `text`; `origin` names it in errors.
+    ///
+    /// # Errors
+    /// As [`ModelFile::load`].
+    pub fn parse(text: &str, origin: &str, format: Format) -> Result<Self, FileError> {
+        Self::parse_with(text, origin, format, &[])
+    }
+
+    /// [`parse`](Self::parse) with overrides (as [`ModelFile::parse_with`]).
+    ///
+    /// # Errors
+    /// As [`ModelFile::parse_with`].
+    pub fn parse_with(
+        text: &str,
+        origin: &str,
+        format: Format,
+        overrides: &[String],
+    ) -> Result<Self, FileError> {
+        let mut root = match format {
+            Format::Toml => node::parse_toml(text, origin)?,
+            Format::Json => node::parse_json(text, origin)?,
+        };
+        for o in overrides {
+            settings::apply_override(&mut root, o).map_err(|why| FileError {
+                origin: origin.to_string(),
+                place: None,
+                message: format!("--set {o}: {why}"),
+            })?;
+        }
         let doc = Doc { origin, text };
         read(doc, &root)
     }
 }
 
+/// Whether the document says `format = "mstar.spatial/1"`.
+fn is_spatial(root: &Node) -> bool {
+    let node::Value::Table(entries) = &root.value else {
+        return false;
+    };
+    entries.iter().any(|e| {
+        e.key == "format" && matches!(&e.node.value, node::Value::Str(s) if s == SPATIAL_FORMAT)
+    })
+}
+
 /// The mechanism and the settings of a parsed document.
-fn read(doc: Doc<'_>, root: &Node) -> Result<ModelFile, FileError> {
-    let system = planar::read(doc, root)?;
-    let (simulation, output) = settings::read(doc, root)?;
-    Ok(ModelFile {
-        system,
+fn read(doc: Doc<'_>, root: &Node) -> Result<MechanismFile, FileError> {
+    let (mechanism, simulation, output, warnings) = if is_spatial(root) {
+        // The settings first: they say how to form the mass matrix.
+        let (simulation, output) = settings::read(doc, root, true)?;
+        let mode = simulation.rotational_mass.unwrap_or_default();
+        let (system, warnings) = spatial::read(doc, root, mode)?;
+        (Mechanism::Spatial(system), simulation, output, warnings)
+    } else {
+        let system = planar::read(doc, root)?;
+        let (simulation, output) = settings::read(doc, root, false)?;
+        (Mechanism::Planar(system), simulation, output, Vec::new())
+    };
+    Ok(MechanismFile {
+        mechanism,
         simulation,
         output,
+        warnings,
     })
 }

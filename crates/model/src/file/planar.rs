@@ -51,7 +51,10 @@ pub(crate) fn read<'a>(doc: Doc<'a>, root: &'a Node) -> Result<PlanarSystem, Fil
         let e = top.entry("format").map(|e| e.node.span.clone());
         return Err(doc.error(
             e.flatten().as_ref(),
-            format!("unknown format '{format}': this version of mstar reads '{FORMAT}'"),
+            format!(
+                "unknown format '{format}': this version of mstar reads '{FORMAT}' and '{}'",
+                super::spatial::FORMAT
+            ),
         ));
     }
     let gravity = top

@@ -91,6 +91,10 @@ pub struct Simulation {
     pub error_control: Option<ErrorControlChoice>,
     /// `h_max`, the largest step size of adaptive steps, s (≥ h).
     pub h_max: Option<f64>,
+    /// `rotational_mass`, how a spatial model's rigid bodies form their
+    /// rotational mass block (`"singular"`, the default, or
+    /// `"regularized"`); spatial models only.
+    pub rotational_mass: Option<crate::spatial::RotationalMass>,
 }
 
 /// `[output]`.
@@ -113,7 +117,7 @@ impl Default for Output {
 }
 
 /// The keys of `[simulation]`.
-const SIMULATION_KEYS: [&str; 17] = [
+const SIMULATION_KEYS: [&str; 18] = [
     "t_end",
     "h",
     "h_min",
@@ -131,16 +135,26 @@ const SIMULATION_KEYS: [&str; 17] = [
     "atol",
     "error_control",
     "h_max",
+    "rotational_mass",
 ];
 
 /// Reads `[simulation]` and `[output]` of the document `root`.
-pub(crate) fn read(doc: Doc<'_>, root: &Node) -> Result<(Simulation, Output), FileError> {
+/// (`spatial`: the document is a spatial model, the only kind that takes
+/// `rotational_mass`.)
+pub(crate) fn read(
+    doc: Doc<'_>,
+    root: &Node,
+    spatial: bool,
+) -> Result<(Simulation, Output), FileError> {
     let Value::Table(entries) = &root.value else {
         return Ok((Simulation::default(), Output::default()));
     };
     let find = |key: &str| entries.iter().find(|e| e.key == key);
     let simulation = match find("simulation") {
-        Some(e) => simulation(Fields::of(doc, &e.node, "[simulation]".to_string())?)?,
+        Some(e) => simulation(
+            Fields::of(doc, &e.node, "[simulation]".to_string())?,
+            spatial,
+        )?,
         None => Simulation::default(),
     };
     let output = match find("output") {
@@ -162,7 +176,7 @@ pub(crate) fn read(doc: Doc<'_>, root: &Node) -> Result<(Simulation, Output), Fi
     Ok((simulation, output))
 }
 
-fn simulation(mut f: Fields<'_>) -> Result<Simulation, FileError> {
+fn simulation(mut f: Fields<'_>, spatial: bool) -> Result<Simulation, FileError> {
     let positive = |unit: &'static str| number_in(|x| x > 0.0, unit);
     let s = Simulation {
         t_end: f.optional("t_end", positive("positive, in s"))?,
@@ -213,7 +227,19 @@ fn simulation(mut f: Fields<'_>) -> Result<Simulation, FileError> {
                 _ => ErrorControlChoice::Monitor,
             }),
         h_max: f.optional("h_max", positive("positive, in s"))?,
+        rotational_mass: f
+            .optional("rotational_mass", choice(&["singular", "regularized"]))?
+            .map(|c| match c {
+                "regularized" => crate::spatial::RotationalMass::Regularized,
+                _ => crate::spatial::RotationalMass::Singular,
+            }),
     };
+    if !spatial && let Some(e) = f.entry("rotational_mass") {
+        return Err(f.bad(
+            e,
+            "applies to spatial models (format = \"mstar.spatial/1\"): a planar body's mass matrix is regular",
+        ));
+    }
     consistent(&mut f, &s)?;
     f.finish(&SIMULATION_KEYS)?;
     Ok(s)
@@ -338,7 +364,7 @@ mod tests {
             origin: "m",
             text: "",
         };
-        let (s, o) = read(doc, &root).expect("valid");
+        let (s, o) = read(doc, &root, false).expect("valid");
         assert_eq!(s.h, Some(1e-4));
         assert_eq!(s.integrator, Some(IntegratorChoice::Hht));
         assert_eq!(o.every, 5);

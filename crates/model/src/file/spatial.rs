@@ -1,0 +1,800 @@
+//! The `mstar.spatial/1` schema: rigid bodies in Euler parameters, point
+//! masses, joints, drivers and forces read into a [`SpatialBuilder`], every
+//! value checked where it is written (`docs/model-format.md`, "Spatial
+//! models").
+
+use std::collections::HashMap;
+use std::ops::Range;
+
+use super::FileError;
+use super::fields::{Doc, Fields, choice, list, number, number_in, numbers, string, two_names};
+use super::node::{Node, Value};
+use crate::planar::{ModelError, TimeFunction};
+use crate::spatial::{
+    Attach, DriverKind, JointSpec, JointType, RotationalMass, SpatialBody, SpatialBodyId,
+    SpatialBuilder, SpatialInertia, SpatialPointMass, SpatialSystem, SpringSpec, rotation_matrix,
+};
+
+/// The format version of spatial model files.
+pub const FORMAT: &str = "mstar.spatial/1";
+
+/// The reserved name of the fixed frame.
+const GROUND: &str = "ground";
+
+/// How far from 1 the norm of a given orientation may be without a warning.
+const NORM_WARNING: f64 = 1e-12;
+
+/// A named body of the model, as joints and forces refer to it.
+#[derive(Clone, Copy, Debug)]
+struct Placed {
+    id: SpatialBodyId,
+    rigid: bool,
+    position: [f64; 3],
+    /// Unit Euler parameters (identity for a point mass).
+    orientation: [f64; 4],
+}
+
+/// One side of a joint or force: the ground or a body.
+#[derive(Clone, Copy, Debug)]
+enum Side {
+    Ground,
+    Body(Placed),
+}
+
+impl Side {
+    fn attach(self) -> Attach {
+        match self {
+            Self::Ground => Attach::Ground,
+            Self::Body(b) => Attach::Body(b.id),
+        }
+    }
+
+    /// The global point of the local point `s` at the initial pose.
+    fn global(self, s: [f64; 3]) -> [f64; 3] {
+        match self {
+            Self::Ground => s,
+            Self::Body(b) => add(b.position, mul(&rotation_matrix(b.orientation), s)),
+        }
+    }
+
+    /// The local point of the global point `g` at the initial pose.
+    fn local(self, g: [f64; 3]) -> [f64; 3] {
+        match self {
+            Self::Ground => g,
+            Self::Body(b) if !b.rigid => [0.0; 3],
+            Self::Body(b) => mul_t(&rotation_matrix(b.orientation), sub(g, b.position)),
+        }
+    }
+
+    /// The global direction `g` in the side's axes at the initial pose.
+    fn local_axis(self, g: [f64; 3]) -> [f64; 3] {
+        match self {
+            Self::Ground => g,
+            Self::Body(b) => mul_t(&rotation_matrix(b.orientation), g),
+        }
+    }
+}
+
+/// The model being read.
+struct Model<'a> {
+    doc: Doc<'a>,
+    builder: SpatialBuilder,
+    bodies: HashMap<String, Placed>,
+    /// The joints (not drivers) by name, with their type.
+    joints: HashMap<String, JointType>,
+    /// Every name with what carries it and where, for duplicates.
+    names: HashMap<String, (String, Option<Range<usize>>)>,
+    warnings: Vec<String>,
+}
+
+/// Reads a whole document: the system and the warnings about it (each
+/// `FILE:LINE:COLUMN: element: key: what`).
+pub(crate) fn read<'a>(
+    doc: Doc<'a>,
+    root: &'a Node,
+    rotational_mass: RotationalMass,
+) -> Result<(SpatialSystem, Vec<String>), FileError> {
+    let mut top = Fields::of(doc, root, "the model".to_string())?;
+    let format = top.required("format", string)?;
+    if format != FORMAT {
+        let e = top.entry("format").map(|e| e.node.span.clone());
+        return Err(doc.error(
+            e.flatten().as_ref(),
+            format!("unknown format '{format}': this version of mstar reads '{FORMAT}'"),
+        ));
+    }
+    let gravity = top
+        .optional("gravity", numbers::<3>)?
+        .unwrap_or([0.0, 0.0, -9.81]);
+    let mut m = Model {
+        doc,
+        builder: SpatialBuilder::new(),
+        bodies: HashMap::new(),
+        joints: HashMap::new(),
+        names: HashMap::new(),
+        warnings: Vec::new(),
+    };
+    m.builder.gravity(gravity);
+    m.builder.rotational_mass(rotational_mass);
+    for (kind, add) in [
+        ("body", Model::body as Adder<'a>),
+        ("point_mass", Model::point_mass),
+        ("joint", Model::joint),
+        ("driver", Model::driver),
+        ("force", Model::force),
+    ] {
+        for (k, node) in top.optional(kind, list)?.unwrap_or(&[]).iter().enumerate() {
+            add(&mut m, node, format!("{kind} #{}", k + 1))?;
+        }
+    }
+    top.finish(&[
+        "format",
+        "gravity",
+        "body",
+        "point_mass",
+        "joint",
+        "driver",
+        "force",
+        "simulation",
+        "output",
+    ])?;
+    let system = m.builder.build().map_err(|e| m.located(e))?;
+    Ok((system, m.warnings))
+}
+
+/// Reads one element into the model.
+type Adder<'a> = fn(&mut Model<'a>, &'a Node, String) -> Result<(), FileError>;
+
+impl<'a> Model<'a> {
+    /// The element's fields and its name, the name claimed (as the planar
+    /// reader does).
+    fn named(
+        &mut self,
+        node: &'a Node,
+        what: String,
+        kind: &str,
+    ) -> Result<(Fields<'a>, String), FileError> {
+        let mut f = Fields::of(self.doc, node, what)?;
+        let name = f.required("name", string)?.to_string();
+        let span = f.entry("name").and_then(|e| e.node.span.clone());
+        f.what = format!("{kind} '{}'", name.escape_debug());
+        if name.is_empty() || name.chars().any(|c| c.is_control()) {
+            return Err(self.doc.error(
+                span.as_ref(),
+                format!(
+                    "{}: a name must be non-empty and without control characters",
+                    f.what
+                ),
+            ));
+        }
+        if let Some((other, at)) = self.names.get(&name) {
+            let line = at
+                .as_ref()
+                .map(|s| {
+                    format!(
+                        " (line {})",
+                        super::node::line_column(self.doc.text, s.start).0
+                    )
+                })
+                .unwrap_or_default();
+            return Err(self.doc.error(
+                span.as_ref(),
+                format!("the name '{name}' is used twice: by {other}{line} and by this {kind}"),
+            ));
+        }
+        if name == GROUND && matches!(kind, "body" | "point mass") {
+            return Err(self.doc.error(
+                span.as_ref(),
+                format!("a {kind} may not be called 'ground': that is the fixed frame"),
+            ));
+        }
+        self.names.insert(name.clone(), (f.what.clone(), span));
+        Ok((f, name))
+    }
+
+    /// A `[[body]]`: a rigid body.
+    fn body(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let (mut f, name) = self.named(node, what, "body")?;
+        let mass = f.required("mass", number_in(|x| x > 0.0, "positive, in kg"))?;
+        let inertia = f.required("inertia", inertia)?;
+        let position = f.required("position", numbers::<3>)?;
+        let given = f.required("orientation", numbers::<4>)?;
+        let velocity = f.optional("velocity", numbers::<3>)?.unwrap_or([0.0; 3]);
+        let angular_velocity = f
+            .optional("angular_velocity", numbers::<3>)?
+            .unwrap_or([0.0; 3]);
+        f.finish(&[
+            "name",
+            "mass",
+            "inertia",
+            "position",
+            "orientation",
+            "velocity",
+            "angular_velocity",
+        ])?;
+        let e = f.entry("orientation").expect("read above");
+        let norm = given.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if !(norm > 1e-150 && norm.is_finite()) {
+            return Err(f.bad(
+                e,
+                "must not be zero: Euler parameters [e0, e1, e2, e3] of a rotation ([1, 0, 0, 0]: body axes = global axes)",
+            ));
+        }
+        if (norm - 1.0).abs() > NORM_WARNING {
+            let message = format!(
+                "{}: orientation: normalized: its norm was {norm:.15} (Euler parameters have norm 1)",
+                f.what
+            );
+            let span = e.node.span.as_ref().or(e.key_span.as_ref());
+            self.warnings
+                .push(self.doc.error(span, message).to_string());
+        }
+        let orientation = given.map(|x| x / norm);
+        let id = self.builder.body(
+            &name,
+            SpatialBody {
+                mass,
+                inertia,
+                position,
+                orientation,
+                velocity,
+                angular_velocity,
+            },
+        );
+        self.bodies.insert(
+            name,
+            Placed {
+                id,
+                rigid: true,
+                position,
+                orientation,
+            },
+        );
+        Ok(())
+    }
+
+    /// A `[[point_mass]]`.
+    fn point_mass(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let (mut f, name) = self.named(node, what, "point mass")?;
+        let mass = f.required("mass", number_in(|x| x > 0.0, "positive, in kg"))?;
+        let position = f.required("position", numbers::<3>)?;
+        let velocity = f.optional("velocity", numbers::<3>)?.unwrap_or([0.0; 3]);
+        f.finish(&["name", "mass", "position", "velocity"])?;
+        let id = self.builder.point_mass(
+            &name,
+            SpatialPointMass {
+                mass,
+                position,
+                velocity,
+            },
+        );
+        self.bodies.insert(
+            name,
+            Placed {
+                id,
+                rigid: false,
+                position,
+                orientation: [1.0, 0.0, 0.0, 0.0],
+            },
+        );
+        Ok(())
+    }
+
+    /// A `[[joint]]`.
+    fn joint(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let (mut f, name) = self.named(node, what, "joint")?;
+        let kinds = [
+            JointType::Spherical,
+            JointType::Revolute,
+            JointType::Prismatic,
+            JointType::Cylindrical,
+            JointType::Universal,
+            JointType::Weld,
+            JointType::Distance,
+        ];
+        let names = kinds.map(JointType::name);
+        let kind = f.required("type", choice(&names))?;
+        let kind = kinds[names.iter().position(|n| *n == kind).expect("a choice")];
+        let sides = self.sides(&mut f)?;
+        let points = self.anchors(&mut f, sides)?;
+        let mut known = vec!["name", "type", "bodies", "points", "at"];
+        for s in sides {
+            if let Side::Body(b) = s
+                && !b.rigid
+                && (kind.uses_axes() || kind == JointType::Weld)
+            {
+                let e = f.entry("type").expect("read above");
+                return Err(f.bad(
+                    e,
+                    format!(
+                        "a {} joint needs orientations, and one of its bodies is a point mass (use spherical or distance)",
+                        kind.name()
+                    ),
+                ));
+            }
+        }
+        let axes = if kind.uses_axes() {
+            known.extend(["axes", "axis"]);
+            self.joint_axes(&mut f, kind, sides)?
+        } else {
+            for key in ["axes", "axis"] {
+                if let Some(e) = f.entry(key) {
+                    return Err(f.bad(
+                        e,
+                        format!(
+                            "a {} joint has no axis: 'axes' belongs to revolute, prismatic, cylindrical and universal joints",
+                            kind.name()
+                        ),
+                    ));
+                }
+            }
+            [[0.0, 0.0, 1.0]; 2]
+        };
+        let mut length = None;
+        if kind == JointType::Distance {
+            known.push("length");
+            length = f.optional("length", number_in(|x| x > 0.0, "positive, in m"))?;
+            let initial = distance(sides[0].global(points[0]), sides[1].global(points[1]));
+            if length.is_none() && (initial.is_nan() || initial <= 0.0) {
+                return Err(self.doc.error(
+                    f.span(),
+                    format!(
+                        "{}: the two points coincide at the initial pose: give 'length'",
+                        f.what
+                    ),
+                ));
+            }
+        }
+        f.finish(&known)?;
+        self.builder.joint(
+            &name,
+            JointSpec {
+                kind,
+                bodies: sides.map(Side::attach),
+                points,
+                axes,
+                length,
+            },
+        );
+        self.joints.insert(name, kind);
+        Ok(())
+    }
+
+    /// The axes of a joint: `axes = [[..], [..]]` in each body's axes, or
+    /// `axis = [..]` global at the initial pose (not for universal joints).
+    fn joint_axes(
+        &self,
+        f: &mut Fields<'a>,
+        kind: JointType,
+        sides: [Side; 2],
+    ) -> Result<[[f64; 3]; 2], FileError> {
+        let axes = f.optional("axes", two_vectors)?;
+        let axis = f.optional("axis", numbers::<3>)?;
+        let axes = match (axes, axis) {
+            (Some(a), None) => a,
+            (None, Some(g)) if kind != JointType::Universal => {
+                [sides[0].local_axis(g), sides[1].local_axis(g)]
+            }
+            (None, Some(_)) => {
+                let e = f.entry("axis").expect("read above");
+                return Err(f.bad(
+                    e,
+                    "a universal joint has two cross axes, one per body: give 'axes = [[..], [..]]'",
+                ));
+            }
+            (Some(_), Some(_)) => {
+                return Err(self.doc.error(
+                    f.span(),
+                    format!("{}: give 'axes' or 'axis', not both", f.what),
+                ));
+            }
+            (None, None) => {
+                return Err(self.doc.error(
+                    f.span(),
+                    format!(
+                        "{}: the key 'axes' is missing: a {} joint needs {} (or 'axis = [x, y, z]', global{})",
+                        f.what,
+                        kind.name(),
+                        if kind == JointType::Universal {
+                            "its two cross axes, 'axes = [[..], [..]]' in each body's axes"
+                        } else {
+                            "its axis in each body's axes, 'axes = [[..], [..]]'"
+                        },
+                        if kind == JointType::Universal {
+                            ", not for a universal joint"
+                        } else {
+                            ""
+                        }
+                    ),
+                ));
+            }
+        };
+        for (k, a) in axes.iter().enumerate() {
+            if a.iter().all(|x| *x == 0.0) {
+                let key = if axis.is_some() { "axis" } else { "axes" };
+                let e = f.entry(key).expect("read above");
+                return Err(f.bad(e, format!("axis {} must not be zero", k + 1)));
+            }
+        }
+        if kind == JointType::Universal {
+            let g = [sides[0].global(axes[0]), sides[1].global(axes[1])];
+            let g = [
+                sub(g[0], sides[0].global([0.0; 3])),
+                sub(g[1], sides[1].global([0.0; 3])),
+            ];
+            let c = dot(g[0], g[1]) / (dot(g[0], g[0]) * dot(g[1], g[1])).sqrt();
+            if c.abs() > 1e-6 {
+                let e = f.entry("axes").expect("read above");
+                return Err(f.bad(
+                    e,
+                    format!(
+                        "the two cross axes must be perpendicular at the initial pose (the cosine of their angle is {c:.3e})"
+                    ),
+                ));
+            }
+        }
+        Ok(axes)
+    }
+
+    /// A `[[driver]]`: a joint's angle or translation prescribed in time.
+    fn driver(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let (mut f, name) = self.named(node, what, "driver")?;
+        let joint = f.required("joint", string)?;
+        let e = f.entry("joint").expect("read above");
+        let Some(&kind) = self.joints.get(joint) else {
+            let mut known: Vec<&str> = self.joints.keys().map(String::as_str).collect();
+            known.sort_unstable();
+            return Err(f.bad(
+                e,
+                format!(
+                    "no joint is called '{}' (known: {})",
+                    joint.escape_debug(),
+                    if known.is_empty() {
+                        "none".to_string()
+                    } else {
+                        known.join(", ")
+                    }
+                ),
+            ));
+        };
+        let motion = f.required("motion", choice(&["angle", "translation"]))?;
+        let motion_kind = if motion == "angle" {
+            DriverKind::Angle
+        } else {
+            DriverKind::Translation
+        };
+        let fits = match motion_kind {
+            DriverKind::Angle => matches!(kind, JointType::Revolute | JointType::Cylindrical),
+            DriverKind::Translation => {
+                matches!(kind, JointType::Prismatic | JointType::Cylindrical)
+            }
+        };
+        if !fits {
+            let e = f.entry("motion").expect("read above");
+            return Err(f.bad(
+                e,
+                format!(
+                    "joint '{}' is {}, which has no free {motion} (angle: revolute, cylindrical; translation: prismatic, cylindrical)",
+                    joint.escape_debug(),
+                    kind.name()
+                ),
+            ));
+        }
+        let function = self
+            .function(&mut f, "function")?
+            .ok_or_else(|| f.missing("function"))?;
+        f.finish(&["name", "joint", "motion", "function"])?;
+        self.builder.driver(&name, joint, motion_kind, function);
+        Ok(())
+    }
+
+    /// A `[[force]]`.
+    fn force(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let (mut f, name) = self.named(node, what, "force")?;
+        let kind = f.required(
+            "type",
+            choice(&[
+                "force",
+                "torque",
+                "spring-damper",
+                "rotational-spring-damper",
+            ]),
+        )?;
+        match kind {
+            "force" | "torque" => {
+                let body = self.body_of(&mut f, "body")?;
+                let torque = kind == "torque";
+                if torque && !body.rigid {
+                    let e = f.entry("body").expect("read above");
+                    return Err(f.bad(e, "a torque needs a rigid body, not a point mass"));
+                }
+                let point = if torque {
+                    [0.0; 3]
+                } else {
+                    f.optional("point", numbers::<3>)?.unwrap_or([0.0; 3])
+                };
+                if !body.rigid && point != [0.0; 3] {
+                    let e = f.entry("point").expect("read above");
+                    return Err(f.bad(e, "a point mass has no extent: its point is [0, 0, 0]"));
+                }
+                let keys = if torque {
+                    ["tx", "ty", "tz"]
+                } else {
+                    ["fx", "fy", "fz"]
+                };
+                let mut c: [TimeFunction; 3] = std::array::from_fn(|_| TimeFunction::Constant(0.0));
+                for (c, key) in c.iter_mut().zip(keys) {
+                    if let Some(function) = self.function(&mut f, key)? {
+                        *c = function;
+                    }
+                }
+                let axes = f
+                    .optional("axes", choice(&["global", "body"]))?
+                    .unwrap_or("global");
+                if axes == "body" && !body.rigid {
+                    let e = f.entry("axes").expect("read above");
+                    return Err(f.bad(e, "a point mass has no axes: use \"global\""));
+                }
+                let mut known = vec!["name", "type", "body", "axes"];
+                known.extend(keys);
+                if !torque {
+                    known.push("point");
+                }
+                f.finish(&known)?;
+                if torque {
+                    self.builder.torque(&name, body.id, c, axes == "body");
+                } else {
+                    self.builder.force(&name, body.id, point, c, axes == "body");
+                }
+            }
+            "spring-damper" => {
+                let sides = self.sides(&mut f)?;
+                let points = self.anchors(&mut f, sides)?;
+                let stiffness =
+                    f.required("stiffness", number_in(|x| x >= 0.0, "non-negative, in N/m"))?;
+                let damping = f
+                    .optional("damping", number_in(|x| x >= 0.0, "non-negative, in N s/m"))?
+                    .unwrap_or(0.0);
+                let length = f.optional("length", number_in(|x| x >= 0.0, "non-negative, in m"))?;
+                let preload = f.optional("preload", number)?.unwrap_or(0.0);
+                f.finish(&[
+                    "name",
+                    "type",
+                    "bodies",
+                    "points",
+                    "at",
+                    "stiffness",
+                    "damping",
+                    "length",
+                    "preload",
+                ])?;
+                self.builder.spring(
+                    &name,
+                    sides.map(Side::attach),
+                    points,
+                    SpringSpec {
+                        stiffness,
+                        damping,
+                        length,
+                        preload,
+                    },
+                );
+            }
+            _ => {
+                let sides = self.sides(&mut f)?;
+                for s in sides {
+                    if let Side::Body(b) = s
+                        && !b.rigid
+                    {
+                        let e = f.entry("bodies").expect("read above");
+                        return Err(f.bad(
+                            e,
+                            "a rotational spring joins rigid bodies (or the ground); point masses have no orientation",
+                        ));
+                    }
+                }
+                let axes = self.joint_axes(&mut f, JointType::Revolute, sides)?;
+                let stiffness = f.required(
+                    "stiffness",
+                    number_in(|x| x >= 0.0, "non-negative, in N m/rad"),
+                )?;
+                let damping = f
+                    .optional(
+                        "damping",
+                        number_in(|x| x >= 0.0, "non-negative, in N m s/rad"),
+                    )?
+                    .unwrap_or(0.0);
+                let angle = f.optional("angle", number)?.unwrap_or(0.0);
+                f.finish(&[
+                    "name",
+                    "type",
+                    "bodies",
+                    "axes",
+                    "axis",
+                    "stiffness",
+                    "damping",
+                    "angle",
+                ])?;
+                self.builder.rotational_spring(
+                    &name,
+                    sides.map(Side::attach),
+                    axes,
+                    [stiffness, damping, angle],
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// The two sides of `bodies`.
+    fn sides(&self, f: &mut Fields<'a>) -> Result<[Side; 2], FileError> {
+        let names = f.required("bodies", two_names)?;
+        let e = f.entry("bodies").expect("read above");
+        let side = |name: &str| -> Result<Side, FileError> {
+            if name == GROUND {
+                return Ok(Side::Ground);
+            }
+            self.bodies
+                .get(name)
+                .map(|&b| Side::Body(b))
+                .ok_or_else(|| f.bad(e, self.unknown_body(name)))
+        };
+        let sides = [side(names[0])?, side(names[1])?];
+        if names[0] == names[1] {
+            return Err(f.bad(
+                e,
+                format!(
+                    "both sides are '{}': an element joins two different bodies",
+                    names[0].escape_debug()
+                ),
+            ));
+        }
+        Ok(sides)
+    }
+
+    /// The body named by `key` (not the ground).
+    fn body_of(&self, f: &mut Fields<'a>, key: &str) -> Result<Placed, FileError> {
+        let name = f.required(key, string)?;
+        let e = f.entry(key).expect("read above");
+        if name == GROUND {
+            return Err(f.bad(e, "the ground cannot move: name a body"));
+        }
+        self.bodies
+            .get(name)
+            .copied()
+            .ok_or_else(|| f.bad(e, self.unknown_body(name)))
+    }
+
+    fn unknown_body(&self, name: &str) -> String {
+        let mut known: Vec<&str> = self.bodies.keys().map(String::as_str).collect();
+        known.sort_unstable();
+        format!(
+            "no body or point mass is called '{}' (known: ground{}{})",
+            name.escape_debug(),
+            if known.is_empty() { "" } else { ", " },
+            known.join(", ")
+        )
+    }
+
+    /// The attachment points from `points` (local) or `at` (one global point
+    /// at the initial pose).
+    fn anchors(&self, f: &mut Fields<'a>, sides: [Side; 2]) -> Result<[[f64; 3]; 2], FileError> {
+        let points = f.optional("points", two_vectors)?;
+        let at = f.optional("at", numbers::<3>)?;
+        let points = match (points, at) {
+            (Some(p), None) => p,
+            (None, Some(g)) => [sides[0].local(g), sides[1].local(g)],
+            (Some(_), Some(_)) => {
+                return Err(self.doc.error(
+                    f.span(),
+                    format!("{}: give 'points' or 'at', not both", f.what),
+                ));
+            }
+            (None, None) => {
+                return Err(self.doc.error(
+                    f.span(),
+                    format!("{}: the key 'points' (or 'at') is missing", f.what),
+                ));
+            }
+        };
+        for (side, p) in sides.iter().zip(points) {
+            if let Side::Body(b) = side
+                && !b.rigid
+                && p != [0.0; 3]
+            {
+                let e = f.entry("points").expect("given for a point off [0, 0, 0]");
+                return Err(f.bad(
+                    e,
+                    format!("a point mass has no extent: its point must be [0, 0, 0], not {p:?}"),
+                ));
+            }
+        }
+        Ok(points)
+    }
+
+    /// The time function of `key`, if present.
+    fn function(&self, f: &mut Fields<'a>, key: &str) -> Result<Option<TimeFunction>, FileError> {
+        let Some(e) = f.entry(key) else {
+            return Ok(None);
+        };
+        let what = format!("{}: {key}", f.what);
+        super::functions::read(self.doc, &e.node, what).map(Some)
+    }
+
+    /// A builder error, placed at the element it names when it can be.
+    fn located(&self, e: ModelError) -> FileError {
+        let (element, message) = match &e {
+            ModelError::Invalid { element, what } => (element.clone(), what.clone()),
+            ModelError::DuplicateName(name) => (name.clone(), e.to_string()),
+        };
+        match self.names.get(&element) {
+            Some((what, span)) => self.doc.error(span.as_ref(), format!("{what}: {message}")),
+            None => self.doc.error(None, format!("{element}: {message}")),
+        }
+    }
+}
+
+/// `inertia`: principal moments `[Jxx, Jyy, Jzz]` or a 3 × 3 matrix.
+fn inertia(node: &Node) -> Result<SpatialInertia, String> {
+    let items = list(node)?;
+    if items.len() == 3 && items.iter().all(|i| matches!(i.value, Value::List(_))) {
+        let rows = [
+            numbers::<3>(&items[0]),
+            numbers::<3>(&items[1]),
+            numbers::<3>(&items[2]),
+        ];
+        let mut j = [[0.0; 3]; 3];
+        for (r, row) in j.iter_mut().zip(rows) {
+            *r = row.map_err(|why| format!("a 3 × 3 matrix has rows of 3 numbers: {why}"))?;
+        }
+        return Ok(SpatialInertia::Matrix(j));
+    }
+    let j = numbers::<3>(node).map_err(|why| {
+        format!("expected the principal moments [Jxx, Jyy, Jzz] or a 3 × 3 matrix, in kg m²: {why}")
+    })?;
+    if j.iter().any(|x| *x <= 0.0) {
+        return Err(format!(
+            "the principal moments must be positive, in kg m² (got {j:?}); a body without rotational inertia is a [[point_mass]]"
+        ));
+    }
+    Ok(SpatialInertia::Principal(j))
+}
+
+/// Two vectors `[[x, y, z], [x, y, z]]`.
+fn two_vectors(node: &Node) -> Result<[[f64; 3]; 2], String> {
+    let items = list(node)?;
+    if items.len() != 2 {
+        return Err(format!(
+            "expected two vectors [[x, y, z], [x, y, z]], found {} items",
+            items.len()
+        ));
+    }
+    Ok([numbers::<3>(&items[0])?, numbers::<3>(&items[1])?])
+}
+
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// `A s`.
+fn mul(a: &[[f64; 3]; 3], s: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| dot(a[i], s))
+}
+
+/// `Aᵀ g`.
+fn mul_t(a: &[[f64; 3]; 3], g: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|j| a[0][j] * g[0] + a[1][j] * g[1] + a[2][j] * g[2])
+}
+
+fn distance(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let d = sub(a, b);
+    dot(d, d).sqrt()
+}
