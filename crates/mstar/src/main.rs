@@ -33,6 +33,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use mstar::kkt::Backend;
+use mstar::model::spatial::{RotationalMass, SpatialSystem, spatial_bar_chain};
 use mstar::newmark::Short;
 use mstar::pendulum::PendulumRun;
 use mstar::{Config, IntegrationError, Newton, Scheme, Start, StepMode, System, csv};
@@ -85,6 +86,9 @@ enum ChainKind {
     Bars,
     /// 1 kg point masses on massless 1 m rods.
     Points,
+    /// Solid cylinders (1 kg, 1 m, radius 0.02 m) in Euler parameters on
+    /// spherical joints, along +x at rest, gravity −z.
+    SpatialBars,
 }
 
 #[derive(clap::Args, Debug)]
@@ -729,33 +733,91 @@ fn chain(args: &ChainArgs) -> Result<()> {
     let n = args.links;
     limits::check_steps(args.t_end, config.h)?;
     let dense = config.kkt.backend == Backend::DENSE;
-    limits::check_chain(n, dense, limits::available_memory())?;
+    let spatial = args.kind == ChainKind::SpatialBars;
+    // A spatial link has 7 coordinates and 4 constraints to a planar bar's
+    // 3 and 2: about twice the memory per link.
+    let weight = if spatial { 2 } else { 1 };
+    limits::check_chain(n * weight, dense, limits::available_memory())?;
     let clock = Instant::now();
-    let sys = match args.kind {
-        ChainKind::Bars => mstar::planar::bar_chain(n),
-        ChainKind::Points => mstar::planar::point_mass_chain(n),
-    };
+    match args.kind {
+        ChainKind::Bars => run_chain(args, config, &mstar::planar::bar_chain(n), clock),
+        ChainKind::Points => run_chain(args, config, &mstar::planar::point_mass_chain(n), clock),
+        ChainKind::SpatialBars => {
+            // The regularized rotational mass keeps S_T's blocks regular, as
+            // the Schur backend needs; the motion is the singular one's.
+            let sys = spatial_bar_chain(n, RotationalMass::Regularized);
+            run_chain(args, config, &sys, clock)
+        }
+    }
+}
+
+/// What the chain command reports of a chain model.
+trait ChainModel: System {
+    /// What the links are.
+    fn describe(&self) -> &'static str;
+    /// The tip body's name and centre of mass.
+    fn tip(&self, u: &[f64]) -> Option<(String, Vec<f64>)>;
+    /// The initial state `(u₀, u̇₀)`.
+    fn start(&self) -> (Vec<f64>, Vec<f64>);
+}
+
+impl ChainModel for mstar::planar::PlanarSystem {
+    fn describe(&self) -> &'static str {
+        if self.initial_position().len() == 3 * self.n_bodies() {
+            "bars on revolute joints"
+        } else {
+            "point masses on rods"
+        }
+    }
+    fn tip(&self, u: &[f64]) -> Option<(String, Vec<f64>)> {
+        let name = format!("link{}", self.n_bodies());
+        let x = self.body(&name)?.x;
+        Some((name, u[x..x + 2].to_vec()))
+    }
+    fn start(&self) -> (Vec<f64>, Vec<f64>) {
+        (self.initial_position(), self.initial_velocity())
+    }
+}
+
+impl ChainModel for SpatialSystem {
+    fn describe(&self) -> &'static str {
+        "solid cylinders on spherical joints (Euler parameters)"
+    }
+    fn tip(&self, u: &[f64]) -> Option<(String, Vec<f64>)> {
+        let name = format!("bar{}", self.n_bodies());
+        let (x, _) = self.body(&name)?;
+        Some((name, u[x..x + 3].to_vec()))
+    }
+    fn start(&self) -> (Vec<f64>, Vec<f64>) {
+        (self.initial_position(), self.initial_velocity())
+    }
+}
+
+fn run_chain<S: ChainModel>(
+    args: &ChainArgs,
+    config: Config,
+    sys: &S,
+    clock: Instant,
+) -> Result<()> {
+    let n = args.links;
     let out = args.out.as_deref();
     check_output(
         out,
-        csv::header(&sys).len(),
+        csv::header(sys).len(),
         (args.t_end, config.h),
         (None, args.output_every),
     )?;
-    let mut stream = open_output(out, &sys, &[])?;
+    let mut stream = open_output(out, sys, &[])?;
     println!(
         "{n}-link chain of {} ({} coordinates, {} constraints); h = {} s, t_end = {} s",
-        match args.kind {
-            ChainKind::Bars => "bars on revolute joints",
-            ChainKind::Points => "point masses on rods",
-        },
+        sys.describe(),
         sys.n_coords(),
         sys.n_constraints(),
         Short(config.h),
         Short(args.t_end)
     );
-    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
-    let mut integ = mstar::Integrator::new(&sys, config.clone(), 0.0, &u0, &v0)?;
+    let (u0, v0) = sys.start();
+    let mut integ = mstar::Integrator::new(sys, config.clone(), 0.0, &u0, &v0)?;
     let setup = clock.elapsed();
     println!(
         "KKT solver: {}; Newton: {}",
@@ -781,17 +843,17 @@ fn chain(args: &ChainArgs) -> Result<()> {
         grid.finish(&mut |row| stream.push(row));
     }
     if ended.is_ok() {
-        chain_summary(&integ, &sys, n, (setup, clock.elapsed().as_secs_f64()))?;
+        chain_summary(&integ, sys, n, (setup, clock.elapsed().as_secs_f64()))?;
     }
-    let warned = warn_accuracy(&integ.stats(), &config, &sys, false);
+    let warned = warn_accuracy(&integ.stats(), &config, sys, false);
     output::conclude(stream, out, ended, integ.time())?;
     Ok(mstar::accuracy::verdict(warned)?)
 }
 
 /// The chain's timing summary and where its tip ended.
-fn chain_summary<S: System + ?Sized>(
+fn chain_summary<S: ChainModel>(
     integ: &mstar::Integrator<'_, S>,
-    sys: &mstar::planar::PlanarSystem,
+    sys: &S,
     n: usize,
     (setup, wall): (std::time::Duration, f64),
 ) -> Result<()> {
@@ -817,15 +879,16 @@ fn chain_summary<S: System + ?Sized>(
         wall * 1e6 / steps / n as f64
     );
     let s = integ.view();
-    let tip = sys
-        .body(&format!("link{n}"))
-        .map(|b| b.x)
-        .context("tip body")?;
+    let (name, tip) = sys.tip(s.u).context("tip body")?;
+    let at: Vec<String> = ["x", "y", "z"]
+        .iter()
+        .zip(&tip)
+        .map(|(c, v)| format!("{c} = {v:.9} m"))
+        .collect();
     println!(
-        "tip (link{n}) at t = {}: x = {:.9} m, y = {:.9} m; max ‖Φ‖∞ = {:.3e} m",
+        "tip ({name}) at t = {}: {}; max ‖Φ‖∞ = {:.3e} m",
         s.t,
-        s.u[tip],
-        s.u[tip + 1],
+        at.join(", "),
         s.constraint
     );
     Ok(())

@@ -26,7 +26,10 @@ fn double_pendulum(mode: RotationalMass) -> SpatialSystem {
         velocity: [0.0; 3],
         angular_velocity: spin,
     };
-    let first = b.body("upper", bar(1.0, [0.5, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0; 3]));
+    let first = b.body(
+        "upper",
+        bar(1.0, [0.5, 0.0, 0.0], [1.0, 0.0, 0.0, 0.0], [0.0; 3]),
+    );
     let quarter = euler_parameters([0.0, 0.0, 1.0], std::f64::consts::FRAC_PI_2);
     let second = b.body("lower", bar(0.8, [1.0, 0.5, 0.0], quarter, [0.0, 3.0, 0.0]));
     let joint = |bodies, points| JointSpec {
@@ -36,10 +39,19 @@ fn double_pendulum(mode: RotationalMass) -> SpatialSystem {
         axes: [[0.0, 0.0, 1.0]; 2],
         length: None,
     };
-    b.joint("base", joint([Attach::Ground, Attach::Body(first)], [[0.0; 3], [-0.5, 0.0, 0.0]]));
+    b.joint(
+        "base",
+        joint(
+            [Attach::Ground, Attach::Body(first)],
+            [[0.0; 3], [-0.5, 0.0, 0.0]],
+        ),
+    );
     b.joint(
         "elbow",
-        joint([Attach::Body(first), Attach::Body(second)], [[0.5, 0.0, 0.0], [-0.5, 0.0, 0.0]]),
+        joint(
+            [Attach::Body(first), Attach::Body(second)],
+            [[0.5, 0.0, 0.0], [-0.5, 0.0, 0.0]],
+        ),
     );
     b.build().expect("a valid model")
 }
@@ -119,7 +131,10 @@ fn the_spatial_double_pendulum_converges_at_second_order_to_the_index1_reference
         ]
     };
     let (coarse, fine) = (errors(1e-3), errors(5e-4));
-    for (k, what) in ["positions", "velocities", "multipliers"].iter().enumerate() {
+    for (k, what) in ["positions", "velocities", "multipliers"]
+        .iter()
+        .enumerate()
+    {
         let order = (coarse[k] / fine[k]).log2();
         assert!(
             (order - 2.0).abs() <= 0.1,

@@ -464,9 +464,11 @@ impl SpatialBuilder {
             .loads
             .iter()
             .map(|(name, at, load)| {
+                let sides = self.sides(name, *at, &bodies)?;
+                point_mass_points(name, sides, load.points(), &bodies)?;
                 Ok(LoadData {
                     name: name.clone(),
-                    sides: self.sides(name, *at, &bodies)?,
+                    sides,
                     element: load.clone(),
                 })
             })
@@ -568,6 +570,7 @@ impl SpatialBuilder {
             }
         };
         let sides = self.sides(name, spec.bodies, bodies)?;
+        point_mass_points(name, sides, spec.points, bodies)?;
         if spec.kind.uses_axes() || matches!(spec.kind, JointType::Weld) {
             for s in sides.iter().flatten() {
                 if !bodies[*s].is_rigid() {
@@ -649,6 +652,30 @@ impl SpatialBuilder {
             }),
         }
     }
+}
+
+/// A point mass has no extent: its attachment point must be `[0, 0, 0]`.
+fn point_mass_points(
+    name: &str,
+    sides: [Option<usize>; 2],
+    points: [[f64; 3]; 2],
+    bodies: &[BodyData],
+) -> Result<(), ModelError> {
+    for (k, side) in sides.iter().enumerate() {
+        if let Some(&i) = side.as_ref()
+            && !bodies[i].is_rigid()
+            && points[k] != [0.0; 3]
+        {
+            return Err(ModelError::Invalid {
+                element: name.to_string(),
+                what: format!(
+                    "'{}' is a point mass: its point must be [0, 0, 0], got {:?}",
+                    bodies[i].name, points[k]
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Unit Euler parameters (`[1, 0, 0, 0]` for a zero vector).

@@ -7,6 +7,9 @@ use super::frame::{D15, D28, Frame};
 use super::real::{Dual, Jet, Real, TIME, VARS};
 use super::system::{BodyData, JointData, LoadData};
 
+/// Structural entries as pairs of local indices.
+pub(crate) type Entries = Vec<(usize, usize)>;
+
 /// The local variables of one side: coordinate `k` of side `s` is `7 s + k`.
 pub(crate) const SIDE: usize = 7;
 
@@ -68,8 +71,12 @@ pub(crate) fn global(bodies: &[BodyData], sides: [Option<usize>; 2], k: usize) -
     (c < b.count()).then_some(b.x + c)
 }
 
-/// Pseudo-random states for probing patterns (deterministic).
-fn probe_states(n: usize) -> Vec<(Vec<f64>, Vec<f64>, f64)> {
+/// A state to probe patterns at: `(u, u̇, t)`.
+pub(crate) type ProbeState = (Vec<f64>, Vec<f64>, f64);
+
+/// Pseudo-random states for probing patterns (deterministic), made once per
+/// model.
+pub(crate) fn probe_states(n: usize) -> Vec<ProbeState> {
     let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
     let mut next = move || {
         seed = seed
@@ -92,13 +99,14 @@ fn probe_states(n: usize) -> Vec<(Vec<f64>, Vec<f64>, f64)> {
 pub(crate) fn joint_patterns(
     bodies: &[BodyData],
     j: &JointData,
-    n: usize,
-) -> (Vec<(usize, usize)>, Vec<(usize, usize)>) {
+    states: &[ProbeState],
+) -> (Entries, Entries) {
     let rows = j.element.row_names().len();
     let mut grad = vec![[false; VARS]; rows];
     let mut hess = [[false; VARS]; VARS];
-    for (u, _, t) in probe_states(n) {
-        let f = frames(bodies, j.sides, &u, None, jet);
+    for (u, _, t) in states {
+        let (u, t) = (u.as_slice(), *t);
+        let f = frames(bodies, j.sides, u, None, jet);
         let mut out = vec![Jet::cst(0.0); rows];
         j.element
             .eval_jet(Jet::var(t, TIME), &f[0], &f[1], &mut out);
@@ -128,12 +136,13 @@ pub(crate) fn joint_patterns(
 pub(crate) fn load_patterns(
     bodies: &[BodyData],
     l: &LoadData,
-    n: usize,
-) -> (Vec<(usize, usize)>, Vec<(usize, usize)>) {
+    states: &[ProbeState],
+) -> (Entries, Entries) {
     let mut du = [[false; 2 * SIDE]; 2 * SIDE];
     let mut dv = [[false; 2 * SIDE]; 2 * SIDE];
-    for (u, v, t) in probe_states(n) {
-        let f = frames(bodies, l.sides, &u, Some(&v), d28);
+    for (u, v, t) in states {
+        let t = *t;
+        let f = frames(bodies, l.sides, u, Some(v), d28);
         let mut g = [[D28::cst(0.0); SIDE]; 2];
         let counts = l.counts(bodies);
         let [ga, gb] = &mut g;

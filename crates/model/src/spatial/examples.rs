@@ -59,8 +59,10 @@ pub fn element_examples(params: &[f64]) -> Vec<(String, SpatialSystem)> {
                     }
                 }
             };
-            let points = [v3(12), v3(15)];
-            let axes = [v3(18), v3(21)];
+            // A point mass attaches at its own position.
+            let points = [v3(12), if pair == 2 { [0.0; 3] } else { v3(15) }];
+            // Axes away from zero (a zero axis is an error).
+            let axes = [v3(18), v3(21)].map(|a| [a[0] + 1.5, a[1], a[2]]);
             for kind in JOINTS {
                 if pair == 2 && (kind.uses_axes() || kind == JointType::Weld) {
                     continue;

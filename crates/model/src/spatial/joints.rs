@@ -31,6 +31,11 @@ pub(crate) trait SpatialJoint: Send + Sync + Debug {
     fn is_driver(&self) -> bool {
         false
     }
+    /// The joint points when it is a plain spherical joint, which has a
+    /// hand-written fast path (`spherical.rs`).
+    fn spherical_points(&self) -> Option<&[[f64; 3]; 2]> {
+        None
+    }
 }
 
 /// Implements the evaluations of [`SpatialJoint`] by the type's generic
@@ -122,6 +127,9 @@ impl Spherical {
 impl SpatialJoint for Spherical {
     fn kind(&self) -> &'static str {
         "spherical"
+    }
+    fn spherical_points(&self) -> Option<&[[f64; 3]; 2]> {
+        Some(&self.0.points)
     }
     fn row_names(&self) -> &'static [&'static str] {
         &[".x", ".y", ".z"]

@@ -22,6 +22,10 @@ pub(crate) trait SpatialLoad: Send + Sync + Debug {
     fn eval_dual(&self, t: f64, a: &Frame<D28>, b: &Frame<D28>, ga: &mut [D28], gb: &mut [D28]);
     /// The same in plain numbers.
     fn eval_f64(&self, t: f64, a: &Frame<f64>, b: &Frame<f64>, ga: &mut [f64], gb: &mut [f64]);
+    /// The points it acts at on each side (zero when it has none).
+    fn points(&self) -> [[f64; 3]; 2] {
+        [[0.0; 3]; 2]
+    }
     /// Its potential energy (0 for non-conservative loads).
     fn potential(&self, _a: &Frame<f64>, _b: &Frame<f64>) -> f64 {
         0.0
@@ -79,6 +83,9 @@ impl PointForce {
 impl SpatialLoad for PointForce {
     fn kind(&self) -> &'static str {
         "force"
+    }
+    fn points(&self) -> [[f64; 3]; 2] {
+        [self.point, [0.0; 3]]
     }
     load_evals!();
 }
@@ -138,6 +145,9 @@ impl Spring {
 impl SpatialLoad for Spring {
     fn kind(&self) -> &'static str {
         "spring-damper"
+    }
+    fn points(&self) -> [[f64; 3]; 2] {
+        self.points
     }
     load_evals!();
     fn potential(&self, a: &Frame<f64>, b: &Frame<f64>) -> f64 {

@@ -26,13 +26,14 @@ mod joints;
 mod loads;
 pub(crate) mod real;
 mod rotation;
+mod spherical;
 mod system;
 
 pub use builder::{
     Attach, DriverKind, JointSpec, JointType, RotationalMass, SpatialBody, SpatialBuilder,
     SpatialInertia, SpatialPointMass, SpringSpec,
 };
-pub use chain::spatial_bar_chain;
+pub use chain::{spatial_bar_chain, spatial_bar_chain_exact};
 pub use examples::element_examples;
 pub use system::{SpatialReaction, SpatialSystem};
 

@@ -5,12 +5,15 @@ use std::sync::Arc;
 use super::SpatialBody;
 use super::body::Inertia;
 use super::builder::normalized;
-use super::evaluate::{SIDE, d15, d28, frames, global, jet, joint_patterns, load_patterns};
+use super::evaluate::{
+    SIDE, d15, d28, frames, global, jet, joint_patterns, load_patterns, probe_states,
+};
 use super::frame::D28;
 use super::joints::SpatialJoint;
 use super::loads::SpatialLoad;
 use super::real::{Jet, Real, TIME};
 use super::rotation::rates_of_omega;
+use super::spherical;
 use crate::{Pattern, System};
 
 /// A body as assembled.
@@ -143,6 +146,9 @@ pub struct SpatialSystem {
     m: usize,
     constraint_names: Vec<String>,
     patterns: Patterns,
+    /// Whether the bodies' inertia Jacobians are replaced by their symmetric
+    /// parts ([`with_symmetric_tangent`](Self::with_symmetric_tangent)).
+    symmetric_tangent: bool,
     /// Offsets of the normalization rows' entries in `B`.
     norm_b_off: usize,
     norm_h_off: usize,
@@ -223,6 +229,7 @@ impl SpatialSystem {
                 g_v: Pattern::new(n, n),
                 mass_du: Pattern::new(n, n),
             },
+            symmetric_tangent: false,
             norm_b_off: 0,
             norm_h_off: 0,
         };
@@ -254,8 +261,9 @@ impl SpatialSystem {
             push_block(&mut p.g_u, x);
             push_block(&mut p.g_v, x);
         }
+        let states = probe_states(n);
         for j in &mut self.joints {
-            let (bl, hl) = joint_patterns(&self.bodies, j, n);
+            let (bl, hl) = joint_patterns(&self.bodies, j, &states);
             (j.b_off, j.h_off) = (p.b.len(), p.hessian.len());
             for &(r, a) in &bl {
                 p.b.push(j.row0 + r, global(&self.bodies, j.sides, a).unwrap_or(0));
@@ -275,7 +283,7 @@ impl SpatialSystem {
             }
         }
         for l in &self.loads {
-            let (du, dv) = load_patterns(&self.bodies, l, n);
+            let (du, dv) = load_patterns(&self.bodies, l, &states);
             let g = |k| global(&self.bodies, l.sides, k).unwrap_or(0);
             let slots = LoadSlots {
                 du_off: p.g_u.len(),
@@ -294,6 +302,19 @@ impl SpatialSystem {
             self.load_slots.push(slots);
         }
         self.patterns = p;
+    }
+
+    /// Declares the iteration matrix symmetric by replacing the bodies'
+    /// `∂(M ü)/∂u`, `∂g/∂u` and `∂g/∂u̇` blocks (the gyroscopic terms) with
+    /// their symmetric parts, so that the symmetric KKT backends (Schur,
+    /// LDLᵀ) apply. The residual is unchanged, so Newton converges to the
+    /// same solution, linearly instead of quadratically: the dropped skew
+    /// parts are `O(ω h)` relative to `M/(β h²)`. Ignored (the tangent stays
+    /// exact) when the model has loads.
+    #[must_use]
+    pub fn with_symmetric_tangent(mut self) -> Self {
+        self.symmetric_tangent = self.loads.is_empty();
+        self
     }
 
     /// Initial coordinates `u₀` (unit Euler parameters).
@@ -421,6 +442,18 @@ impl SpatialSystem {
     }
 }
 
+/// Replaces every row-major 4 × 4 block of `x` by its symmetric part.
+fn symmetrize_blocks(x: &mut [f64]) {
+    for b in x.chunks_exact_mut(16) {
+        for r in 0..4 {
+            for c in r + 1..4 {
+                let m = 0.5 * (b[4 * r + c] + b[4 * c + r]);
+                (b[4 * r + c], b[4 * c + r]) = (m, m);
+            }
+        }
+    }
+}
+
 /// Pushes the dense 4 × 4 block at `(x, x)`, row by row.
 fn push_block(p: &mut Pattern, x: usize) {
     for r in 0..4 {
@@ -441,11 +474,9 @@ impl System for SpatialSystem {
 
     fn coord_name(&self, i: usize) -> String {
         const NAMES: [&str; 7] = ["x", "y", "z", "e0", "e1", "e2", "e3"];
-        let b = self
-            .bodies
-            .iter()
-            .rfind(|b| b.x <= i)
-            .unwrap_or(&self.bodies[0]);
+        // Bodies are in coordinate order: the last that starts at or before i.
+        let k = self.bodies.partition_point(|b| b.x <= i).saturating_sub(1);
+        let b = &self.bodies[k];
         format!("{}.{}", b.name, NAMES[(i - b.x).min(6)])
     }
 
@@ -455,6 +486,10 @@ impl System for SpatialSystem {
 
     fn mass_pattern(&self) -> Pattern {
         self.patterns.mass.clone()
+    }
+
+    fn tangent_is_symmetric(&self) -> bool {
+        self.symmetric_tangent
     }
 
     fn mass_into(&self, _t: f64, u: &[f64], mass: &mut [f64]) {
@@ -523,6 +558,9 @@ impl System for SpatialSystem {
                 j.mass_du(&u[x..x + 4], &w[x..x + 4], &mut out[16 * k..16 * k + 16]);
             }
         }
+        if self.symmetric_tangent {
+            symmetrize_blocks(out);
+        }
     }
 
     fn phi_into(&self, t: f64, u: &[f64], phi: &mut [f64]) {
@@ -552,7 +590,11 @@ impl System for SpatialSystem {
 
     fn phi_t_into(&self, t: f64, u: &[f64], phi_t: &mut [f64]) {
         phi_t.fill(0.0);
-        for j in &self.joints {
+        for j in self
+            .joints
+            .iter()
+            .filter(|j| j.element.spherical_points().is_none())
+        {
             let f = frames(&self.bodies, j.sides, u, None, d15);
             let mut out = [d15(0.0, TIME); 6];
             let rows = j.rows();
@@ -570,6 +612,18 @@ impl System for SpatialSystem {
 
     fn hessian_into(&self, t: f64, u: &[f64], mu: &[f64], out: &mut [f64]) {
         for j in &self.joints {
+            if let Some(points) = j.element.spherical_points() {
+                let mut h = [[0.0; 2 * SIDE]; 2 * SIDE];
+                let rigid = j
+                    .sides
+                    .map(|s| s.is_some_and(|i| self.bodies[i].is_rigid()));
+                let m = [mu[j.row0], mu[j.row0 + 1], mu[j.row0 + 2]];
+                spherical::hessian(points, rigid, m, &mut h);
+                for (k, &(a, b)) in j.h_local.iter().enumerate() {
+                    out[j.h_off + k] = h[a][b];
+                }
+                continue;
+            }
             let o = self.joint_jet(j, t, u);
             for (k, &(a, b)) in j.h_local.iter().enumerate() {
                 out[j.h_off + k] = (0..j.rows()).map(|r| mu[j.row0 + r] * o[r].h[a][b]).sum();
@@ -586,6 +640,11 @@ impl System for SpatialSystem {
             c[row] = -2.0 * v[x..x + 4].iter().map(|e| e * e).sum::<f64>();
         }
         for j in &self.joints {
+            if let Some(points) = j.element.spherical_points() {
+                let rates = self.side_values(j, v);
+                spherical::accel_rhs(points, rates, &mut c[j.row0..j.row0 + 3]);
+                continue;
+            }
             let o = self.joint_jet(j, t, u);
             let vl: [f64; TIME] =
                 std::array::from_fn(|a| global(&self.bodies, j.sides, a).map_or(0.0, |i| v[i]));
@@ -631,6 +690,15 @@ impl SpatialSystem {
             }
         }
         for j in &self.joints {
+            if let Some(points) = j.element.spherical_points() {
+                let mut grad = [[0.0; 2 * SIDE]; 3];
+                let q = self.side_values(j, u);
+                spherical::phi_grad(points, q, &mut phi[j.row0..j.row0 + 3], &mut grad);
+                for (k, &(r, a)) in j.b_local.iter().enumerate() {
+                    b[j.b_off + k] = grad[r][a];
+                }
+                continue;
+            }
             let f = frames(&self.bodies, j.sides, u, None, d15);
             let mut out = [d15(0.0, TIME); 6];
             let rows = j.rows();
@@ -643,6 +711,16 @@ impl SpatialSystem {
                 b[j.b_off + k] = out[r].g[a];
             }
         }
+    }
+
+    /// The coordinates (or rates) of a joint's two sides in `x`.
+    fn side_values<'a>(&self, j: &JointData, x: &'a [f64]) -> [spherical::Side<'a>; 2] {
+        j.sides.map(|s| {
+            s.map(|i| {
+                let b = &self.bodies[i];
+                &x[b.x..b.x + b.count()]
+            })
+        })
     }
 
     fn joint_jet(&self, j: &JointData, t: f64, u: &[f64]) -> Vec<Jet> {
@@ -663,6 +741,10 @@ impl SpatialSystem {
                     j.quadratic_du(&v[x..x + 4], block);
                 }
             }
+        }
+        if self.symmetric_tangent {
+            // No loads: the values are the bodies' 4 × 4 blocks alone.
+            symmetrize_blocks(out);
         }
         for (l, s) in self.loads.iter().zip(&self.load_slots) {
             let f = frames(&self.bodies, l.sides, u, Some(v), d28);
