@@ -82,10 +82,7 @@ fn every_model_with_a_reference_is_validated() {
         if entry.path().is_dir() {
             continue;
         }
-        let name = entry
-            .file_name()
-            .to_string_lossy()
-            .into_owned();
+        let name = entry.file_name().to_string_lossy().into_owned();
         if examples.contains(&name.as_str()) {
             continue;
         }
