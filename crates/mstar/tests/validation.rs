@@ -67,6 +67,41 @@ fn the_third_crank_leaves_the_parallelogram_s_motion_as_it_was() {
 }
 
 #[test]
+fn the_heavy_top_keeps_its_invariants_and_converges_to_the_index1_reference() {
+    check("spatial/top.toml");
+}
+
+#[test]
+fn the_heavy_top_precesses_and_nutates_at_the_closed_form_rates() {
+    check("spatial/top-steady.toml");
+}
+
+#[test]
+fn the_free_body_flips_at_the_closed_form_period() {
+    check("spatial/dzhanibekov.toml");
+}
+
+#[test]
+fn the_tilted_hinge_swings_as_a_one_angle_pendulum() {
+    check("spatial/tilted-hinge.toml");
+}
+
+#[test]
+fn the_spatial_double_pendulum_converges_to_the_index1_reference_at_second_order() {
+    check("spatial/double-pendulum.toml");
+}
+
+#[test]
+fn bricard_s_mechanism_conserves_energy_with_minimum_norm_multipliers() {
+    check("spatial/bricard.toml");
+}
+
+#[test]
+fn the_spatial_slider_crank_converges_to_the_index1_reference_at_second_order() {
+    check("spatial/slider-crank.toml");
+}
+
+#[test]
 fn every_model_with_a_reference_is_validated() {
     // A model file in models/ is a reference case, or the reference of one
     // (parallelogram.toml), or an example (crank-and-spring, the JSON copy).
@@ -75,21 +110,21 @@ fn every_model_with_a_reference_is_validated() {
         "double-pendulum.json",
         "parallelogram.toml",
     ];
-    for entry in std::fs::read_dir(models()).expect("models/") {
-        let entry = entry.expect("entry");
-        // models/spatial/: spatial models, checked by model_files_spatial.rs
-        // (no `cargo xtask validate` case yet).
-        if entry.path().is_dir() {
-            continue;
+    for dir in ["", "spatial/"] {
+        for entry in std::fs::read_dir(models().join(dir)).expect("models/") {
+            let entry = entry.expect("entry");
+            if entry.path().is_dir() {
+                continue;
+            }
+            let name = format!("{dir}{}", entry.file_name().to_string_lossy());
+            if examples.contains(&name.as_str()) {
+                continue;
+            }
+            assert!(
+                CASES.iter().any(|c| c.model == name),
+                "{name} has no validation case"
+            );
         }
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if examples.contains(&name.as_str()) {
-            continue;
-        }
-        assert!(
-            CASES.iter().any(|c| c.model == name),
-            "{name} has no validation case"
-        );
     }
 }
 

@@ -95,6 +95,23 @@ impl<'a, S: System + ?Sized> Index1Rk4<'a, S> {
 
     /// `ü` from the acceleration-level KKT system at `(t, u, u̇)`.
     fn acceleration(&self, t: f64, u: &[f64], v: &[f64]) -> Result<Vec<f64>, String> {
+        let n = self.sys.n_coords();
+        Ok(self.kkt_solution(t, u, v)?[..n].to_vec())
+    }
+
+    /// The multipliers `λ` of the acceleration-level KKT system at
+    /// `(t, u, u̇)`: the reference for a DAE's `λ` at a state of the
+    /// reference solution.
+    ///
+    /// # Errors
+    /// A message when the KKT matrix is singular (redundant constraints).
+    pub fn multipliers(&self, t: f64, u: &[f64], v: &[f64]) -> Result<Vec<f64>, String> {
+        let n = self.sys.n_coords();
+        Ok(self.kkt_solution(t, u, v)?[n..].to_vec())
+    }
+
+    /// `[ü; λ]` from `[M Bᵀ; B 0][ü; λ] = [g; c]` at `(t, u, u̇)`.
+    fn kkt_solution(&self, t: f64, u: &[f64], v: &[f64]) -> Result<Vec<f64>, String> {
         let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
         let mut kkt = DMatrix::<f64>::zeros(n + m, n + m);
         let pattern = self.sys.mass_pattern();
@@ -121,7 +138,7 @@ impl<'a, S: System + ?Sized> Index1Rk4<'a, S> {
             .full_piv_lu()
             .solve(&rhs)
             .ok_or_else(|| format!("the acceleration-level KKT matrix is singular at t = {t}"))?;
-        Ok(x.rows(0, n).iter().copied().collect())
+        Ok(x.iter().copied().collect())
     }
 
     /// `B(t, u)`, dense.

@@ -11,16 +11,20 @@
 
 pub mod andrews;
 mod crank_and_spring;
+mod kinematics;
 mod n_four_bar;
 mod order;
 mod parallelogram;
 mod pendulums;
 mod slider_crank;
+mod spatial;
+mod top;
 
 use std::path::Path;
 
 use mstar_model::SampleRef;
-use mstar_model::file::ModelFile;
+use mstar_model::file::{Mechanism, MechanismFile, ModelFile};
+use mstar_model::spatial::SpatialSystem;
 
 /// One line of the validation table.
 #[derive(Clone, Debug, PartialEq)]
@@ -77,6 +81,13 @@ pub const CASES: &[Case] = &[
     andrews::CASE,
     n_four_bar::CASE,
     parallelogram::CASE,
+    top::TOP,
+    top::TOP_STEADY,
+    spatial::DZHANIBEKOV,
+    spatial::TILTED_HINGE,
+    spatial::DOUBLE_PENDULUM,
+    spatial::BRICARD,
+    spatial::SLIDER_CRANK,
 ];
 
 /// A model file of `models`, with overrides (`simulation.h=…`).
@@ -84,19 +95,31 @@ fn load(models: &Path, name: &str, set: &[String]) -> Result<ModelFile, String> 
     ModelFile::load_with(&models.join(name), set).map_err(|e| e.to_string())
 }
 
-/// Every sample's `(t, u, λ)` of a model file's run (its settings, with
-/// overrides), as `mstar run` would compute them.
+/// A spatial model file of `models`, with overrides.
+fn load_spatial(models: &Path, name: &str, set: &[String]) -> Result<SpatialSystem, String> {
+    match MechanismFile::load_with(&models.join(name), set)
+        .map_err(|e| e.to_string())?
+        .mechanism
+    {
+        Mechanism::Spatial(sys) => Ok(sys),
+        Mechanism::Planar(_) => Err(format!("{name}: not a spatial model")),
+    }
+}
+
+/// Every sample's `(t, u, u̇, λ)` of a model file's run, planar or spatial
+/// (its settings, with overrides), as `mstar run` would compute them.
 fn samples(models: &Path, name: &str, set: &[String]) -> Result<Vec<Sample>, String> {
-    let model = load(models, name, set)?;
+    let model = MechanismFile::load_with(&models.join(name), set).map_err(|e| e.to_string())?;
     let mut out = Vec::new();
-    crate::run::simulate(&model.system, &model.simulation, &mut |s: &SampleRef<
-        '_,
-    >| {
+    let sys = crate::run::lookup(&model.mechanism);
+    crate::run::simulate(sys, &model.simulation, &mut |s: &SampleRef<'_>| {
         out.push(Sample {
             t: s.t,
             u: s.u.to_vec(),
+            v: s.v.to_vec(),
             lambda: s.lambda.to_vec(),
             energy: s.energy(),
+            kinetic: s.kinetic,
         });
     })
     .map_err(|e| format!("{name}: {e}"))?;
@@ -108,8 +131,10 @@ fn samples(models: &Path, name: &str, set: &[String]) -> Result<Vec<Sample>, Str
 struct Sample {
     t: f64,
     u: Vec<f64>,
+    v: Vec<f64>,
     lambda: Vec<f64>,
     energy: f64,
+    kinetic: f64,
 }
 
 /// The larger of two errors, NaN winning.
