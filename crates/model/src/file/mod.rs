@@ -33,6 +33,7 @@
 //! column where the format tells them (every TOML value; JSON syntax errors):
 //! `bar.toml:7:8: body 'bar': mass: must be positive, in kg (got -1)`.
 
+mod bodies;
 mod fields;
 mod functions;
 mod node;
@@ -126,13 +127,10 @@ impl ModelFile {
     /// # Errors
     /// As [`load`](Self::load), and for a malformed override.
     pub fn load_with(path: &Path, overrides: &[String]) -> Result<Self, FileError> {
-        let origin = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| FileError {
-            origin: origin.clone(),
-            place: None,
-            message: format!("cannot read the model file: {e}"),
-        })?;
-        Self::parse_with(&text, &origin, Format::of(path), overrides)
+        Self::planar(
+            MechanismFile::load_with(path, overrides)?,
+            &path.display().to_string(),
+        )
     }
 
     /// Reads and checks a model from `text`; `origin` names it in errors.
@@ -157,18 +155,14 @@ impl ModelFile {
         format: Format,
         overrides: &[String],
     ) -> Result<Self, FileError> {
-        let mut root = match format {
-            Format::Toml => node::parse_toml(text, origin)?,
-            Format::Json => node::parse_json(text, origin)?,
-        };
-        for o in overrides {
-            settings::apply_override(&mut root, o).map_err(|why| FileError {
-                origin: origin.to_string(),
-                place: None,
-                message: format!("--set {o}: {why}"),
-            })?;
-        }
-        let file = MechanismFile::parse_with(text, origin, format, overrides)?;
+        Self::planar(
+            MechanismFile::parse_with(text, origin, format, overrides)?,
+            origin,
+        )
+    }
+
+    /// The planar model of `file`; an error naming `origin` for a spatial one.
+    fn planar(file: MechanismFile, origin: &str) -> Result<Self, FileError> {
         match file.mechanism {
             Mechanism::Planar(system) => Ok(Self {
                 system,

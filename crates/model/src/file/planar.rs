@@ -2,11 +2,9 @@
 //! forces read into a [`PlanarBuilder`], every value checked where it is
 //! written (`docs/model-format.md`).
 
-use std::collections::HashMap;
-use std::ops::Range;
-
 use super::FileError;
-use super::fields::{Doc, Fields, choice, list, number_in, numbers, string, two_names, two_points};
+use super::bodies::{self, Bodies, Names};
+use super::fields::{Doc, Fields, choice, number_in, numbers, string, two_points};
 use super::node::Node;
 use crate::planar::{
     At, BodyId, Coordinate, PlanarBuilder, PlanarSystem, PointMass, RigidBody,
@@ -17,7 +15,6 @@ use crate::planar::{
 pub const FORMAT: &str = "mstar.planar/1";
 
 /// The reserved name of the fixed frame.
-const GROUND: &str = "ground";
 
 /// A named body of the model, as joints and forces refer to it.
 #[derive(Clone, Copy, Debug)]
@@ -28,19 +25,15 @@ struct Placed {
 }
 
 /// One side of a joint or force: the ground or a body.
-#[derive(Clone, Copy, Debug)]
-enum Side {
-    Ground,
-    Body(Placed),
-}
+type Side = bodies::Side<Placed>;
 
 /// The model being read.
 struct Model<'a> {
     doc: Doc<'a>,
     builder: PlanarBuilder,
-    bodies: HashMap<String, Placed>,
+    bodies: Bodies<Placed>,
     /// Every name with what carries it and where, for duplicates.
-    names: HashMap<String, (String, Option<Range<usize>>)>,
+    names: Names,
 }
 
 /// Reads a whole document.
@@ -63,90 +56,40 @@ pub(crate) fn read<'a>(doc: Doc<'a>, root: &'a Node) -> Result<PlanarSystem, Fil
     let mut m = Model {
         doc,
         builder: PlanarBuilder::new(),
-        bodies: HashMap::new(),
-        names: HashMap::new(),
+        bodies: Bodies::new(),
+        names: Names::default(),
     };
     m.builder.gravity(gravity[0], gravity[1]);
-    for (kind, add) in [
-        ("body", Model::body as Adder<'a>),
-        ("point_mass", Model::point_mass),
-        ("joint", Model::joint),
-        ("driver", Model::driver),
-        ("force", Model::force),
-    ] {
-        for (k, node) in top.optional(kind, list)?.unwrap_or(&[]).iter().enumerate() {
-            add(&mut m, node, format!("{kind} #{}", k + 1))?;
-        }
-    }
     // ([simulation] and [output] are the caller's: settings, not the mechanism.)
-    top.finish(&[
-        "format",
-        "gravity",
-        "body",
-        "point_mass",
-        "joint",
-        "driver",
-        "force",
-        "simulation",
-        "output",
-    ])?;
+    bodies::read_elements(
+        &mut top,
+        &mut m,
+        [
+            Model::body,
+            Model::point_mass,
+            Model::joint,
+            Model::driver,
+            Model::force,
+        ],
+    )?;
     m.builder.build().map_err(|e| m.located(e))
 }
 
-/// Reads one element into the model.
-type Adder<'a> = fn(&mut Model<'a>, &'a Node, String) -> Result<(), FileError>;
-
 impl<'a> Model<'a> {
-    /// The element's fields and its name (described as `what` until it is
-    /// known), the name claimed.
+    /// The element's fields and its name, the name claimed
+    /// ([`Names::named`]).
     fn named(
         &mut self,
         node: &'a Node,
         what: String,
         kind: &str,
     ) -> Result<(Fields<'a>, String), FileError> {
-        let mut f = Fields::of(self.doc, node, what)?;
-        let name = f.required("name", string)?.to_string();
-        let span = f.entry("name").and_then(|e| e.node.span.clone());
-        // Escaped: a newline in a name must not split the message.
-        f.what = format!("{kind} '{}'", name.escape_debug());
-        if name.is_empty() || name.chars().any(|c| c.is_control()) {
-            return Err(self.doc.error(
-                span.as_ref(),
-                format!(
-                    "{}: a name must be non-empty and without control characters",
-                    f.what
-                ),
-            ));
-        }
-        if let Some((other, at)) = self.names.get(&name) {
-            let line = at
-                .as_ref()
-                .map(|s| {
-                    format!(
-                        " (line {})",
-                        super::node::line_column(self.doc.text, s.start).0
-                    )
-                })
-                .unwrap_or_default();
-            return Err(self.doc.error(
-                span.as_ref(),
-                format!("the name '{name}' is used twice: by {other}{line} and by this {kind}"),
-            ));
-        }
-        self.names.insert(name.clone(), (f.what.clone(), span));
-        Ok((f, name))
+        self.names.named(self.doc, node, what, kind)
     }
 
     /// A `[[body]]`: a rigid body.
     fn body(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
         let (mut f, name) = self.named(node, what, "body")?;
-        if name == GROUND {
-            return Err(self.doc.error(
-                f.span(),
-                "a body may not be called 'ground': that is the fixed frame".to_string(),
-            ));
-        }
         let mass = f.required("mass", number_in(|x| x > 0.0, "positive, in kg"))?;
         let inertia = f.required(
             "inertia",
@@ -181,12 +124,6 @@ impl<'a> Model<'a> {
     /// A `[[point_mass]]`.
     fn point_mass(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
         let (mut f, name) = self.named(node, what, "point mass")?;
-        if name == GROUND {
-            return Err(self.doc.error(
-                f.span(),
-                "a point mass may not be called 'ground': that is the fixed frame".to_string(),
-            ));
-        }
         let mass = f.required("mass", number_in(|x| x > 0.0, "positive, in kg"))?;
         let p = f.required("position", numbers::<2>)?;
         let v = f.optional("velocity", numbers::<2>)?.unwrap_or([0.0; 2]);
@@ -218,7 +155,7 @@ impl<'a> Model<'a> {
             "type",
             choice(&["revolute", "prismatic", "distance", "weld"]),
         )?;
-        let sides = self.sides(&mut f)?;
+        let sides = self.bodies.sides(&mut f)?;
         let at = self.anchors(&mut f, sides)?;
         match kind {
             "revolute" => {
@@ -270,7 +207,7 @@ impl<'a> Model<'a> {
     /// A `[[driver]]`: a coordinate of a body prescribed in time.
     fn driver(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
         let (mut f, name) = self.named(node, what, "driver")?;
-        let body = self.body_of(&mut f, "body")?;
+        let body = self.bodies.body_of(&mut f, "body")?;
         let coordinate = f.required("coordinate", choice(&["x", "y", "theta"]))?;
         if coordinate == "theta" && !body.rigid {
             let e = f.entry("coordinate").expect("read above");
@@ -305,7 +242,7 @@ impl<'a> Model<'a> {
             "spring-damper" => self.spring(&mut f, &name)?,
             "rotational-spring-damper" => self.rotational_spring(&mut f, &name)?,
             "torque" => {
-                let body = self.body_of(&mut f, "body")?;
+                let body = self.bodies.body_of(&mut f, "body")?;
                 if !body.rigid {
                     return Err(self.doc.error(
                         f.span(),
@@ -319,7 +256,7 @@ impl<'a> Model<'a> {
                 self.builder.torque(&name, body.id, tau);
             }
             _ => {
-                let body = self.body_of(&mut f, "body")?;
+                let body = self.bodies.body_of(&mut f, "body")?;
                 let point = f.optional("point", numbers::<2>)?.unwrap_or([0.0; 2]);
                 let fx = self
                     .function(&mut f, "fx")?
@@ -337,7 +274,7 @@ impl<'a> Model<'a> {
 
     /// A linear spring-damper between two points.
     fn spring(&mut self, f: &mut Fields<'a>, name: &str) -> Result<(), FileError> {
-        let sides = self.sides(f)?;
+        let sides = self.bodies.sides(f)?;
         let points = f.required("points", two_points)?;
         let at = [
             self.side_at(f, sides[0], points[0])?,
@@ -376,7 +313,7 @@ impl<'a> Model<'a> {
     /// A rotational spring-damper between two bodies (or the ground and a
     /// body), at rest at the initial relative angle.
     fn rotational_spring(&mut self, f: &mut Fields<'a>, name: &str) -> Result<(), FileError> {
-        let sides = self.sides(f)?;
+        let sides = self.bodies.sides(f)?;
         let stiffness = f.required(
             "stiffness",
             number_in(|x| x >= 0.0, "non-negative, in N m/rad"),
@@ -404,56 +341,6 @@ impl<'a> Model<'a> {
                 format!("{}: a rotational spring joins two rigid bodies (the first may be 'ground'); point masses have no angle", f.what),
             )),
         }
-    }
-
-    /// The two sides of `bodies`.
-    fn sides(&self, f: &mut Fields<'a>) -> Result<[Side; 2], FileError> {
-        let names = f.required("bodies", two_names)?;
-        let e = f.entry("bodies").expect("read above");
-        let side = |name: &str| -> Result<Side, FileError> {
-            if name == GROUND {
-                return Ok(Side::Ground);
-            }
-            self.bodies
-                .get(name)
-                .map(|&b| Side::Body(b))
-                .ok_or_else(|| f.bad(e, self.unknown_body(name)))
-        };
-        let sides = [side(names[0])?, side(names[1])?];
-        if names[0] == names[1] {
-            return Err(f.bad(
-                e,
-                format!(
-                    "both sides are '{}': an element joins two different bodies",
-                    names[0].escape_debug()
-                ),
-            ));
-        }
-        Ok(sides)
-    }
-
-    /// The body named by `key` (not the ground).
-    fn body_of(&self, f: &mut Fields<'a>, key: &str) -> Result<Placed, FileError> {
-        let name = f.required(key, string)?;
-        let e = f.entry(key).expect("read above");
-        if name == GROUND {
-            return Err(f.bad(e, "the ground cannot move: name a body"));
-        }
-        self.bodies
-            .get(name)
-            .copied()
-            .ok_or_else(|| f.bad(e, self.unknown_body(name)))
-    }
-
-    fn unknown_body(&self, name: &str) -> String {
-        let mut known: Vec<&str> = self.bodies.keys().map(String::as_str).collect();
-        known.sort_unstable();
-        format!(
-            "no body or point mass is called '{}' (known: ground{}{})",
-            name.escape_debug(),
-            if known.is_empty() { "" } else { ", " },
-            known.join(", ")
-        )
     }
 
     /// The attachment points from `points` (local) or `at` (one global point
@@ -526,14 +413,7 @@ impl<'a> Model<'a> {
 
     /// A builder error, placed at the element it names when it can be.
     fn located(&self, e: crate::planar::ModelError) -> FileError {
-        let (element, message) = match &e {
-            crate::planar::ModelError::Invalid { element, what } => (element.clone(), what.clone()),
-            crate::planar::ModelError::DuplicateName(name) => (name.clone(), e.to_string()),
-        };
-        match self.names.get(&element) {
-            Some((what, span)) => self.doc.error(span.as_ref(), format!("{what}: {message}")),
-            None => self.doc.error(None, format!("{element}: {message}")),
-        }
+        self.names.located(self.doc, &e)
     }
 }
 

@@ -4,10 +4,10 @@
 //! models").
 
 use std::collections::HashMap;
-use std::ops::Range;
 
 use super::FileError;
-use super::fields::{Doc, Fields, choice, list, number, number_in, numbers, string, two_names};
+use super::bodies::{self, Bodies, Names};
+use super::fields::{Doc, Fields, choice, list, number, number_in, numbers, string};
 use super::node::{Node, Value};
 use crate::planar::{ModelError, TimeFunction};
 use crate::spatial::{
@@ -19,7 +19,6 @@ use crate::spatial::{
 pub const FORMAT: &str = "mstar.spatial/1";
 
 /// The reserved name of the fixed frame.
-const GROUND: &str = "ground";
 
 /// How far from 1 the norm of a given orientation may be without a warning.
 const NORM_WARNING: f64 = 1e-12;
@@ -35,11 +34,7 @@ struct Placed {
 }
 
 /// One side of a joint or force: the ground or a body.
-#[derive(Clone, Copy, Debug)]
-enum Side {
-    Ground,
-    Body(Placed),
-}
+type Side = bodies::Side<Placed>;
 
 impl Side {
     fn attach(self) -> Attach {
@@ -79,11 +74,11 @@ impl Side {
 struct Model<'a> {
     doc: Doc<'a>,
     builder: SpatialBuilder,
-    bodies: HashMap<String, Placed>,
+    bodies: Bodies<Placed>,
     /// The joints (not drivers) by name, with their type.
     joints: HashMap<String, JointType>,
     /// Every name with what carries it and where, for duplicates.
-    names: HashMap<String, (String, Option<Range<usize>>)>,
+    names: Names,
     warnings: Vec<String>,
 }
 
@@ -109,87 +104,39 @@ pub(crate) fn read<'a>(
     let mut m = Model {
         doc,
         builder: SpatialBuilder::new(),
-        bodies: HashMap::new(),
+        bodies: Bodies::new(),
         joints: HashMap::new(),
-        names: HashMap::new(),
+        names: Names::default(),
         warnings: Vec::new(),
     };
     m.builder.gravity(gravity);
     m.builder.rotational_mass(rotational_mass);
-    for (kind, add) in [
-        ("body", Model::body as Adder<'a>),
-        ("point_mass", Model::point_mass),
-        ("joint", Model::joint),
-        ("driver", Model::driver),
-        ("force", Model::force),
-    ] {
-        for (k, node) in top.optional(kind, list)?.unwrap_or(&[]).iter().enumerate() {
-            add(&mut m, node, format!("{kind} #{}", k + 1))?;
-        }
-    }
-    top.finish(&[
-        "format",
-        "gravity",
-        "body",
-        "point_mass",
-        "joint",
-        "driver",
-        "force",
-        "simulation",
-        "output",
-    ])?;
+    // ([simulation] and [output] are the caller's: settings, not the mechanism.)
+    bodies::read_elements(
+        &mut top,
+        &mut m,
+        [
+            Model::body,
+            Model::point_mass,
+            Model::joint,
+            Model::driver,
+            Model::force,
+        ],
+    )?;
     let system = m.builder.build().map_err(|e| m.located(e))?;
     Ok((system, m.warnings))
 }
 
-/// Reads one element into the model.
-type Adder<'a> = fn(&mut Model<'a>, &'a Node, String) -> Result<(), FileError>;
-
 impl<'a> Model<'a> {
-    /// The element's fields and its name, the name claimed (as the planar
-    /// reader does).
+    /// The element's fields and its name, the name claimed
+    /// ([`Names::named`]).
     fn named(
         &mut self,
         node: &'a Node,
         what: String,
         kind: &str,
     ) -> Result<(Fields<'a>, String), FileError> {
-        let mut f = Fields::of(self.doc, node, what)?;
-        let name = f.required("name", string)?.to_string();
-        let span = f.entry("name").and_then(|e| e.node.span.clone());
-        f.what = format!("{kind} '{}'", name.escape_debug());
-        if name.is_empty() || name.chars().any(|c| c.is_control()) {
-            return Err(self.doc.error(
-                span.as_ref(),
-                format!(
-                    "{}: a name must be non-empty and without control characters",
-                    f.what
-                ),
-            ));
-        }
-        if let Some((other, at)) = self.names.get(&name) {
-            let line = at
-                .as_ref()
-                .map(|s| {
-                    format!(
-                        " (line {})",
-                        super::node::line_column(self.doc.text, s.start).0
-                    )
-                })
-                .unwrap_or_default();
-            return Err(self.doc.error(
-                span.as_ref(),
-                format!("the name '{name}' is used twice: by {other}{line} and by this {kind}"),
-            ));
-        }
-        if name == GROUND && matches!(kind, "body" | "point mass") {
-            return Err(self.doc.error(
-                span.as_ref(),
-                format!("a {kind} may not be called 'ground': that is the fixed frame"),
-            ));
-        }
-        self.names.insert(name.clone(), (f.what.clone(), span));
-        Ok((f, name))
+        self.names.named(self.doc, node, what, kind)
     }
 
     /// A `[[body]]`: a rigid body.
@@ -295,7 +242,7 @@ impl<'a> Model<'a> {
         let names = kinds.map(JointType::name);
         let kind = f.required("type", choice(&names))?;
         let kind = kinds[names.iter().position(|n| *n == kind).expect("a choice")];
-        let sides = self.sides(&mut f)?;
+        let sides = self.bodies.sides(&mut f)?;
         let points = self.anchors(&mut f, sides)?;
         let mut known = vec!["name", "type", "bodies", "points", "at"];
         for s in sides {
@@ -502,7 +449,7 @@ impl<'a> Model<'a> {
         )?;
         match kind {
             "force" | "torque" => {
-                let body = self.body_of(&mut f, "body")?;
+                let body = self.bodies.body_of(&mut f, "body")?;
                 let torque = kind == "torque";
                 if torque && !body.rigid {
                     let e = f.entry("body").expect("read above");
@@ -548,7 +495,7 @@ impl<'a> Model<'a> {
                 }
             }
             "spring-damper" => {
-                let sides = self.sides(&mut f)?;
+                let sides = self.bodies.sides(&mut f)?;
                 let points = self.anchors(&mut f, sides)?;
                 let stiffness =
                     f.required("stiffness", number_in(|x| x >= 0.0, "non-negative, in N/m"))?;
@@ -581,7 +528,7 @@ impl<'a> Model<'a> {
                 );
             }
             _ => {
-                let sides = self.sides(&mut f)?;
+                let sides = self.bodies.sides(&mut f)?;
                 for s in sides {
                     if let Side::Body(b) = s
                         && !b.rigid
@@ -624,56 +571,6 @@ impl<'a> Model<'a> {
             }
         }
         Ok(())
-    }
-
-    /// The two sides of `bodies`.
-    fn sides(&self, f: &mut Fields<'a>) -> Result<[Side; 2], FileError> {
-        let names = f.required("bodies", two_names)?;
-        let e = f.entry("bodies").expect("read above");
-        let side = |name: &str| -> Result<Side, FileError> {
-            if name == GROUND {
-                return Ok(Side::Ground);
-            }
-            self.bodies
-                .get(name)
-                .map(|&b| Side::Body(b))
-                .ok_or_else(|| f.bad(e, self.unknown_body(name)))
-        };
-        let sides = [side(names[0])?, side(names[1])?];
-        if names[0] == names[1] {
-            return Err(f.bad(
-                e,
-                format!(
-                    "both sides are '{}': an element joins two different bodies",
-                    names[0].escape_debug()
-                ),
-            ));
-        }
-        Ok(sides)
-    }
-
-    /// The body named by `key` (not the ground).
-    fn body_of(&self, f: &mut Fields<'a>, key: &str) -> Result<Placed, FileError> {
-        let name = f.required(key, string)?;
-        let e = f.entry(key).expect("read above");
-        if name == GROUND {
-            return Err(f.bad(e, "the ground cannot move: name a body"));
-        }
-        self.bodies
-            .get(name)
-            .copied()
-            .ok_or_else(|| f.bad(e, self.unknown_body(name)))
-    }
-
-    fn unknown_body(&self, name: &str) -> String {
-        let mut known: Vec<&str> = self.bodies.keys().map(String::as_str).collect();
-        known.sort_unstable();
-        format!(
-            "no body or point mass is called '{}' (known: ground{}{})",
-            name.escape_debug(),
-            if known.is_empty() { "" } else { ", " },
-            known.join(", ")
-        )
     }
 
     /// The attachment points from `points` (local) or `at` (one global point
@@ -723,14 +620,7 @@ impl<'a> Model<'a> {
 
     /// A builder error, placed at the element it names when it can be.
     fn located(&self, e: ModelError) -> FileError {
-        let (element, message) = match &e {
-            ModelError::Invalid { element, what } => (element.clone(), what.clone()),
-            ModelError::DuplicateName(name) => (name.clone(), e.to_string()),
-        };
-        match self.names.get(&element) {
-            Some((what, span)) => self.doc.error(span.as_ref(), format!("{what}: {message}")),
-            None => self.doc.error(None, format!("{element}: {message}")),
-        }
+        self.names.located(self.doc, &e)
     }
 }
 
