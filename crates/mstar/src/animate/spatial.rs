@@ -181,3 +181,88 @@ impl Figure for SpatialFigure {
         out
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mstar::model::spatial::{
+        Attach, JointSpec, JointType, SpatialBody, SpatialBuilder, SpatialInertia, euler_parameters,
+    };
+
+    fn close(p: Point, q: Point) -> bool {
+        (p[0] - q[0]).abs() < 1e-12 && (p[1] - q[1]).abs() < 1e-12
+    }
+
+    #[test]
+    fn each_view_takes_its_axes() {
+        let p = [1.0, 2.0, 3.0];
+        assert_eq!(Projection::Xz.project(p), [1.0, 3.0]);
+        assert_eq!(Projection::Yz.project(p), [2.0, 3.0]);
+        assert_eq!(Projection::Xy.project(p), [1.0, 2.0]);
+        // y = 2 m drawn 1 m long at 30°: (√3/2, 1/2) m.
+        let oblique = Projection::Oblique.project(p);
+        assert!(close(oblique, [1.0 + 0.75f64.sqrt(), 3.5]), "{oblique:?}");
+        assert_eq!(Projection::default(), Projection::Oblique);
+    }
+
+    /// A bar along its body x axis, centre at (1, 2, 3), turned 90° about
+    /// global z, on a ball joint at its local (−0.5, 0, 0), with a point
+    /// mass on a rod at its local (0.5, 0, 0).
+    fn bar() -> (SpatialFigure, Vec<f64>) {
+        let mut b = SpatialBuilder::new();
+        let bar = b.body(
+            "bar",
+            SpatialBody {
+                mass: 1.0,
+                inertia: SpatialInertia::Principal([0.001, 0.1, 0.1]),
+                position: [1.0, 2.0, 3.0],
+                orientation: euler_parameters([0.0, 0.0, 1.0], std::f64::consts::FRAC_PI_2),
+                velocity: [0.0; 3],
+                angular_velocity: [0.0; 3],
+            },
+        );
+        let spec = |kind, bodies, points| JointSpec {
+            kind,
+            bodies,
+            points,
+            axes: [[0.0, 0.0, 1.0]; 2],
+            length: None,
+        };
+        b.joint(
+            "ball",
+            spec(
+                JointType::Spherical,
+                [Attach::Ground, Attach::Body(bar)],
+                [[1.0, 1.5, 3.0], [-0.5, 0.0, 0.0]],
+            ),
+        );
+        let sys = b.build().expect("valid");
+        let u = sys.initial_position();
+        (SpatialFigure::new(sys.sketch(), Projection::Xy), u)
+    }
+
+    #[test]
+    fn body_points_turn_with_the_body_and_are_projected() {
+        let (figure, u) = bar();
+        // The ball end at (1, 1.5, 3): seen from above, (1, 1.5).
+        assert!(close(figure.end(0, 1, &u), [1.0, 1.5]));
+        assert!(close(figure.end(0, 0, &u), [1.0, 1.5]));
+        assert!(close(figure.centre(0, &u), [1.0, 2.0]));
+        // One point: a line from it to the centre.
+        let Shape::Line(line) = figure.outline(0, &u, 0.1) else {
+            panic!("a line");
+        };
+        assert!(
+            close(line[0], [1.0, 1.5]) && close(line[1], [1.0, 2.0]),
+            "{line:?}"
+        );
+        assert_eq!(figure.sketch().elements[0].kind, "spherical");
+        assert_eq!(
+            figure.sketch().elements[0].ends[0],
+            Attachment::Ground([1.0, 1.5])
+        );
+        let columns: Vec<String> = figure.columns().into_iter().map(|c| c.0).collect();
+        assert_eq!(columns[0], "u:bar.x");
+        assert_eq!(columns[6], "u:bar.e3");
+    }
+}
