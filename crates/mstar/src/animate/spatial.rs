@@ -16,8 +16,9 @@ pub const OBLIQUE_ANGLE_DEG: f64 = 30.0;
 /// Which global axes go right and up in the picture (`--view`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Projection {
-    /// Oblique (cabinet): x right, z up, y drawn receding up and to the
-    /// right at 30° and half length.
+    /// Oblique (cabinet): x right, z up, y (into the picture) drawn at half
+    /// length, 30° above the horizontal: seen from the front, a little above
+    /// and to the right.
     #[default]
     Oblique,
     /// From the front (looking along +y): x right, z up.
