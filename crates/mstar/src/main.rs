@@ -63,8 +63,9 @@ enum Command {
     Check(model_commands::CheckArgs),
     /// Draw a model moving through the results of `mstar run`: an animated
     /// GIF, a self-contained HTML page (play/pause, time slider) or one frame
-    /// as a PNG. Exit 0 when written, 1 when the results do not fit the model
-    /// or a file cannot be written, 2 when the model file cannot be read.
+    /// as a PNG; a spatial model projected onto the picture (--view). Exit 0
+    /// when written, 1 when the results do not fit the model or a file cannot
+    /// be written, 2 when the model file cannot be read.
     Animate(animate::AnimateArgs),
     /// The paper's pendulum in u = [x, y, θ] (singular M = diag(m, m, 0)).
     ///

@@ -31,6 +31,9 @@ pub(crate) trait SpatialJoint: Send + Sync + Debug {
     fn is_driver(&self) -> bool {
         false
     }
+    /// Its points in the axes of body A and body B (a driver's are those of
+    /// the joint it drives), for drawings.
+    fn points(&self) -> [[f64; 3]; 2];
     /// The joint points when it is a plain spherical joint, which has a
     /// hand-written fast path (`spherical.rs`).
     fn spherical_points(&self) -> Option<&[[f64; 3]; 2]> {
@@ -125,6 +128,9 @@ impl Spherical {
 }
 
 impl SpatialJoint for Spherical {
+    fn points(&self) -> [[f64; 3]; 2] {
+        self.0.points
+    }
     fn kind(&self) -> &'static str {
         "spherical"
     }
@@ -149,6 +155,9 @@ impl Revolute {
 }
 
 impl SpatialJoint for Revolute {
+    fn points(&self) -> [[f64; 3]; 2] {
+        self.0.points
+    }
     fn kind(&self) -> &'static str {
         "revolute"
     }
@@ -171,6 +180,9 @@ impl Cylindrical {
 }
 
 impl SpatialJoint for Cylindrical {
+    fn points(&self) -> [[f64; 3]; 2] {
+        self.0.points
+    }
     fn kind(&self) -> &'static str {
         "cylindrical"
     }
@@ -198,6 +210,9 @@ impl Prismatic {
 }
 
 impl SpatialJoint for Prismatic {
+    fn points(&self) -> [[f64; 3]; 2] {
+        self.geometry.points
+    }
     fn kind(&self) -> &'static str {
         "prismatic"
     }
@@ -220,6 +235,9 @@ impl Universal {
 }
 
 impl SpatialJoint for Universal {
+    fn points(&self) -> [[f64; 3]; 2] {
+        self.0.points
+    }
     fn kind(&self) -> &'static str {
         "universal"
     }
@@ -254,6 +272,9 @@ impl Weld {
 }
 
 impl SpatialJoint for Weld {
+    fn points(&self) -> [[f64; 3]; 2] {
+        self.geometry.points
+    }
     fn kind(&self) -> &'static str {
         "weld"
     }
@@ -278,6 +299,9 @@ impl Distance {
 }
 
 impl SpatialJoint for Distance {
+    fn points(&self) -> [[f64; 3]; 2] {
+        self.geometry.points
+    }
     fn kind(&self) -> &'static str {
         "distance"
     }
@@ -315,6 +339,9 @@ impl AngleDriver {
 }
 
 impl SpatialJoint for AngleDriver {
+    fn points(&self) -> [[f64; 3]; 2] {
+        self.geometry.points
+    }
     fn kind(&self) -> &'static str {
         "angle driver"
     }
@@ -342,6 +369,9 @@ impl SlideDriver {
 }
 
 impl SpatialJoint for SlideDriver {
+    fn points(&self) -> [[f64; 3]; 2] {
+        self.geometry.points
+    }
     fn kind(&self) -> &'static str {
         "translation driver"
     }

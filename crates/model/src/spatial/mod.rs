@@ -26,6 +26,7 @@ mod joints;
 mod loads;
 pub(crate) mod real;
 mod rotation;
+mod sketch;
 mod spherical;
 mod system;
 
@@ -35,6 +36,7 @@ pub use builder::{
 };
 pub use chain::{spatial_bar_chain, spatial_bar_chain_exact};
 pub use examples::element_examples;
+pub use sketch::{SpatialAttachment, SpatialSketch, SpatialSketchBody, SpatialSketchElement};
 pub use system::{SpatialReaction, SpatialSystem};
 
 /// Handle of a body in the [`SpatialBuilder`] that made it.

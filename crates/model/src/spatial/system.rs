@@ -337,6 +337,11 @@ impl SpatialSystem {
         u
     }
 
+    /// The loads as assembled.
+    pub(crate) fn load_list(&self) -> &[LoadData] {
+        &self.loads
+    }
+
     /// Number of bodies.
     #[must_use]
     pub fn n_bodies(&self) -> usize {

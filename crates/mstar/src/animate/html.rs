@@ -386,7 +386,10 @@ mod tests {
             times: vec![0.0, 0.5, 1.0],
             states: vec![u0.clone(), u1.clone(), u1],
         };
-        let scene = Scene::new(sys.sketch(), &frames.states);
+        let scene = Scene::new(
+            Box::new(crate::animate::figure::PlanarFigure::new(sys.sketch())),
+            &frames.states,
+        );
         let view = View::fit(scene.bounds(&frames.states), 400, 300);
         let html = page(&scene, &view, &frames, "a & b");
         assert!(html.contains("<title>a &amp; b</title>"));

@@ -2,24 +2,28 @@
 //! of `mstar run`, as an animated GIF, a self-contained HTML page, or one
 //! frame as a PNG picture. All three draw the same [`scene`]: each body
 //! through its joint points, springs as zigzags, the ground marked, the time
-//! in a corner (docs/model-format.md, "Animating a run").
+//! in a corner (docs/model-format.md, "Animating a run"). A planar model is
+//! drawn in its plane ([`figure`]), a spatial one projected onto the
+//! picture by `--view` ([`spatial`]).
 
+mod figure;
 mod html;
 mod picture;
 mod results;
 mod scene;
+mod spatial;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Result, bail};
-use mstar::System;
-use mstar::model::file::ModelFile;
-use mstar::planar::PlanarSystem;
+use mstar::model::file::{Mechanism, MechanismFile};
 
+use figure::{Figure, PlanarFigure};
 use picture::Canvas;
 use results::Results;
 use scene::{Scene, View};
+pub use spatial::Projection;
 
 /// Arguments of `mstar animate`.
 #[derive(clap::Args, Debug)]
@@ -66,6 +70,13 @@ pub struct AnimateArgs {
     /// drawing, which scales with the window).
     #[arg(long, default_value = "640x480", value_parser = size)]
     size: Size,
+    /// How a spatial model is projected onto the picture: `oblique` (x right,
+    /// z up, y receding up and to the right at 30° and half length), `xz`
+    /// (front: x right, z up), `yz` (side: y right, z up) or `xy` (top: x
+    /// right, y up) [default: oblique]. Planar models are drawn in their own
+    /// plane and do not take it.
+    #[arg(long, value_enum)]
+    view: Option<Projection>,
     /// Override a key of the model file (as for `mstar run`).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
@@ -107,14 +118,22 @@ fn positive(text: &str) -> Result<f64, String> {
 /// do not fit the model or an output cannot be written, 2 when the model
 /// file cannot be read (as `mstar check`).
 pub fn animate(args: &AnimateArgs) -> ExitCode {
-    let file = match ModelFile::load_with(&args.model, &args.set) {
+    let file = match MechanismFile::load_with(&args.model, &args.set) {
         Ok(file) => file,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::from(2);
         }
     };
-    match render(args, &file.system) {
+    let figure = match figure(args, &file.mechanism) {
+        Ok(figure) => figure,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let n_coords = file.mechanism.system().n_coords();
+    match render(args, figure, n_coords) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
@@ -123,10 +142,26 @@ pub fn animate(args: &AnimateArgs) -> ExitCode {
     }
 }
 
+/// The mechanism as drawn: a planar one in its plane (which takes no
+/// `--view`), a spatial one through `--view`.
+fn figure(args: &AnimateArgs, mechanism: &Mechanism) -> Result<Box<dyn Figure>> {
+    match (mechanism, args.view) {
+        (Mechanism::Planar(sys), None) => Ok(Box::new(PlanarFigure::new(sys.sketch()))),
+        (Mechanism::Planar(_), Some(_)) => bail!(
+            "--view is for spatial models: {} is planar and is drawn in its own plane (x right, y up)",
+            args.model.display()
+        ),
+        (Mechanism::Spatial(sys), view) => Ok(Box::new(spatial::SpatialFigure::new(
+            sys.sketch(),
+            view.unwrap_or_default(),
+        ))),
+    }
+}
+
 /// Reads the results and writes each output asked for.
-fn render(args: &AnimateArgs, sys: &PlanarSystem) -> Result<()> {
-    let run = results::read(&args.results, &sys.sketch(), sys.n_coords())?;
-    let scene = Scene::new(sys.sketch(), &run.states);
+fn render(args: &AnimateArgs, figure: Box<dyn Figure>, n_coords: usize) -> Result<()> {
+    let run = results::read(&args.results, &figure.columns(), n_coords)?;
+    let scene = Scene::new(figure, &run.states);
     let view = View::fit(scene.bounds(&run.states), args.size.width, args.size.height);
     let canvas = Canvas {
         scene: &scene,

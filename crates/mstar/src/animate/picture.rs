@@ -258,7 +258,10 @@ mod tests {
     fn a_frame_shows_the_body_in_its_colour() {
         let sys = crate::animate::hinged_bar("bar");
         let u = sys.initial_position();
-        let scene = Scene::new(sys.sketch(), std::slice::from_ref(&u));
+        let scene = Scene::new(
+            Box::new(crate::animate::figure::PlanarFigure::new(sys.sketch())),
+            std::slice::from_ref(&u),
+        );
         let view = View::fit(
             Bounds {
                 min: [-0.1, -0.5],

@@ -1,11 +1,11 @@
 //! The CSV file of `mstar run` read back for a model: the times and, per row,
 //! the coordinates of the model's bodies, found by column name
-//! (`u:<body>.x`, `.y`, `.theta`) so that the column order does not matter.
+//! (`u:<body>.x`, `.y`, `.theta` of a planar model, `.x` … `.z`, `.e0` …
+//! `.e3` of a spatial one) so that the column order does not matter.
 
 use std::path::Path;
 
 use anyhow::{Context as _, Result, bail};
-use mstar::planar::Sketch;
 
 /// The rows of a results file, in time order.
 #[derive(Clone, Debug, PartialEq)]
@@ -27,25 +27,26 @@ struct Column {
     name: String,
 }
 
-/// Reads the results of `mstar run` for the model drawn by `sketch`, which has
-/// `n_coords` coordinates. A `<name>.partial.csv` from a failed run reads the
+/// Reads the results of `mstar run` for a model with `n_coords` coordinates
+/// whose drawing needs the columns `wanted`, each `(name, index in u)` (as
+/// [`Figure::columns`](super::figure::Figure::columns) lists them). A `<name>.partial.csv` from a failed run reads the
 /// same way.
 ///
 /// # Errors
 /// If the file cannot be read, lacks a column the model needs, has no rows,
 /// has a field that is not a finite number (named by line and column), or
 /// goes back in time.
-pub fn read(path: &Path, sketch: &Sketch, n_coords: usize) -> Result<Results> {
+pub fn read(path: &Path, wanted: &[(String, usize)], n_coords: usize) -> Result<Results> {
     let file =
         std::fs::File::open(path).with_context(|| format!("could not read {}", path.display()))?;
-    parse(std::io::BufReader::new(file), path, sketch, n_coords)
+    parse(std::io::BufReader::new(file), path, wanted, n_coords)
 }
 
 /// [`read`] from any reader; `path` names it in messages.
 pub fn parse(
     reader: impl std::io::Read,
     path: &Path,
-    sketch: &Sketch,
+    wanted: &[(String, usize)],
     n_coords: usize,
 ) -> Result<Results> {
     let name = path.display();
@@ -57,7 +58,7 @@ pub fn parse(
         .with_context(|| format!("{name}: could not read the header"))?
         .clone();
     let (time, columns) =
-        columns(&header, sketch, n_coords).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+        columns(&header, wanted, n_coords).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     let mut out = Results {
         times: Vec::new(),
         states: Vec::new(),
@@ -99,10 +100,10 @@ pub fn parse(
     Ok(out)
 }
 
-/// The `t` column and the columns of every body's coordinates.
+/// The `t` column and the `wanted` columns.
 fn columns(
     header: &csv::StringRecord,
-    sketch: &Sketch,
+    wanted: &[(String, usize)],
     n_coords: usize,
 ) -> Result<(usize, Vec<Column>)> {
     let find = |name: &str| -> Result<usize> {
@@ -112,24 +113,15 @@ fn columns(
     };
     let time = find("t")?;
     let mut columns = Vec::new();
-    for body in &sketch.bodies {
-        let axes: &[&str] = if body.rigid {
-            &["x", "y", "theta"]
-        } else {
-            &["x", "y"]
-        };
-        for (k, axis) in axes.iter().enumerate() {
-            let name = format!("u:{}.{axis}", body.name);
-            let coord = body.x + k;
-            if coord >= n_coords {
-                bail!("the model's body '{}' has no coordinate {coord}", body.name);
-            }
-            columns.push(Column {
-                field: find(&name)?,
-                coord,
-                name,
-            });
+    for (name, coord) in wanted {
+        if *coord >= n_coords {
+            bail!("the model has no coordinate {coord} for column '{name}'");
         }
+        columns.push(Column {
+            field: find(name)?,
+            coord: *coord,
+            name: name.clone(),
+        });
     }
     Ok((time, columns))
 }
@@ -181,7 +173,8 @@ impl Results {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use mstar::planar::{At, PlanarBuilder, PointMass, RigidBody};
+    use crate::animate::figure::{Figure, PlanarFigure};
+    use mstar::planar::{At, PlanarBuilder, PointMass, RigidBody, Sketch};
 
     /// A rigid body `a, b` (quotes and a comma in its name) and a point mass.
     fn sketch() -> Sketch {
@@ -213,7 +206,8 @@ mod tests {
     }
 
     fn parse_text(text: &str) -> Result<Results> {
-        parse(text.as_bytes(), Path::new("r.csv"), &sketch(), 5)
+        let wanted = PlanarFigure::new(sketch()).columns();
+        parse(text.as_bytes(), Path::new("r.csv"), &wanted, 5)
     }
 
     #[test]

@@ -3,7 +3,9 @@
 //! circles, squares) in a [`View`] fitted once over the whole run, so every
 //! frame has the same items in the same order with the same point counts.
 
-use mstar::planar::{Attachment, Sketch, SketchElement};
+use mstar::planar::{Attachment, Sketch};
+
+use super::figure::Figure;
 
 /// A point `[x, y]`: world metres, or pixels (x right, y down).
 pub type Point = [f64; 2];
@@ -63,6 +65,17 @@ pub enum Shape {
 }
 
 impl Shape {
+    /// The same shape with every point mapped by `f` (world to pixels).
+    #[must_use]
+    pub fn map(self, f: impl Fn(Point) -> Point) -> Self {
+        match self {
+            Self::Line(p) => Self::Line(p.into_iter().map(f).collect()),
+            Self::Polygon(p) => Self::Polygon(p.into_iter().map(f).collect()),
+            Self::Circle(c, r) => Self::Circle(f(c), r),
+            Self::Square(c, h) => Self::Square(f(c), h),
+        }
+    }
+
     /// Its points (a circle's or square's centre).
     #[must_use]
     pub fn points(&self) -> &[Point] {
@@ -296,17 +309,14 @@ fn one_body(kind: &str) -> bool {
 
 /// The elements that attach at a body as a whole (its centre of mass), not
 /// at a point of its outline.
-fn whole_body(kind: &str) -> bool {
+pub fn whole_body(kind: &str) -> bool {
     matches!(kind, "driver" | "torque" | "rotational-spring-damper")
 }
 
-/// A model's drawing: what stays the same in every frame (outlines, guide
-/// directions, ground points), and [`Scene::items`] for one state.
-#[derive(Clone, Debug)]
+/// A model's drawing: what stays the same in every frame (its [`Figure`],
+/// guide directions, ground points), and [`Scene::items`] for one state.
 pub struct Scene {
-    sketch: Sketch,
-    /// Per body, the local outline: the hull of its joint and load points.
-    outlines: Vec<Vec<Point>>,
+    figure: Box<dyn Figure>,
     /// Per element, its guide if it is a prismatic joint whose points part.
     guides: Vec<Option<Guide>>,
     /// The distinct ground points of joints and springs.
@@ -314,38 +324,27 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// The scene of `sketch` over the run's `states` (for the guides'
+    /// The scene of `figure` over the run's `states` (for the guides'
     /// directions and lengths).
     #[must_use]
-    pub fn new(sketch: Sketch, states: &[Vec<f64>]) -> Self {
-        let mut local: Vec<Vec<Point>> = vec![Vec::new(); sketch.bodies.len()];
+    pub fn new(figure: Box<dyn Figure>, states: &[Vec<f64>]) -> Self {
+        let sketch = figure.sketch();
         let mut grounds: Vec<Point> = Vec::new();
         for e in sketch.elements.iter().filter(|e| !whole_body(e.kind)) {
             for (i, end) in e.ends.iter().enumerate() {
-                match *end {
-                    Attachment::Body { body, local: p } => {
-                        if let Some(points) = local.get_mut(body) {
-                            points.push(p);
-                        }
-                    }
-                    Attachment::Ground(p) if !(one_body(e.kind) && i == 1) => {
-                        if !grounds.contains(&p) {
-                            grounds.push(p);
-                        }
-                    }
-                    Attachment::Ground(_) => {}
+                if let Attachment::Ground(p) = *end
+                    && !(one_body(e.kind) && i == 1)
+                    && !grounds.contains(&p)
+                {
+                    grounds.push(p);
                 }
             }
         }
-        let outlines = local.iter().map(|p| hull(p)).collect();
-        let guides = sketch
-            .elements
-            .iter()
-            .map(|e| guide(&sketch, e, states))
+        let guides = (0..sketch.elements.len())
+            .map(|e| guide(figure.as_ref(), e, states))
             .collect();
         Self {
-            sketch,
-            outlines,
+            figure,
             guides,
             grounds,
         }
@@ -354,20 +353,20 @@ impl Scene {
     /// The model's bodies and elements.
     #[must_use]
     pub fn sketch(&self) -> &Sketch {
-        &self.sketch
+        self.figure.sketch()
     }
 
     /// The box around every body centre, joint point and ground point over
     /// the given states (the run: the view stays put while it plays).
     #[must_use]
     pub fn bounds(&self, states: &[Vec<f64>]) -> Bounds {
-        let s = &self.sketch;
+        let (f, s) = (&self.figure, self.sketch());
         let mut points: Vec<Point> = self.grounds.clone();
         for u in states {
-            points.extend(s.bodies.iter().map(|b| [u[b.x], u[b.x + 1]]));
-            for e in &s.elements {
+            points.extend((0..s.bodies.len()).map(|b| f.centre(b, u)));
+            for (i, e) in s.elements.iter().enumerate() {
                 let ends = if one_body(e.kind) { 1 } else { 2 };
-                points.extend(e.ends[..ends].iter().map(|a| s.position(a, u)));
+                points.extend((0..ends).map(|side| f.end(i, side, u)));
             }
         }
         Bounds::around(points).unwrap_or(Bounds {
@@ -391,16 +390,11 @@ impl Scene {
         out
     }
 
-    /// An attachment in pixels.
-    fn px(&self, at: &Attachment, u: &[f64], view: &View) -> Point {
-        view.px(self.sketch.position(at, u))
-    }
-
     fn guide_items(&self, u: &[f64], view: &View, out: &mut Vec<Item>) {
-        for (e, g) in self.sketch.elements.iter().zip(&self.guides) {
+        for (i, (e, g)) in self.sketch().elements.iter().zip(&self.guides).enumerate() {
             let Some(g) = g else { continue };
-            let a = self.sketch.position(&e.ends[0], u);
-            let d = rotate(g.local, angle(&self.sketch, &e.ends[0], u));
+            let a = self.figure.end(i, 0, u);
+            let d = rotate(g.local, self.figure.angle(&e.ends[0], u));
             let pad = 14.0 * view.unit / view.scale;
             let end = |s: f64| view.px([a[0] + s * d[0], a[1] + s * d[1]]);
             let mut style = Style::stroke(GUIDE, 1.5 * view.unit);
@@ -417,8 +411,9 @@ impl Scene {
     /// (`marks` true): joint circles and squares, drivers, forces.
     fn element_items(&self, u: &[f64], view: &View, marks: bool, out: &mut Vec<Item>) {
         let k = view.unit;
-        for e in &self.sketch.elements {
-            let [a, b] = e.ends.map(|end| self.px(&end, u, view));
+        let angle = |at: &Attachment| self.figure.angle(at, u);
+        for (i, e) in self.sketch().elements.iter().enumerate() {
+            let [a, b] = [0, 1].map(|side| view.px(self.figure.end(i, side, u)));
             // A joint's mark sits on its body's point (the ground's is marked).
             let on_body = if matches!(e.ends[0], Attachment::Ground(_)) {
                 b
@@ -428,14 +423,16 @@ impl Scene {
             match (e.kind, marks) {
                 ("spring-damper", false) => out.push(line(zigzag(a, b, COILS, 6.0 * k), 1.5 * k)),
                 ("rotational-spring-damper", false) => {
-                    let turn =
-                        angle(&self.sketch, &e.ends[1], u) - angle(&self.sketch, &e.ends[0], u);
+                    let turn = angle(&e.ends[1]) - angle(&e.ends[0]);
                     let span = (4.0 * std::f64::consts::PI + turn).clamp(1.0, 30.0);
-                    let start = angle(&self.sketch, &e.ends[1], u);
+                    let start = angle(&e.ends[1]);
                     out.push(line(spiral(b, 3.0 * k, 13.0 * k, start, span, 40), 1.5 * k));
                 }
                 ("distance", false) => out.push(line(vec![a, b], 2.0 * k)),
-                ("revolute", true) => out.push(ring(on_body, 4.5 * k, k)),
+                // With the spatial joints that keep a point on their axis.
+                ("revolute" | "spherical" | "universal" | "cylindrical", true) => {
+                    out.push(ring(on_body, 4.5 * k, k));
+                }
                 ("distance", true) => {
                     out.push(ring(a, 3.0 * k, k));
                     out.push(ring(b, 3.0 * k, k));
@@ -470,9 +467,9 @@ impl Scene {
     /// with its centre of mass as a dot; a filled circle (point mass).
     fn body_items(&self, u: &[f64], view: &View, out: &mut Vec<Item>) {
         let k = view.unit;
-        for (i, (body, outline)) in self.sketch.bodies.iter().zip(&self.outlines).enumerate() {
+        for (i, body) in self.sketch().bodies.iter().enumerate() {
             let colour = body_colour(i);
-            let centre = view.px([u[body.x], u[body.x + 1]]);
+            let centre = view.px(self.figure.centre(i, u));
             if !body.rigid {
                 out.push(Item {
                     shape: Shape::Circle(centre, 8.0 * k),
@@ -481,7 +478,8 @@ impl Scene {
                 });
                 continue;
             }
-            let shape = self.rigid_shape(i, outline, u, view);
+            let half = 8.0 * k / view.scale;
+            let shape = self.figure.outline(i, u, half).map(|p| view.px(p));
             let style = match shape {
                 Shape::Polygon(_) => Style::stroke(colour, 3.0 * k).with_fill(colour, 0.35),
                 _ => Style::stroke(colour, 7.0 * k),
@@ -498,50 +496,26 @@ impl Scene {
             });
         }
     }
-
-    /// A rigid body's shape through its outline: a bar for two points (or
-    /// from a single point to the centre of mass), a polygon for more; a
-    /// body attached only at its centre is a small square turning with it.
-    fn rigid_shape(&self, i: usize, outline: &[Point], u: &[f64], view: &View) -> Shape {
-        let at = |p: Point| self.px(&Attachment::Body { body: i, local: p }, u, view);
-        match outline {
-            [] | [[0.0, 0.0]] => {
-                let h = 8.0 * view.unit / view.scale;
-                Shape::Polygon([[-h, -h], [h, -h], [h, h], [-h, h]].map(at).to_vec())
-            }
-            [p] => Shape::Line(vec![at(*p), at([0.0, 0.0])]),
-            [_, _] => Shape::Line(outline.iter().map(|&p| at(p)).collect()),
-            _ => Shape::Polygon(outline.iter().map(|&p| at(p)).collect()),
-        }
-    }
 }
 
 /// The guide of a prismatic joint: its axis in a's frame (from the model)
 /// and b's travel along it over the run. None for other elements.
-fn guide(sketch: &Sketch, e: &SketchElement, states: &[Vec<f64>]) -> Option<Guide> {
-    let local = e.axis?;
+fn guide(figure: &dyn Figure, e: usize, states: &[Vec<f64>]) -> Option<Guide> {
+    let element = &figure.sketch().elements[e];
+    let local = element.axis?;
     let relative = |u: &Vec<f64>| {
-        let a = sketch.position(&e.ends[0], u);
-        let b = sketch.position(&e.ends[1], u);
-        rotate([b[0] - a[0], b[1] - a[1]], -angle(sketch, &e.ends[0], u))
+        let a = figure.end(e, 0, u);
+        let b = figure.end(e, 1, u);
+        rotate(
+            [b[0] - a[0], b[1] - a[1]],
+            -figure.angle(&element.ends[0], u),
+        )
     };
     let range = states.iter().map(relative).fold([0.0f64, 0.0f64], |r, p| {
         let s = p[0] * local[0] + p[1] * local[1];
         [r[0].min(s), r[1].max(s)]
     });
     Some(Guide { local, range })
-}
-
-/// The angle of an attachment's body (0 for the ground and point masses).
-fn angle(sketch: &Sketch, at: &Attachment, u: &[f64]) -> f64 {
-    match *at {
-        Attachment::Body { body, .. } => sketch
-            .bodies
-            .get(body)
-            .filter(|b| b.rigid)
-            .map_or(0.0, |b| u[b.x + 2]),
-        Attachment::Ground(_) => 0.0,
-    }
 }
 
 fn rotate(p: Point, theta: f64) -> Point {
@@ -605,6 +579,7 @@ fn ground_symbol(g: Point, k: f64, out: &mut Vec<Item>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::animate::figure::PlanarFigure;
     use mstar::planar::{At, PlanarBuilder, PointMass, RigidBody, SpringDamper};
 
     /// A plate hinged to the ground with a third point, a bob on a rod from
@@ -670,7 +645,10 @@ mod tests {
         // Any state, not only the initial one.
         u[2] = 1.1;
         u[0] = 0.7;
-        let scene = Scene::new(sketch.clone(), std::slice::from_ref(&u));
+        let scene = Scene::new(
+            Box::new(PlanarFigure::new(sketch.clone())),
+            std::slice::from_ref(&u),
+        );
         let view = View::fit(scene.bounds(std::slice::from_ref(&u)), 640, 480);
         let items = scene.items(&u, &view);
         let plate: Vec<&Item> = items.iter().filter(|i| i.body == Some(0)).collect();
@@ -705,7 +683,10 @@ mod tests {
     #[test]
     fn the_zigzag_spans_the_spring() {
         let (sketch, u) = model();
-        let scene = Scene::new(sketch.clone(), std::slice::from_ref(&u));
+        let scene = Scene::new(
+            Box::new(PlanarFigure::new(sketch.clone())),
+            std::slice::from_ref(&u),
+        );
         let view = View::fit(scene.bounds(std::slice::from_ref(&u)), 320, 240);
         let spring = &sketch.elements[3];
         assert_eq!(spring.kind, "spring-damper");
@@ -764,7 +745,7 @@ mod tests {
         v[2] += 2.0;
         v[3] -= 0.3;
         let states = [u.clone(), v.clone()];
-        let scene = Scene::new(sketch, &states);
+        let scene = Scene::new(Box::new(PlanarFigure::new(sketch)), &states);
         let view = View::fit(scene.bounds(&states), 640, 480);
         let (a, b) = (scene.items(&u, &view), scene.items(&v, &view));
         assert_eq!(a.len(), b.len());
