@@ -485,25 +485,33 @@ pub trait ModelLookup: System {
     fn pose_keys(&self) -> &'static str;
 }
 
+/// The [`ModelLookup`] methods that planar and spatial systems have as
+/// inherent methods of the same names and meanings.
+macro_rules! forward_lookup {
+    () => {
+        fn initial_position(&self) -> Vec<f64> {
+            Self::initial_position(self)
+        }
+        fn initial_velocity(&self) -> Vec<f64> {
+            Self::initial_velocity(self)
+        }
+        fn constraint_owner(&self, row: usize) -> Option<&str> {
+            Self::constraint_owner(self, row)
+        }
+        fn joint_names(&self) -> Vec<&str> {
+            Self::joint_names(self).collect()
+        }
+        fn is_driver(&self, name: &str) -> Option<bool> {
+            Self::is_driver(self, name)
+        }
+        fn joint_rows(&self, name: &str) -> Option<std::ops::Range<usize>> {
+            Self::joint_rows(self, name)
+        }
+    };
+}
+
 impl ModelLookup for PlanarSystem {
-    fn initial_position(&self) -> Vec<f64> {
-        Self::initial_position(self)
-    }
-    fn initial_velocity(&self) -> Vec<f64> {
-        Self::initial_velocity(self)
-    }
-    fn constraint_owner(&self, row: usize) -> Option<&str> {
-        Self::constraint_owner(self, row)
-    }
-    fn joint_names(&self) -> Vec<&str> {
-        Self::joint_names(self).collect()
-    }
-    fn is_driver(&self, name: &str) -> Option<bool> {
-        Self::is_driver(self, name)
-    }
-    fn joint_rows(&self, name: &str) -> Option<std::ops::Range<usize>> {
-        Self::joint_rows(self, name)
-    }
+    forward_lookup!();
     fn reaction_components(&self) -> &'static [&'static str] {
         &["fx", "fy", "tau"]
     }
@@ -519,24 +527,7 @@ impl ModelLookup for PlanarSystem {
 }
 
 impl ModelLookup for SpatialSystem {
-    fn initial_position(&self) -> Vec<f64> {
-        Self::initial_position(self)
-    }
-    fn initial_velocity(&self) -> Vec<f64> {
-        Self::initial_velocity(self)
-    }
-    fn constraint_owner(&self, row: usize) -> Option<&str> {
-        Self::constraint_owner(self, row)
-    }
-    fn joint_names(&self) -> Vec<&str> {
-        Self::joint_names(self).collect()
-    }
-    fn is_driver(&self, name: &str) -> Option<bool> {
-        Self::is_driver(self, name)
-    }
-    fn joint_rows(&self, name: &str) -> Option<std::ops::Range<usize>> {
-        Self::joint_rows(self, name)
-    }
+    forward_lookup!();
     fn reaction_components(&self) -> &'static [&'static str] {
         &["fx", "fy", "fz", "tx", "ty", "tz"]
     }

@@ -14,8 +14,6 @@ use crate::planar::{
 /// The one format version this reader knows.
 pub const FORMAT: &str = "mstar.planar/1";
 
-/// The reserved name of the fixed frame.
-
 /// A named body of the model, as joints and forces refer to it.
 #[derive(Clone, Copy, Debug)]
 struct Placed {

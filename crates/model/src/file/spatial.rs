@@ -18,8 +18,6 @@ use crate::spatial::{
 /// The format version of spatial model files.
 pub const FORMAT: &str = "mstar.spatial/1";
 
-/// The reserved name of the fixed frame.
-
 /// How far from 1 the norm of a given orientation may be without a warning.
 const NORM_WARNING: f64 = 1e-12;
 
@@ -230,15 +228,7 @@ impl<'a> Model<'a> {
     /// A `[[joint]]`.
     fn joint(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
         let (mut f, name) = self.named(node, what, "joint")?;
-        let kinds = [
-            JointType::Spherical,
-            JointType::Revolute,
-            JointType::Prismatic,
-            JointType::Cylindrical,
-            JointType::Universal,
-            JointType::Weld,
-            JointType::Distance,
-        ];
+        let kinds = JointType::ALL;
         let names = kinds.map(JointType::name);
         let kind = f.required("type", choice(&names))?;
         let kind = kinds[names.iter().position(|n| *n == kind).expect("a choice")];

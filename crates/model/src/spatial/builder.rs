@@ -106,6 +106,17 @@ pub enum JointType {
 }
 
 impl JointType {
+    /// Every joint type, in the order of the documentation.
+    pub const ALL: [Self; 7] = [
+        Self::Spherical,
+        Self::Revolute,
+        Self::Prismatic,
+        Self::Cylindrical,
+        Self::Universal,
+        Self::Weld,
+        Self::Distance,
+    ];
+
     /// The name model files use.
     #[must_use]
     pub fn name(self) -> &'static str {

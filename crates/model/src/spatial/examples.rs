@@ -8,16 +8,6 @@ use super::builder::{
 use super::{SpatialBody, SpatialInertia, SpatialPointMass, SpatialSystem, euler_parameters};
 use crate::planar::TimeFunction;
 
-const JOINTS: [JointType; 7] = [
-    JointType::Spherical,
-    JointType::Revolute,
-    JointType::Prismatic,
-    JointType::Cylindrical,
-    JointType::Universal,
-    JointType::Weld,
-    JointType::Distance,
-];
-
 /// Every joint, driver and load of the spatial layer between two rigid
 /// bodies, the ground and a rigid body, and (where it takes points only) a
 /// rigid body and a point mass; with singular and regularized rotational
@@ -63,7 +53,7 @@ pub fn element_examples(params: &[f64]) -> Vec<(String, SpatialSystem)> {
             let points = [v3(12), if pair == 2 { [0.0; 3] } else { v3(15) }];
             // Axes away from zero (a zero axis is an error).
             let axes = [v3(18), v3(21)].map(|a| [a[0] + 1.5, a[1], a[2]]);
-            for kind in JOINTS {
+            for kind in JointType::ALL {
                 if pair == 2 && (kind.uses_axes() || kind == JointType::Weld) {
                     continue;
                 }
