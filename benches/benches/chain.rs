@@ -7,6 +7,11 @@
 //! structure it asks for (Schur complement on the unaugmented matrix; LDLᵀ
 //! and LU of the augmented KKT matrix with `M*`, LU up to N = 10⁴).
 //!
+//! `chain/spatial`: the spatial bar chain of `mstar chain --kind spatial-bars`
+//! (solid cylinders in Euler parameters on spherical joints) at the command's
+//! default settings (full Newton, ρ∞ = 0.9, tolerance 1e-10), one thread, N up
+//! to 10⁵, with few samples at large N.
+//!
 //! Besides criterion's estimates it writes `target/studies/bench/counts.csv`
 //! (Newton iterations and factorizations per step, peak memory) for
 //! `cargo xtask bench`. Set `MSTAR_BENCH_MAX_N` to limit the largest chain
@@ -19,13 +24,34 @@ use std::time::{Duration, Instant};
 /// Step size and the end of the timed interval, s.
 const H: f64 = 1e-3;
 const T_END: f64 = 1.0;
+/// An end time no benchmark reaches: each `step(FAR)` is one step of size h
+/// (`Integrator::step` needs a finite end).
+const FAR: f64 = 1e9;
 
 use criterion::measurement::WallTime;
 use criterion::{BenchmarkGroup, BenchmarkId, Criterion, criterion_group, criterion_main};
 use mstar::kkt::{Backend, KktOptions, KktSolver};
 use mstar::linearize::{Coefficients, Linearization};
+use mstar::model::spatial::{RotationalMass, SpatialSystem, spatial_bar_chain};
 use mstar::planar::{PlanarSystem, bar_chain};
-use mstar::{Config, Integrator, Newton, Sample, Scheme};
+use mstar::{Config, Integrator, Newton, Sample, Scheme, System};
+
+/// A chain model and its initial state.
+trait Chain: System {
+    fn start(&self) -> (Vec<f64>, Vec<f64>);
+}
+
+impl Chain for PlanarSystem {
+    fn start(&self) -> (Vec<f64>, Vec<f64>) {
+        (self.initial_position(), self.initial_velocity())
+    }
+}
+
+impl Chain for SpatialSystem {
+    fn start(&self) -> (Vec<f64>, Vec<f64>) {
+        (self.initial_position(), self.initial_velocity())
+    }
+}
 
 fn config() -> Config {
     Config {
@@ -62,11 +88,11 @@ fn warmed(sys: &PlanarSystem, warm: usize) -> Integrator<'_, PlanarSystem> {
 }
 
 /// [`warmed`] with another configuration.
-fn warmed_with(sys: &PlanarSystem, warm: usize, config: Config) -> Integrator<'_, PlanarSystem> {
-    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+fn warmed_with<S: Chain>(sys: &S, warm: usize, config: Config) -> Integrator<'_, S> {
+    let (u0, v0) = sys.start();
     let mut integ = Integrator::new(sys, config, 0.0, &u0, &v0).expect("start");
     for _ in 0..warm {
-        integ.step(f64::INFINITY).expect("step");
+        integ.step(FAR).expect("step");
     }
     integ
 }
@@ -92,9 +118,9 @@ fn two_threads() -> rayon::ThreadPool {
 /// restarted (untimed) whenever it reaches `T_END`, so every timed step lies
 /// in (0.02 s, `T_END`] of the 1 s run and not in the violent whips
 /// of a long chain much later.
-fn timed_steps<'a>(
-    integ: &mut Integrator<'a, PlanarSystem>,
-    sys: &'a PlanarSystem,
+fn timed_steps<'a, S: Chain>(
+    integ: &mut Integrator<'a, S>,
+    sys: &'a S,
     config: &Config,
     iters: u64,
 ) -> Duration {
@@ -107,7 +133,7 @@ fn timed_steps<'a>(
         let k = left.min(iters - done);
         let start = Instant::now();
         for _ in 0..k {
-            integ.step(f64::INFINITY).expect("step");
+            integ.step(FAR).expect("step");
         }
         total += start.elapsed();
         done += k;
@@ -151,7 +177,7 @@ fn steps(c: &mut Criterion) {
         let before = integ.stats();
         let k = 100;
         for _ in 0..k {
-            integ.step(f64::INFINITY).expect("step");
+            integ.step(FAR).expect("step");
         }
         let after = integ.stats();
         let _ = writeln!(
@@ -167,6 +193,35 @@ fn steps(c: &mut Criterion) {
     if std::fs::create_dir_all(&dir).is_ok() {
         let _ = std::fs::write(dir.join("counts.csv"), counts);
     }
+}
+
+/// The configuration of `mstar chain` (its defaults: h = 1e-3, full Newton,
+/// generalized-α ρ∞ = 0.9, tolerance 1e-10).
+fn chain_command_config() -> Config {
+    Config {
+        h: H,
+        newton: Newton::Full,
+        ..Config::default()
+    }
+}
+
+/// Steps of the spatial bar chain at `mstar chain`'s defaults, one thread.
+fn spatial(c: &mut Criterion) {
+    one_thread_globally();
+    let config = chain_command_config();
+    let mut group = c.benchmark_group("chain/spatial");
+    for n in sizes() {
+        let sys = spatial_bar_chain(n, RotationalMass::Regularized);
+        let large = n >= 10_000;
+        group.sample_size(10);
+        group.warm_up_time(Duration::from_secs(if large { 1 } else { 2 }));
+        group.measurement_time(Duration::from_secs(if large { 8 } else { 3 }));
+        let mut integ = warmed_with(&sys, 20, config.clone());
+        group.bench_with_input(BenchmarkId::from_parameter(n), &n, |b, _| {
+            b.iter_custom(|iters| timed_steps(&mut integ, &sys, &config, iters));
+        });
+    }
+    group.finish();
 }
 
 fn phases(c: &mut Criterion) {
@@ -270,5 +325,5 @@ fn solver_phases(
     });
 }
 
-criterion_group!(benches, steps, phases);
+criterion_group!(benches, steps, spatial, phases);
 criterion_main!(benches);

@@ -39,6 +39,10 @@ Usage:
     python3 benches/exudyn/spatial_chain.py --tip            # only "tip x y z" (N = 10, t = 1 s)
     python3 benches/exudyn/spatial_chain.py --json           # JSON lines on stdout, rest on stderr
     python3 benches/exudyn/spatial_chain.py --selfcheck      # N = 1 against a scalar RK4 pendulum
+    python3 benches/exudyn/spatial_chain.py --sizes 1000 --mstar target/debug/mstar
+        # side by side: after each size's Exudyn runs, the same chain (same N,
+        # h, rho_inf, tolerance, end time) through `mstar chain --kind
+        # spatial-bars` on one thread, best of --repeats, and the ratio
 """
 
 import argparse
@@ -88,6 +92,11 @@ parser.add_argument("--sparse-from", type=int, default=30,
 parser.add_argument("--big-limit", type=float, default=60.0,
                     help="run N = 10000 only if one run of N = 1000 (100 steps) takes less "
                          "than this many s (default 60)")
+parser.add_argument("--mstar", metavar="PATH",
+                    help="also run the mstar binary at PATH on every size (mstar chain --kind "
+                         "spatial-bars, same N, h, rho_inf, tol and end time, RAYON_NUM_THREADS=1, "
+                         "full Newton as mstar chain's default) and print the time ratio "
+                         "Exudyn / mstar")
 args = parser.parse_args()
 
 if args.fast:
@@ -349,6 +358,50 @@ def selfcheck():
     return worst
 
 
+def run_mstar(n, t_end):
+    """One run of `mstar chain --kind spatial-bars` on the settings of this
+    script; returns its µs/step, Newton iterations/step and tip (x, y, z)."""
+    import re
+    import subprocess
+    cmd = [args.mstar, "chain", "--kind", "spatial-bars", "--links", str(n),
+           "--t-end", repr(t_end), "--h", repr(args.h), "--rho", repr(args.rho),
+           "--tol", repr(args.tol)]
+    env = dict(os.environ, RAYON_NUM_THREADS="1")
+    out = subprocess.run(cmd, env=env, check=True, capture_output=True, text=True).stdout
+    step = re.search(r"time per step: ([0-9.]+) µs", out)
+    newton = re.search(r"Newton iterations: \d+ \(([0-9.]+) per step", out)
+    tip = re.search(r"x = (\S+) m, y = (\S+) m, z = (\S+) m", out)
+    if not (step and newton and tip):
+        raise RuntimeError("unexpected output of %s:\n%s" % (" ".join(cmd), out))
+    return {'us_per_step': float(step.group(1)), 'newton': float(newton.group(1)),
+            'tip': tuple(float(tip.group(k)) for k in (1, 2, 3)), 'command': " ".join(cmd)}
+
+
+def best_mstar(n, t_end):
+    """The fastest of --repeats runs of mstar at size n."""
+    best = None
+    for _ in range(args.repeats):
+        wait_quiet()
+        r = run_mstar(n, t_end)
+        if best is None or r['us_per_step'] < best['us_per_step']:
+            best = r
+    say("  N = %6d mstar: %.1f µs/step, %.2f Newton it./step (%s)"
+        % (n, best['us_per_step'], best['newton'], best['command']))
+    return best
+
+
+def side_by_side_table(rows, mstar_rows):
+    """Exudyn and mstar per body-step on the same chains, and the ratio."""
+    lines = ["| N | Exudyn µs/body/step | mstar µs/body/step | Exudyn / mstar | tip x (Exudyn) | tip x (mstar) |",
+             "|---:|---:|---:|---:|---:|---:|"]
+    for (n, r), m in zip(rows, mstar_rows):
+        exu_us = r['wall'] / r['steps'] * 1e6 / n
+        ms_us = m['us_per_step'] / n
+        lines.append("| %d | %.3f | %.3f | %.1f | %.9f | %.9f |"
+                     % (n, exu_us, ms_us, exu_us / ms_us, r['tip'][0], m['tip'][0]))
+    return "\n".join(lines)
+
+
 def markdown_table(rows):
     lines = ["| N | steps | µs/step | µs/body/step | Newton/step | Jac/step | rejected | linear solver |",
              "|---:|---:|---:|---:|---:|---:|---:|---|"]
@@ -382,7 +435,7 @@ def main():
         % ((r['t_final'],) + r['tip']))
 
     sizes = list(args.sizes)
-    rows = []
+    rows, mstar_rows = [], []
     i = 0
     while i < len(sizes):
         n = sizes[i]
@@ -398,6 +451,8 @@ def main():
             if best is None or r['wall'] < best['wall']:
                 best = r
         rows.append((n, best))
+        if args.mstar:
+            mstar_rows.append(best_mstar(n, t_end))
         if args.json:
             us_step = best['wall'] / best['steps'] * 1e6
             print(json.dumps({'n': n, 'steps': best['steps'], 'us_per_step': us_step,
@@ -414,6 +469,12 @@ def main():
         % (exu.__version__, exu._compiledModuleName, args.rho, args.h, args.tol))
     say()
     say(markdown_table(rows))
+    if args.mstar:
+        say()
+        say("side by side (same N, h, rho_inf, tol, end time; one thread each; best of %d):"
+            % args.repeats)
+        say()
+        say(side_by_side_table(rows, mstar_rows))
 
     if args.phases:
         say()

@@ -3,7 +3,8 @@
 //!
 //! Runs `cargo bench -p mstar-benches --bench chain`, then reads criterion's
 //! median estimates (`target/criterion/chain_step/<N>/new/estimates.json`, and
-//! the per-phase ones) and the counts the benchmark writes
+//! the per-phase ones, and the spatial chain's `chain_spatial/<N>`) and the
+//! counts the benchmark writes
 //! (`target/studies/bench/counts.csv`).
 
 use std::path::Path;
@@ -98,6 +99,9 @@ fn report(out: &Path) -> Result<()> {
     table.write_csv(&out.join("bench.csv"))?;
     phases.print();
     phases.write_csv(&out.join("phases.csv"))?;
+    let spatial = spatial_table();
+    spatial.print();
+    spatial.write_csv(&out.join("spatial.csv"))?;
     draw_figures("bench", out, &[("chain.png".to_string(), curves.panels())])?;
     Ok(())
 }
@@ -121,6 +125,25 @@ fn step_table() -> Table {
             "peak MiB",
         ],
     )
+}
+
+/// The spatial bar chain (`chain/spatial`, `mstar chain --kind spatial-bars`
+/// at the command's defaults), one row per N that ran.
+fn spatial_table() -> Table {
+    let mut table = Table::new(
+        "spatial chain of N solid cylinders on spherical joints (Euler parameters), h = 1e-3, generalized-α ρ∞ = 0.9, tol 1e-10, full Newton, Schur, one thread",
+        &["N", "µs/step", "µs/body/step"],
+    );
+    for n in [10, 100, 1_000, 10_000, 100_000] {
+        if let Some(step) = median_us(&format!("chain_spatial/{n}")) {
+            table.row(vec![
+                n.to_string(),
+                format!("{step:.1}"),
+                format!("{:.3}", step / n as f64),
+            ]);
+        }
+    }
+    table
 }
 
 /// The empty phase table, one row per N to come.

@@ -36,6 +36,7 @@
 //! factorization, the solves and the products.
 
 mod analyse;
+mod blocks;
 
 use crate::backend::{Backend, KktBackend, Registration, Structure};
 use crate::envelope::EnvelopeLdlt;
@@ -328,45 +329,44 @@ impl Schur {
         Ok(())
     }
 
-    /// General blocks: dense `S_K⁻¹`, `W = B_K S_K⁻¹`, `C += W B_Kᵀ`.
+    /// General blocks: dense `S_K⁻¹`, `W = B_K S_K⁻¹`, `C += W B_Kᵀ`
+    /// ([`blocks::factor_block`], fixed-size for small blocks).
     fn factor_blocks(&mut self, values: &[f64]) -> Result<(), KktError> {
         let c_values = self.cf.values_mut();
+        let mut scratch = blocks::Scratch {
+            block: &mut self.block,
+            bk: &mut self.bk,
+            w: &mut self.w,
+        };
         for b in &self.blocks {
             let k = b.coords.len();
-            let blk = &mut self.block[..k * k];
-            blk.fill(0.0);
-            for &(p, i, j) in &self.s_entries[b.s_entries.clone()] {
-                blk[i * k + j] += values[p];
-            }
+            let lists = blocks::Lists {
+                s_entries: &self.s_entries[b.s_entries.clone()],
+                b_entries: &self.b_entries[b.b_entries.clone()],
+                pairs: &self.pairs[b.pairs.clone()],
+                n_rows: b.n_rows,
+            };
             let inv = &mut self.inverse[b.inverse..b.inverse + k * k];
-            invert(blk, inv, k).map_err(|l| KktError::Singular {
-                unknown: Some(self.coords[b.coords.start + l]),
-            })?;
-            let nr = b.n_rows;
-            let bk = &mut self.bk[..nr * k];
-            bk.fill(0.0);
-            for &(p, r, j) in &self.b_entries[b.b_entries.clone()] {
-                bk[r * k + j] += values[p];
-            }
-            let w = &mut self.w[..nr * k];
-            for r in 0..nr {
-                for l in 0..k {
-                    w[r * k + l] = (0..k).map(|j| bk[r * k + j] * inv[j * k + l]).sum();
+            blocks::factor_block(k, &lists, values, inv, &mut scratch, c_values).map_err(|l| {
+                KktError::Singular {
+                    unknown: Some(self.coords[b.coords.start + l]),
                 }
-            }
-            for &(r, s, slot) in &self.pairs[b.pairs.clone()] {
-                let (r, s) = (usize::from(r), usize::from(s));
-                let v: f64 = (0..k).map(|l| w[r * k + l] * bk[s * k + l]).sum();
-                c_values[slot as usize] += v;
-            }
+            })?;
         }
         Ok(())
     }
 
-    /// The entries of `S` of the last factorization as `(row, column, value)`
-    /// in global unknowns.
-    fn s_global(&self) -> impl Iterator<Item = (usize, usize, f64)> + '_ {
-        s_global(&self.blocks, &self.coords, &self.s_entries, &self.s_values)
+    /// `f(row, column, value)` for every entry of `S` of the last
+    /// factorization in global unknowns (it runs in every
+    /// residual check: plain loops, no iterator adaptors).
+    fn for_each_s(&self, f: impl FnMut(usize, usize, f64)) {
+        for_each_s(
+            &self.blocks,
+            &self.coords,
+            &self.s_entries,
+            &self.s_values,
+            f,
+        );
     }
 
     /// `y = A x` for the last factored matrix, from the compact copies of
@@ -381,9 +381,7 @@ impl Schur {
                 *yj = s * xj;
             }
         } else {
-            for (i, j, v) in self.s_global() {
-                yp[i] += v * xp[j];
-            }
+            self.for_each_s(|i, j, v| yp[i] += v * xp[j]);
         }
         for j in 0..n {
             let (mut acc, xj) = (yp[j], xp[j]);
@@ -413,9 +411,9 @@ impl Schur {
                 *w += s.abs();
             }
         } else {
-            for (i, _, v) in s_global(&self.blocks, &self.coords, &self.s_entries, &self.s_values) {
-                wp[i] += v.abs();
-            }
+            let (blocks, coords) = (&self.blocks, &self.coords);
+            let (entries, values) = (&self.s_entries, &self.s_values);
+            for_each_s(blocks, coords, entries, values, |i, _, v| wp[i] += v.abs());
         }
         for (&(_, r, _), &v) in self.d_all.iter().zip(&self.d_values) {
             wm[r] += v.abs();
@@ -591,13 +589,9 @@ impl Schur {
             return;
         }
         for b in &self.blocks {
-            let coords = &self.coords[b.coords.clone()];
-            let k = coords.len();
+            let k = b.coords.len();
             let inv = &self.inverse[b.inverse..b.inverse + k * k];
-            for (i, &ci) in coords.iter().enumerate() {
-                let row = &inv[i * k..(i + 1) * k];
-                self.x[ci] = row.iter().zip(coords).map(|(a, &cj)| a * f[cj]).sum();
-            }
+            blocks::apply_block(&self.coords[b.coords.clone()], inv, f, &mut self.x);
         }
     }
 }
@@ -632,19 +626,20 @@ fn range(ptr: &[u32], j: usize) -> std::ops::Range<usize> {
 
 /// The entries of block-diagonal `S` as `(row, column, value)` in global
 /// unknowns (free function so that callers may hold other fields mutably).
-fn s_global<'a>(
-    blocks: &'a [Block],
-    coords: &'a [usize],
-    s_entries: &'a [(usize, usize, usize)],
-    s_values: &'a [f64],
-) -> impl Iterator<Item = (usize, usize, f64)> + 'a {
-    blocks.iter().flat_map(move |b| {
+fn for_each_s(
+    blocks: &[Block],
+    coords: &[usize],
+    s_entries: &[(usize, usize, usize)],
+    s_values: &[f64],
+    mut f: impl FnMut(usize, usize, f64),
+) {
+    for b in blocks {
         let local = &coords[b.coords.clone()];
-        s_entries[b.s_entries.clone()]
-            .iter()
-            .zip(&s_values[b.s_entries.clone()])
-            .map(move |(&(_, i, j), &v)| (local[i], local[j], v))
-    })
+        let entries = &s_entries[b.s_entries.clone()];
+        for (&(_, i, j), &v) in entries.iter().zip(&s_values[b.s_entries.clone()]) {
+            f(local[i], local[j], v);
+        }
+    }
 }
 
 /// `C` and how it is factored.
@@ -711,53 +706,6 @@ impl CFactor {
             Self::Sparse { ldlt, .. } => ldlt.solve_in_place(y),
         }
     }
-}
-
-/// Inverts the row-major `k × k` matrix `a` (destroyed) into `inv` by
-/// Gauss–Jordan elimination with partial pivoting. A pivot at most `k ε` times
-/// the largest entry of its column is taken for zero: `Err(local column)`.
-fn invert(a: &mut [f64], inv: &mut [f64], k: usize) -> Result<(), usize> {
-    inv.fill(0.0);
-    for i in 0..k {
-        inv[i * k + i] = 1.0;
-    }
-    let eps = (k as f64) * f64::EPSILON;
-    for col in 0..k {
-        let scale = (0..k).fold(0.0f64, |s, i| s.max(a[i * k + col].abs()));
-        let (mut p, mut best) = (col, a[col * k + col].abs());
-        for i in col + 1..k {
-            let v = a[i * k + col].abs();
-            if v > best {
-                (p, best) = (i, v);
-            }
-        }
-        if best <= eps * scale || best == 0.0 {
-            return Err(col);
-        }
-        if p != col {
-            for j in 0..k {
-                a.swap(p * k + j, col * k + j);
-                inv.swap(p * k + j, col * k + j);
-            }
-        }
-        let d = 1.0 / a[col * k + col];
-        for j in 0..k {
-            a[col * k + j] *= d;
-            inv[col * k + j] *= d;
-        }
-        for i in 0..k {
-            if i != col {
-                let f = a[i * k + col];
-                if f != 0.0 {
-                    for j in 0..k {
-                        a[i * k + j] -= f * a[col * k + j];
-                        inv[i * k + j] -= f * inv[col * k + j];
-                    }
-                }
-            }
-        }
-    }
-    Ok(())
 }
 
 #[cfg(test)]

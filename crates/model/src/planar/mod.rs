@@ -143,7 +143,7 @@ const PARALLEL_CHUNK: usize = 2048;
 
 /// Splits `x` into consecutive parts starting at `bases` (the first part at 0
 /// whatever the first base says; bases ascending).
-fn split_at_bases(x: &mut [f64], bases: impl Iterator<Item = usize>) -> Vec<&mut [f64]> {
+pub(crate) fn split_at_bases(x: &mut [f64], bases: impl Iterator<Item = usize>) -> Vec<&mut [f64]> {
     let mut parts = Vec::new();
     let (mut rest, mut at) = (x, 0);
     for base in bases.skip(1) {

@@ -58,11 +58,23 @@ impl Inertia {
     }
 
     /// `k Aᵀ J' B` for 3 × 4 matrices `A`, `B`, added to `out` (row-major).
+    /// `J' B` is formed once (3 × 4), and `out` taken as a fixed 16 values so
+    /// that the loops unroll without bounds checks (it runs four times per
+    /// body and Newton iteration); the sums are in the same order as
+    /// `j_times`, so the values do not depend on this layout.
+    #[inline]
     fn add_gjg(&self, a: &[[f64; 4]; 3], b: &[[f64; 4]; 3], k: f64, out: &mut [f64]) {
-        for c in 0..4 {
-            let jb = self.j_times([b[0][c], b[1][c], b[2][c]]);
-            for r in 0..4 {
-                out[4 * r + c] += k * (a[0][r] * jb[0] + a[1][r] * jb[1] + a[2][r] * jb[2]);
+        let Some(out) = out.first_chunk_mut::<16>() else {
+            unreachable!("a 4 × 4 block has 16 values");
+        };
+        let j = &self.j;
+        let jb: [[f64; 4]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|c| j[i][0] * b[0][c] + j[i][1] * b[1][c] + j[i][2] * b[2][c])
+        });
+        for r in 0..4 {
+            for c in 0..4 {
+                out[4 * r + c] +=
+                    k * (a[0][r] * jb[0][c] + a[1][r] * jb[1][c] + a[2][r] * jb[2][c]);
             }
         }
     }

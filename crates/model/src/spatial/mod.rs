@@ -23,6 +23,7 @@ mod evaluate;
 mod examples;
 mod frame;
 mod joints;
+mod kernel;
 mod loads;
 pub(crate) mod real;
 mod rotation;

@@ -10,11 +10,21 @@ use super::evaluate::{
 };
 use super::frame::D28;
 use super::joints::SpatialJoint;
+use super::kernel::{JointLayout, SphericalKernel};
 use super::loads::SpatialLoad;
 use super::real::{Jet, Real, TIME};
 use super::rotation::rates_of_omega;
 use super::spherical;
+use crate::planar::split_at_bases;
 use crate::{Pattern, System};
+use rayon::prelude::*;
+
+/// A chunk of spherical kernels and where its output starts: global row, `B`
+/// value, Hessian value.
+type Part<'a> = (&'a [SphericalKernel], (usize, usize, usize));
+
+/// Spherical joints per parallel task.
+const PARALLEL_CHUNK: usize = 2048;
 
 /// A body as assembled.
 #[derive(Clone, Debug)]
@@ -152,6 +162,10 @@ pub struct SpatialSystem {
     /// Offsets of the normalization rows' entries in `B`.
     norm_b_off: usize,
     norm_h_off: usize,
+    /// Spherical joints (the bulk of chains), evaluated by their kernels.
+    spherical: Vec<SphericalKernel>,
+    /// Indices of the other joints (the generic path).
+    others: Vec<usize>,
 }
 
 #[derive(Clone, Debug)]
@@ -232,9 +246,120 @@ impl SpatialSystem {
             symmetric_tangent: false,
             norm_b_off: 0,
             norm_h_off: 0,
+            spherical: Vec::new(),
+            others: Vec::new(),
         };
         sys.build_patterns();
+        sys.build_kernels();
         sys
+    }
+
+    /// Sorts the joints into [`SphericalKernel`]s and the rest.
+    fn build_kernels(&mut self) {
+        let (mut spherical, mut others) = (Vec::new(), Vec::new());
+        for (i, j) in self.joints.iter().enumerate() {
+            let kernel = j.element.spherical_points().and_then(|points| {
+                SphericalKernel::new(&JointLayout {
+                    sides: j
+                        .sides
+                        .map(|s| s.map(|b| (self.bodies[b].x, self.bodies[b].count()))),
+                    points,
+                    row0: j.row0,
+                    b_off: j.b_off,
+                    h_off: j.h_off,
+                    b_local: &j.b_local,
+                    h_local: &j.h_local,
+                })
+            });
+            match kernel {
+                Some(k) => spherical.push(k),
+                None => others.push(i),
+            }
+        }
+        (self.spherical, self.others) = (spherical, others);
+    }
+
+    /// The same system with every joint evaluated by the generic element
+    /// path (no [`SphericalKernel`]): the reference the fast path is tested
+    /// against. The values agree to the bit.
+    #[must_use]
+    pub fn with_generic_joints(mut self) -> Self {
+        self.spherical.clear();
+        self.others = (0..self.joints.len()).collect();
+        self
+    }
+
+    /// The spherical kernels in chunks for rayon, each with the global row,
+    /// `B` value and Hessian value at which its output part starts (0 for the
+    /// first chunk); empty when the work is sequential: fewer than two
+    /// chunks' worth of joints, or one thread in rayon's current pool (as the
+    /// planar chains).
+    fn parallel_parts(&self) -> Vec<Part<'_>> {
+        let threads = rayon::current_num_threads();
+        if threads < 2 || self.spherical.len() < 2 * PARALLEL_CHUNK {
+            return Vec::new();
+        }
+        let size = self
+            .spherical
+            .len()
+            .div_ceil(4 * threads)
+            .max(PARALLEL_CHUNK);
+        self.spherical
+            .chunks(size)
+            .enumerate()
+            .map(|(i, ks)| (ks, if i == 0 { (0, 0, 0) } else { ks[0].offsets() }))
+            .collect()
+    }
+
+    /// `Φ` and `B` of the spherical kernels, in parallel chunks when
+    /// [`parallel_parts`](Self::parallel_parts) gives them. Each kernel
+    /// writes only its own rows and values, so the parts never overlap.
+    fn kernels_phi_b(&self, u: &[f64], phi: &mut [f64], b: &mut [f64]) {
+        let parts = self.parallel_parts();
+        if parts.is_empty() {
+            for k in &self.spherical {
+                k.phi_b(u, phi, b, (0, 0));
+            }
+            return;
+        }
+        let phi_parts = split_at_bases(phi, parts.iter().map(|p| p.1.0));
+        let b_parts = split_at_bases(b, parts.iter().map(|p| p.1.1));
+        parts
+            .into_par_iter()
+            .zip(phi_parts)
+            .zip(b_parts)
+            .for_each(|(((ks, base), phi), b)| {
+                for k in ks {
+                    k.phi_b(u, phi, b, (base.0, base.1));
+                }
+            });
+    }
+
+    /// The spherical kernels' Hessian values, in parallel chunks as
+    /// [`kernels_phi_b`](Self::kernels_phi_b).
+    fn kernels_hessian(&self, mu: &[f64], out: &mut [f64]) {
+        let parts = self.parallel_parts();
+        if parts.is_empty() {
+            for k in &self.spherical {
+                k.hessian(mu, out, 0);
+            }
+            return;
+        }
+        let out_parts = split_at_bases(out, parts.iter().map(|p| p.1.2));
+        parts
+            .into_par_iter()
+            .zip(out_parts)
+            .for_each(|((ks, base), out)| {
+                for k in ks {
+                    k.hessian(mu, out, base.2);
+                }
+            });
+    }
+
+    /// How many joints run through the fast spherical kernel.
+    #[must_use]
+    pub fn kernel_joints(&self) -> usize {
+        self.spherical.len()
     }
 
     fn rigid_blocks(&self) -> impl Iterator<Item = (usize, &BodyData)> {
@@ -616,7 +741,8 @@ impl System for SpatialSystem {
     }
 
     fn hessian_into(&self, t: f64, u: &[f64], mu: &[f64], out: &mut [f64]) {
-        for j in &self.joints {
+        self.kernels_hessian(mu, out);
+        for j in self.others.iter().map(|&i| &self.joints[i]) {
             if let Some(points) = j.element.spherical_points() {
                 let mut h = [[0.0; 2 * SIDE]; 2 * SIDE];
                 let rigid = j
@@ -644,7 +770,10 @@ impl System for SpatialSystem {
             let x = self.bodies[b].x + 3;
             c[row] = -2.0 * v[x..x + 4].iter().map(|e| e * e).sum::<f64>();
         }
-        for j in &self.joints {
+        for k in &self.spherical {
+            k.accel_rhs(v, c);
+        }
+        for j in self.others.iter().map(|&i| &self.joints[i]) {
             if let Some(points) = j.element.spherical_points() {
                 let rates = self.side_values(j, v);
                 spherical::accel_rhs(points, rates, &mut c[j.row0..j.row0 + 3]);
@@ -694,7 +823,8 @@ impl SpatialSystem {
                 b[self.norm_b_off + 4 * k + i] = 2.0 * p[i];
             }
         }
-        for j in &self.joints {
+        self.kernels_phi_b(u, phi, b);
+        for j in self.others.iter().map(|&i| &self.joints[i]) {
             if let Some(points) = j.element.spherical_points() {
                 let mut grad = [[0.0; 2 * SIDE]; 3];
                 let q = self.side_values(j, u);

@@ -1,0 +1,343 @@
+//! One diagonal block's share of the Schur factorization: `S_K⁻¹` (dense,
+//! Gauss-Jordan with partial pivoting), `W = B_K S_K⁻¹` and `C += W B_Kᵀ`
+//! over the block's pairs of rows.
+//!
+//! Blocks of up to 4 unknowns take a path whose size is a
+//! compile-time constant (the loops unroll, the block lives on the stack):
+//! bodies in Euler parameters give blocks of 1 (`x`, `y`, `z`) and 4 (`p`)
+//! unknowns, thousands of them per factorization. Both paths do the same
+//! arithmetic in the same order, so they give the same values to the bit.
+
+/// The largest block taking the fixed-size path ([`factor_block`]'s match).
+#[cfg(test)]
+const MAX_FIXED: usize = 4;
+
+/// A block's analysed entry lists, each already cut to the block.
+pub(super) struct Lists<'a> {
+    /// `(KKT value position, local i, local j)` of its `S` entries.
+    pub(super) s_entries: &'a [(usize, usize, usize)],
+    /// `(KKT value position, local row, local column)` of its `B` entries.
+    pub(super) b_entries: &'a [(usize, usize, usize)],
+    /// `(local row r, local row s, slot of C[r, s])`.
+    pub(super) pairs: &'a [(u16, u16, u32)],
+    /// Number of rows of `B` touching the block.
+    pub(super) n_rows: usize,
+}
+
+/// Reused buffers: `B_K` and `W` (at least `n_rows × k` each) and, for the
+/// generic path, the block (`k × k`).
+pub(super) struct Scratch<'a> {
+    pub(super) block: &'a mut [f64],
+    pub(super) bk: &'a mut [f64],
+    pub(super) w: &'a mut [f64],
+}
+
+/// Factors one block of `k` unknowns: writes `S_K⁻¹` (row-major) into
+/// `inverse` and adds `W B_Kᵀ` into `c_values`.
+///
+/// # Errors
+/// The local column without a pivot when `S_K` is singular.
+pub(super) fn factor_block(
+    k: usize,
+    lists: &Lists<'_>,
+    values: &[f64],
+    inverse: &mut [f64],
+    scratch: &mut Scratch<'_>,
+    c_values: &mut [f64],
+) -> Result<(), usize> {
+    match k {
+        1 => factor_fixed::<1>(lists, values, inverse, scratch, c_values),
+        2 => factor_fixed::<2>(lists, values, inverse, scratch, c_values),
+        3 => factor_fixed::<3>(lists, values, inverse, scratch, c_values),
+        4 => factor_fixed::<4>(lists, values, inverse, scratch, c_values),
+        _ => factor_dynamic(k, lists, values, inverse, scratch, c_values),
+    }
+}
+
+fn factor_fixed<const K: usize>(
+    lists: &Lists<'_>,
+    values: &[f64],
+    inverse: &mut [f64],
+    scratch: &mut Scratch<'_>,
+    c_values: &mut [f64],
+) -> Result<(), usize> {
+    let mut a = [[0.0; K]; K];
+    for &(p, i, j) in lists.s_entries {
+        a[i][j] += values[p];
+    }
+    let mut inv = [[0.0; K]; K];
+    invert_fixed(&mut a, &mut inv)?;
+    for (out, row) in inverse.chunks_exact_mut(K).zip(&inv) {
+        out.copy_from_slice(row);
+    }
+    let nr = lists.n_rows;
+    let bk = &mut scratch.bk[..nr * K];
+    bk.fill(0.0);
+    for &(p, r, j) in lists.b_entries {
+        bk[r * K + j] += values[p];
+    }
+    let w = &mut scratch.w[..nr * K];
+    for (wr, br) in w.chunks_exact_mut(K).zip(bk.chunks_exact(K)) {
+        for l in 0..K {
+            // As `Iterator::sum`: from −0.0, term by term.
+            let mut acc = -0.0;
+            for j in 0..K {
+                acc += br[j] * inv[j][l];
+            }
+            wr[l] = acc;
+        }
+    }
+    let bk: &[f64] = bk;
+    for &(r, s, slot) in lists.pairs {
+        let (r, s) = (usize::from(r) * K, usize::from(s) * K);
+        let (wr, bs) = (&w[r..r + K], &bk[s..s + K]);
+        let mut v = -0.0;
+        for l in 0..K {
+            v += wr[l] * bs[l];
+        }
+        c_values[slot as usize] += v;
+    }
+    Ok(())
+}
+
+fn factor_dynamic(
+    k: usize,
+    lists: &Lists<'_>,
+    values: &[f64],
+    inverse: &mut [f64],
+    scratch: &mut Scratch<'_>,
+    c_values: &mut [f64],
+) -> Result<(), usize> {
+    let blk = &mut scratch.block[..k * k];
+    blk.fill(0.0);
+    for &(p, i, j) in lists.s_entries {
+        blk[i * k + j] += values[p];
+    }
+    invert(blk, inverse, k)?;
+    let nr = lists.n_rows;
+    let bk = &mut scratch.bk[..nr * k];
+    bk.fill(0.0);
+    for &(p, r, j) in lists.b_entries {
+        bk[r * k + j] += values[p];
+    }
+    let w = &mut scratch.w[..nr * k];
+    for r in 0..nr {
+        for l in 0..k {
+            w[r * k + l] = (0..k).map(|j| bk[r * k + j] * inverse[j * k + l]).sum();
+        }
+    }
+    for &(r, s, slot) in lists.pairs {
+        let (r, s) = (usize::from(r), usize::from(s));
+        let v: f64 = (0..k).map(|l| w[r * k + l] * bk[s * k + l]).sum();
+        c_values[slot as usize] += v;
+    }
+    Ok(())
+}
+
+/// `x = S_K⁻¹ f` on the block's unknowns `coords` (`inverse` row-major).
+#[inline]
+pub(super) fn apply_block(coords: &[usize], inverse: &[f64], f: &[f64], x: &mut [f64]) {
+    match coords.len() {
+        1 => apply_fixed::<1>(coords, inverse, f, x),
+        4 => apply_fixed::<4>(coords, inverse, f, x),
+        k => {
+            for (i, &ci) in coords.iter().enumerate() {
+                let row = &inverse[i * k..(i + 1) * k];
+                x[ci] = row.iter().zip(coords).map(|(a, &cj)| a * f[cj]).sum();
+            }
+        }
+    }
+}
+
+fn apply_fixed<const K: usize>(coords: &[usize], inverse: &[f64], f: &[f64], x: &mut [f64]) {
+    let fl: [f64; K] = std::array::from_fn(|j| f[coords[j]]);
+    for (row, &ci) in inverse.chunks_exact(K).zip(coords) {
+        let mut acc = -0.0;
+        for j in 0..K {
+            acc += row[j] * fl[j];
+        }
+        x[ci] = acc;
+    }
+}
+
+/// [`invert`] for a block whose size is a constant: the same operations.
+fn invert_fixed<const K: usize>(
+    a: &mut [[f64; K]; K],
+    inv: &mut [[f64; K]; K],
+) -> Result<(), usize> {
+    for (i, row) in inv.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    let eps = (K as f64) * f64::EPSILON;
+    for col in 0..K {
+        let scale = (0..K).fold(0.0f64, |s, i| s.max(a[i][col].abs()));
+        let (mut p, mut best) = (col, a[col][col].abs());
+        for (i, row) in a.iter().enumerate().skip(col + 1) {
+            let v = row[col].abs();
+            if v > best {
+                (p, best) = (i, v);
+            }
+        }
+        if best <= eps * scale || best == 0.0 {
+            return Err(col);
+        }
+        if p != col {
+            a.swap(p, col);
+            inv.swap(p, col);
+        }
+        let d = 1.0 / a[col][col];
+        for j in 0..K {
+            a[col][j] *= d;
+            inv[col][j] *= d;
+        }
+        let (pivot_a, pivot_inv) = (a[col], inv[col]);
+        for i in (0..K).filter(|&i| i != col) {
+            let f = a[i][col];
+            if f != 0.0 {
+                for j in 0..K {
+                    a[i][j] -= f * pivot_a[j];
+                    inv[i][j] -= f * pivot_inv[j];
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Inverts the row-major `k × k` matrix `a` (overwritten) into `inv` by
+/// Gauss-Jordan elimination with partial pivoting; `Err(column)` when a
+/// pivot is zero relative to its column.
+pub(super) fn invert(a: &mut [f64], inv: &mut [f64], k: usize) -> Result<(), usize> {
+    inv.fill(0.0);
+    for i in 0..k {
+        inv[i * k + i] = 1.0;
+    }
+    let eps = (k as f64) * f64::EPSILON;
+    for col in 0..k {
+        let scale = (0..k).fold(0.0f64, |s, i| s.max(a[i * k + col].abs()));
+        let (mut p, mut best) = (col, a[col * k + col].abs());
+        for i in col + 1..k {
+            let v = a[i * k + col].abs();
+            if v > best {
+                (p, best) = (i, v);
+            }
+        }
+        if best <= eps * scale || best == 0.0 {
+            return Err(col);
+        }
+        if p != col {
+            for j in 0..k {
+                a.swap(p * k + j, col * k + j);
+                inv.swap(p * k + j, col * k + j);
+            }
+        }
+        let d = 1.0 / a[col * k + col];
+        for j in 0..k {
+            a[col * k + j] *= d;
+            inv[col * k + j] *= d;
+        }
+        for i in 0..k {
+            if i != col {
+                let f = a[i * k + col];
+                if f != 0.0 {
+                    for j in 0..k {
+                        a[i * k + j] -= f * a[col * k + j];
+                        inv[i * k + j] -= f * inv[col * k + j];
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A symmetric positive definite block with a pivot that needs a swap.
+    fn sample(k: usize) -> Vec<f64> {
+        let mut a = vec![0.0; k * k];
+        for i in 0..k {
+            for j in 0..k {
+                a[i * k + j] = 1.0 / (1.0 + (i + j) as f64) + if i == j { 0.5 } else { 0.0 };
+            }
+        }
+        a[0] = 1e-3;
+        a
+    }
+
+    fn both(k: usize) {
+        let a = sample(k);
+        let s: Vec<(usize, usize, usize)> = (0..k * k).map(|p| (p, p / k, p % k)).collect();
+        // Two rows of B: row 0 all ones, row 1 = 1, 2, 3, …
+        let values_b: Vec<f64> = (0..2 * k)
+            .map(|q| if q < k { 1.0 } else { (q - k + 1) as f64 })
+            .collect();
+        let mut values = a.clone();
+        values.extend(&values_b);
+        let b: Vec<(usize, usize, usize)> = (0..2 * k).map(|q| (k * k + q, q / k, q % k)).collect();
+        let pairs = [(0u16, 0u16, 0u32), (1, 0, 1), (1, 1, 2)];
+        let lists = Lists {
+            s_entries: &s,
+            b_entries: &b,
+            pairs: &pairs,
+            n_rows: 2,
+        };
+        let run = |fixed: bool| {
+            let (mut block, mut bk, mut w) = (vec![0.0; k * k], vec![0.0; 2 * k], vec![0.0; 2 * k]);
+            let mut scratch = Scratch {
+                block: &mut block,
+                bk: &mut bk,
+                w: &mut w,
+            };
+            let (mut inv, mut c) = (vec![0.0; k * k], vec![0.0; 3]);
+            let r = if fixed {
+                factor_block(k, &lists, &values, &mut inv, &mut scratch, &mut c)
+            } else {
+                factor_dynamic(k, &lists, &values, &mut inv, &mut scratch, &mut c)
+            };
+            assert_eq!(r, Ok(()));
+            (inv, c)
+        };
+        let (inv_f, c_f) = run(true);
+        let (inv_d, c_d) = run(false);
+        assert_eq!(inv_f, inv_d, "k = {k}");
+        assert_eq!(c_f, c_d, "k = {k}");
+        // S S⁻¹ = I, independently of either path.
+        for i in 0..k {
+            for j in 0..k {
+                let p: f64 = (0..k).map(|l| a[i * k + l] * inv_f[l * k + j]).sum();
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((p - want).abs() < 1e-10, "k = {k}: ({i}, {j}) = {p}");
+            }
+        }
+    }
+
+    #[test]
+    fn fixed_size_blocks_equal_the_generic_path_to_the_bit() {
+        for k in 1..=MAX_FIXED {
+            both(k);
+        }
+    }
+
+    #[test]
+    fn fixed_size_inverse_reports_the_singular_column() {
+        let values = [1.0, 2.0, 2.0, 4.0];
+        let s = [(0, 0, 0), (1, 0, 1), (2, 1, 0), (3, 1, 1)];
+        let lists = Lists {
+            s_entries: &s,
+            b_entries: &[],
+            pairs: &[],
+            n_rows: 0,
+        };
+        let (mut block, mut bk, mut w) = (vec![0.0; 4], Vec::new(), Vec::new());
+        let mut scratch = Scratch {
+            block: &mut block,
+            bk: &mut bk,
+            w: &mut w,
+        };
+        let r = factor_block(2, &lists, &values, &mut [0.0; 4], &mut scratch, &mut []);
+        assert_eq!(r, Err(1));
+    }
+}
