@@ -37,7 +37,6 @@ Usage:
 import argparse
 import os
 import sys
-import time
 
 # ---------------------------------------------------------------------------
 # Command line.  It is parsed before exudyn is imported because the choice of
@@ -76,6 +75,7 @@ if args.fast:
 import exudyn as exu                       # noqa: E402  (import after the switch above)
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from quiet_machine import end_time_for, wait_for_quiet_machine  # noqa: E402  (benches/)
+import exudyn_run  # noqa: E402  (this folder)
 from exudyn.itemInterface import (         # noqa: E402
     LoadMassProportional, MarkerBodyMass, MarkerBodyPosition, NodeRigidBody2D,
     ObjectGround, ObjectJointRevolute2D, ObjectRigidBody2D,
@@ -130,49 +130,8 @@ def build_chain(n):
 
 
 def settings_for(n, end_time):
-    """Simulation settings: generalized-alpha, fixed h, quiet, no files."""
-    s = exu.SimulationSettings()
-    ti = s.timeIntegration
-    ti.solverType = exu.DynamicSolverType.GeneralizedAlpha
-    ti.startTime = 0.0
-    ti.endTime = end_time
-    ti.numberOfSteps = int(round(end_time / args.h))
-    ti.verboseMode = 0
-    ti.verboseModeFile = 0
-    ti.stepInformation = 0
-
-    ga = ti.generalizedAlpha
-    ga.spectralRadius = args.rho
-    ga.useNewmark = False            # true generalized-alpha, not Newmark
-    ga.useIndex2Constraints = False  # index-3 (position-level) constraints, as in mstar
-    ga.computeInitialAccelerations = True  # consistent start, as mstar's default
-
-    nw = ti.newton
-    nw.relativeTolerance = args.tol
-    nw.useModifiedNewton = True
-    # absoluteTolerance keeps Exudyn's default (1e-10): it only matters when
-    # the residual is already tiny at the start of a step.
-
-    # No solution, sensor or restart files; no end-of-run statistics.
-    sol = s.solution
-    sol.file.write = False
-    sol.sensors.active = False
-    sol.restart.write = False
-    sol.recordImagesInterval = -1
-    s.show.computationTime = False
-    s.show.statistics = False
-    s.show.globalTimers = False
-
-    # Linear solver: sparse LU for large chains.  reuseAnalyzedPattern keeps
-    # the symbolic analysis between factorizations (the pattern never
-    # changes for this model).
-    if n >= SPARSE_FROM_N:
-        s.linearSolver.solverType = exu.LinearSolverType.EigenSparse
-        s.linearSolver.reuseAnalyzedPattern = True
-    else:
-        s.linearSolver.solverType = exu.LinearSolverType.EXUdense
-    s.parallel.numberOfThreads = 1  # mstar is single-threaded
-    return s
+    """Simulation settings (exudyn_run.settings_for) at this script's options."""
+    return exudyn_run.settings_for(exu, n, end_time, args.h, args.rho, args.tol, SPARSE_FROM_N)
 
 
 def tip_position(mbs, node):
@@ -181,11 +140,7 @@ def tip_position(mbs, node):
     return float(p[0]), float(p[1])
 
 
-# Exudyn's internal solver timers (seconds, summed over the run) that are
-# reported with --phases.  reactionForces is the constraint-force term
-# (C_q^T lambda) of the residual, AERHS the constraint equations themselves.
-PHASES = ['ODE2RHS', 'reactionForces', 'AERHS', 'totalJacobian', 'massMatrix',
-          'factorization', 'newtonIncrement', 'integrationFormula']
+PHASES = exudyn_run.PHASES
 
 
 def solve_once(n, end_time, phases=False):
@@ -195,32 +150,9 @@ def solve_once(n, end_time, phases=False):
     adds some overhead, so such a run is not used for the table)."""
     SC, mbs, tip_node = build_chain(n)
     s = settings_for(n, end_time)
-    solver = exu.MainSolverImplicitSecondOrder()
-    if not solver.InitializeSolver(mbs, s):
-        raise RuntimeError("InitializeSolver failed for N = %d" % n)
-    if phases:
-        solver.timer.Reset(True)  # zero all timers; True = keep them switched on
-        solver.timer.useTimer = True
-    t0 = time.perf_counter()
-    ok = solver.SolveSteps(mbs, s)
-    wall = time.perf_counter() - t0
-    if not ok:
-        raise RuntimeError("SolveSteps failed for N = %d: %s" % (n, solver.GetErrorString()))
-    it = solver.it
-    out = {
-        'wall': wall,
-        # currentStepIndex is the index of the *next* step (it starts at 1),
-        # so the number of completed steps is one less.
-        'steps': it.currentStepIndex - 1,
-        'nominal_steps': s.timeIntegration.numberOfSteps,
-        'newton': it.newtonStepsCount,         # Newton iterations, whole run
-        'jacobians': it.newtonJacobiCount,     # Jacobian evaluations = factorizations
-        'rejected': it.rejectedModifiedNewtonSteps,
-        't_final': it.currentTime,
-        'tip': tip_position(mbs, tip_node),
-    }
-    if phases:
-        out['phases'] = {name: getattr(solver.timer, name) for name in PHASES}
+    out = exudyn_run.timed_solve(exu, mbs, s, n, phases)
+    out['tip'] = tip_position(mbs, tip_node)
+    solver = out.pop('solver')
     solver.FinalizeSolver(mbs, s)
     del SC, mbs
     return out
