@@ -23,6 +23,7 @@
 mod fd;
 pub mod file;
 mod fn_system;
+mod parallel;
 mod pattern;
 mod pendulum;
 pub mod planar;

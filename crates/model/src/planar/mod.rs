@@ -134,12 +134,8 @@ fn global_pairs<'a>(
         .map(|&(a, b)| (slots.global[a], slots.global[b]))
 }
 
-/// A chunk of revolute joints and where its output starts: global row, B
-/// value, Hessian value.
-type Part<'a> = (&'a [RevoluteKernel], (usize, usize, usize));
-
-/// Revolute joints per parallel task.
-const PARALLEL_CHUNK: usize = 2048;
+/// A chunk of kernels and where its output starts.
+type Part<'a> = crate::parallel::Part<'a, RevoluteKernel>;
 
 /// Splits `x` into consecutive parts starting at `bases` (the first part at 0
 /// whatever the first base says; bases ascending).
@@ -161,20 +157,7 @@ impl PlanarSystem {
     /// first chunk); empty when the work is sequential: fewer than two
     /// chunks' worth of joints, or one thread in rayon's current pool.
     fn parallel_parts(&self) -> Vec<Part<'_>> {
-        let threads = rayon::current_num_threads();
-        if threads < 2 || self.revolutes.len() < 2 * PARALLEL_CHUNK {
-            return Vec::new();
-        }
-        let size = self
-            .revolutes
-            .len()
-            .div_ceil(4 * threads)
-            .max(PARALLEL_CHUNK);
-        self.revolutes
-            .chunks(size)
-            .enumerate()
-            .map(|(i, ks)| (ks, if i == 0 { (0, 0, 0) } else { ks[0].offsets() }))
-            .collect()
+        crate::parallel::parallel_parts(&self.revolutes)
     }
 
     fn assemble(

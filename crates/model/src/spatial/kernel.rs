@@ -110,11 +110,6 @@ impl SphericalKernel {
         out
     }
 
-    /// First global constraint row, and offsets in the `B` and Hessian values.
-    pub(crate) fn offsets(&self) -> (usize, usize, usize) {
-        (self.row0, self.b_off, self.h_off)
-    }
-
     /// `Φ` (3 rows) and its `B` entries. `phi` and `b` start at global row
     /// `base.0` and value `base.1` (a part of the buffers, for rayon).
     #[inline]
@@ -234,6 +229,12 @@ fn bits(mut mask: u16) -> impl Iterator<Item = usize> {
             i
         })
     })
+}
+
+impl crate::parallel::KernelOffsets for SphericalKernel {
+    fn offsets(&self) -> (usize, usize, usize) {
+        (self.row0, self.b_off, self.h_off)
+    }
 }
 
 #[cfg(test)]

@@ -19,12 +19,8 @@ use crate::planar::split_at_bases;
 use crate::{Pattern, System};
 use rayon::prelude::*;
 
-/// A chunk of spherical kernels and where its output starts: global row, `B`
-/// value, Hessian value.
-type Part<'a> = (&'a [SphericalKernel], (usize, usize, usize));
-
-/// Spherical joints per parallel task.
-const PARALLEL_CHUNK: usize = 2048;
+/// A chunk of kernels and where its output starts.
+type Part<'a> = crate::parallel::Part<'a, SphericalKernel>;
 
 /// A body as assembled.
 #[derive(Clone, Debug)]
@@ -295,20 +291,7 @@ impl SpatialSystem {
     /// chunks' worth of joints, or one thread in rayon's current pool (as the
     /// planar chains).
     fn parallel_parts(&self) -> Vec<Part<'_>> {
-        let threads = rayon::current_num_threads();
-        if threads < 2 || self.spherical.len() < 2 * PARALLEL_CHUNK {
-            return Vec::new();
-        }
-        let size = self
-            .spherical
-            .len()
-            .div_ceil(4 * threads)
-            .max(PARALLEL_CHUNK);
-        self.spherical
-            .chunks(size)
-            .enumerate()
-            .map(|(i, ks)| (ks, if i == 0 { (0, 0, 0) } else { ks[0].offsets() }))
-            .collect()
+        crate::parallel::parallel_parts(&self.spherical)
     }
 
     /// `Φ` and `B` of the spherical kernels, in parallel chunks when

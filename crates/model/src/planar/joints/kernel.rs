@@ -23,11 +23,6 @@ pub(crate) struct RevoluteKernel {
 }
 
 impl RevoluteKernel {
-    /// First global constraint row, and offsets in the B and Hessian values.
-    pub(crate) fn offsets(&self) -> (usize, usize, usize) {
-        (self.row0, self.b_off, self.h_off)
-    }
-
     /// The kernel of `c`, if it is a revolute joint; `trig_slot(θ)` is the
     /// position of `(sin θ, cos θ)` in the table of [`phi_b`](Self::phi_b)
     /// for the angle coordinate `θ`.
@@ -111,5 +106,11 @@ impl RevoluteKernel {
                 }
             }
         }
+    }
+}
+
+impl crate::parallel::KernelOffsets for RevoluteKernel {
+    fn offsets(&self) -> (usize, usize, usize) {
+        (self.row0, self.b_off, self.h_off)
     }
 }
