@@ -42,6 +42,7 @@ pub mod pendulum;
 pub mod record;
 pub mod redundant;
 pub mod run;
+pub mod sweep;
 pub mod testing;
 pub mod validation;
 
