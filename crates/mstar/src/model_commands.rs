@@ -62,8 +62,9 @@ pub struct RunArgs {
     /// within the steps (overrides [output] every_time and every).
     #[arg(long, value_name = "DT")]
     output_every: Option<f64>,
-    /// Override a key of the file, e.g. --set simulation.rho=0.8 or
-    /// --set output.every=10 (repeatable; values in TOML syntax).
+    /// Override a key of the file, e.g. --set simulation.rho=0.8,
+    /// --set output.every=10, or of an element by its name,
+    /// --set body.upper.mass=2 (repeatable; values in TOML syntax).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
 }
