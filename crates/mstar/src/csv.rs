@@ -66,6 +66,15 @@ fn number(out: &mut String, x: f64) {
     }
 }
 
+/// `x` as the CSV files write it (see [`to_csv`]): shortest round-trip form,
+/// plain for `1e-4 ≤ |x| < 1e15` (and 0), exponent notation otherwise.
+#[must_use]
+pub fn format_number(x: f64) -> String {
+    let mut out = String::new();
+    number(&mut out, x);
+    out
+}
+
 /// Appends one sample as a CSV row, `extra` values after the standard ones.
 fn row(out: &mut String, s: &SampleRef<'_>, extra: &[f64]) {
     number(out, s.t);

@@ -13,7 +13,9 @@
 //! - [`csv`]: the output format; [`pendulum`]: the paper's presets;
 //!   [`analysis`]: errors, fitted orders, the period-2h amplitude;
 //! - [`run`]: model files' settings as an integrator configuration, and
-//!   `mstar check`'s report;
+//!   `mstar check`'s report; [`record`]: what a run writes (its CSV rows) and
+//!   measures; [`sweep`]: many runs of a model file over parameter values,
+//!   on all cores, sharded, resumable;
 //! - [`testing`]: for model authors, the derivative checker;
 //!   [`catalogue`]: the test models with their independent references.
 //!
@@ -37,8 +39,10 @@ pub mod analysis;
 pub mod catalogue;
 pub mod csv;
 pub mod pendulum;
+pub mod record;
 pub mod redundant;
 pub mod run;
+pub mod sweep;
 pub mod testing;
 pub mod validation;
 

@@ -25,6 +25,7 @@ mod model_commands;
 mod output;
 mod signals;
 mod summary;
+mod sweep_command;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -61,6 +62,14 @@ enum Command {
     /// initial state is from the constraints. Exit 0 when it can run as
     /// written, 1 when it cannot, 2 when the file cannot be read or holds a value out of range (an unknown KKT solver too).
     Check(model_commands::CheckArgs),
+    /// Run a model file for many values of its keys (--set KEY=V1,V2,… or
+    /// KEY=START:STOP:COUNT; every combination, or --zip), on all cores or
+    /// --jobs N, one shard of a cluster job with --shard I/N; resumable.
+    /// Writes DIR/runs/<index>.csv and DIR/summary.csv (docs/sweeps.md).
+    /// Exit 0 when every run reached its end, 10 + n when n runs failed
+    /// (110: 100 or more), 2 for a bad model file or command line (nothing
+    /// ran), 1 when a file cannot be written.
+    Sweep(sweep_command::SweepArgs),
     /// Draw a model moving through the results of `mstar run`: an animated
     /// GIF, a self-contained HTML page (play/pause, time slider) or one frame
     /// as a PNG; a spatial model projected onto the picture (--view). Exit 0
@@ -289,6 +298,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => return model_commands::run(&args),
         Command::Check(args) => return model_commands::check(&args),
+        Command::Sweep(args) => return sweep_command::sweep(&args),
         Command::Animate(args) => return animate::animate(&args),
         Command::Pendulum(args) => pendulum(&args),
         Command::Chain(args) => chain(&args),

@@ -62,8 +62,9 @@ pub struct RunArgs {
     /// within the steps (overrides [output] every_time and every).
     #[arg(long, value_name = "DT")]
     output_every: Option<f64>,
-    /// Override a key of the file, e.g. --set simulation.rho=0.8 or
-    /// --set output.every=10 (repeatable; values in TOML syntax).
+    /// Override a key of the file, e.g. --set simulation.rho=0.8,
+    /// --set output.every=10, or of an element by its name,
+    /// --set body.upper.mass=2 (repeatable; values in TOML syntax).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
 }
@@ -251,11 +252,11 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         _ => (integrate(sys, start, &|_| Ok(()), &mut output), None),
     };
     output.progress.finish_and_clear();
-    output.finish_rows();
+    output.recorder.finish_rows();
     let (stats, t, wall, ended) = outcome?;
     print_summary(stats, t, &output, wall);
     let warned = crate::warn_accuracy(&stats, &config_used, sys, true);
-    crate::output::conclude(output.stream, args.out.as_deref(), ended, t)?;
+    crate::output::conclude(output.recorder.into_stream(), args.out.as_deref(), ended, t)?;
     // The samples are written; they are wrong from the drift on.
     if let (Some(mstar::run::RunError::RedundancyChanged { t, .. }), Some(out)) =
         (&drift, &args.out)
@@ -453,27 +454,14 @@ fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
     })
 }
 
-/// What `mstar run` does with every sample: the CSV file (every n-th step
-/// and the last), the progress bar, and the figures of the summary.
+/// What `mstar run` does with every sample: the CSV file and the figures of
+/// the summary ([`mstar::record::Recorder`]), and the progress bar.
 struct RunOutput<'a> {
-    stream: Option<csv::CsvStream>,
-    /// The model's extra columns and a buffer for their values.
-    columns: Option<&'a dyn Columns>,
-    extra: Vec<f64>,
-    every: usize,
-    /// The rows of `[output] every_time` (every step when not given).
-    grid: crate::output::Grid,
-    seen: usize,
-    /// The time of the last state observed, and of the last one written.
-    last_seen: f64,
-    last_written: Option<f64>,
+    recorder: mstar::record::Recorder<'a>,
     t_end: f64,
     progress: ProgressBar,
     shown: bool,
     start: Instant,
-    energy0: Option<f64>,
-    drift: f64,
-    max_constraint: f64,
 }
 
 impl<'a> RunOutput<'a> {
@@ -488,87 +476,23 @@ impl<'a> RunOutput<'a> {
             ProgressStyle::with_template("{bar:40} t = {msg} s [{elapsed_precise}, {eta} left]")
                 .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
+        let rows = mstar::record::Rows { every, grid };
         Self {
-            stream,
-            columns,
-            extra: Vec::new(),
-            every: every.max(1),
-            grid,
-            seen: 0,
-            last_seen: f64::NAN,
-            last_written: None,
+            recorder: mstar::record::Recorder::new(stream, columns, rows, t_end),
             t_end,
             progress,
             shown: false,
             start: Instant::now(),
-            energy0: None,
-            drift: 0.0,
-            max_constraint: 0.0,
         }
-    }
-}
-
-impl RunOutput<'_> {
-    /// Writes the rows that the state `s` completes (`[output] every_time`),
-    /// with the model's extra columns.
-    fn write(&mut self, s: &SampleRef<'_>) {
-        self.last_written = Some(s.t);
-        let Some(stream) = self.stream.as_mut() else {
-            return;
-        };
-        let (columns, extra) = (self.columns, &mut self.extra);
-        self.grid.rows(s, &mut |row| {
-            extra.clear();
-            if let Some(columns) = columns {
-                columns.values(row, extra);
-            }
-            stream.push_with(row, extra);
-        });
-        crate::output::watch(stream);
-    }
-
-    /// Writes the last state reached when `[output] every_time` left it out.
-    fn finish_rows(&mut self) {
-        let grid = std::mem::replace(&mut self.grid, crate::output::Grid::every_step());
-        let (Some(stream), columns, extra) = (self.stream.as_mut(), self.columns, &mut self.extra)
-        else {
-            return;
-        };
-        grid.finish(&mut |row| {
-            extra.clear();
-            if let Some(columns) = columns {
-                columns.values(row, extra);
-            }
-            stream.push_with(row, extra);
-        });
     }
 }
 
 impl Observer for RunOutput<'_> {
     fn observe(&mut self, s: &SampleRef<'_>) {
-        // The last state observed again after a run that stopped early
-        // (`integrate`): written if `every` skipped it, so that nothing the
-        // run computed is lost.
-        if self.seen > 0 && s.t == self.last_seen {
-            if self.last_written != Some(s.t) {
-                self.write(s);
-            }
-            return;
+        self.recorder.observe(s);
+        if let Some(stream) = self.recorder.stream() {
+            crate::output::watch(stream);
         }
-        let last = s.t >= self.t_end * (1.0 - 1e-12);
-        if self.seen.is_multiple_of(self.every) || last {
-            self.write(s);
-        }
-        self.seen += 1;
-        self.last_seen = s.t;
-        let e = s.energy();
-        let e0 = *self.energy0.get_or_insert(e);
-        self.drift = if (e - e0).abs() > self.drift || e.is_nan() {
-            (e - e0).abs()
-        } else {
-            self.drift
-        };
-        self.max_constraint = self.max_constraint.max(s.constraint);
         // A bar on standard error for runs longer than a second (indicatif
         // draws nothing when it is not a terminal).
         if !self.shown && self.start.elapsed().as_secs_f64() > 1.0 {
@@ -602,7 +526,8 @@ fn print_summary(st: mstar::RunStats, t: f64, out: &RunOutput<'_>, wall: f64) {
     );
     println!(
         "max ‖Φ‖∞ = {:.3e}; energy drift max |E − E₀| = {:.3e} J",
-        out.max_constraint, out.drift
+        out.recorder.max_constraint(),
+        out.recorder.energy_drift()
     );
     println!(
         "wall time: {wall:.3} s ({:.2} µs per step)",

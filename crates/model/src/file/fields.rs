@@ -124,15 +124,21 @@ impl<'a> Fields<'a> {
         let hint = closest(&e.key, known)
             .map(|c| format!(" (did you mean '{c}'?)"))
             .unwrap_or_default();
-        Err(self.doc.error(
+        let given = if e.created { " (given by --set)" } else { "" };
+        let error = self.doc.error(
             e.key_span.as_ref().or(e.node.span.as_ref()),
             format!(
-                "{}: unknown key '{}'{hint}; the keys here are: {}",
+                "{}: unknown key '{}'{given}{hint}; the keys here are: {}",
                 self.what,
                 e.key,
                 known.join(", ")
             ),
-        ))
+        );
+        Err(if e.created {
+            error.of_override()
+        } else {
+            error
+        })
     }
 }
 

@@ -27,14 +27,23 @@ pub(crate) fn read(doc: Doc<'_>, node: &Node, what: String) -> Result<TimeFuncti
             ),
         ));
     };
+    // A key an override added beside the function's own, or in place of
+    // it, is the override's error.
+    let added = |e: FileError| {
+        if entries.iter().any(|e| e.created) {
+            e.of_override()
+        } else {
+            e
+        }
+    };
     let [entry] = entries.as_slice() else {
-        return Err(doc.error(
+        return Err(added(doc.error(
             node.span.as_ref(),
             format!(
                 "{what}: a function is a table with one key, one of: {}",
                 KINDS.join(", ")
             ),
-        ));
+        )));
     };
     let inner = &entry.node;
     let place = inner.span.as_ref().or(entry.key_span.as_ref());
@@ -46,13 +55,13 @@ pub(crate) fn read(doc: Doc<'_>, node: &Node, what: String) -> Result<TimeFuncti
         "harmonic" => harmonic(doc, inner, format!("{what}: harmonic"))?,
         "table" => table(inner).map_err(|why| doc.error(place, format!("{what}: table: {why}")))?,
         other => {
-            return Err(doc.error(
+            return Err(added(doc.error(
                 entry.key_span.as_ref(),
                 format!(
                     "{what}: unknown function '{other}'; the functions are: {}",
                     KINDS.join(", ")
                 ),
-            ));
+            )));
         }
     };
     match function.problem() {

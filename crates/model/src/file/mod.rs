@@ -64,6 +64,12 @@ pub struct FileError {
     pub place: Option<(usize, usize)>,
     /// What is wrong.
     pub message: String,
+    /// The error is in a command-line override (`--set KEY=VALUE`) rather
+    /// than in the model: a malformed assignment, a path through an element
+    /// or key the file does not have, or a key the reader does not know.
+    /// (A value out of range is the model's error even when an override gave
+    /// it.) A sweep refuses such overrides before it runs anything.
+    pub in_override: bool,
 }
 
 impl FileError {
@@ -73,6 +79,21 @@ impl FileError {
             origin: origin.to_string(),
             place: offset.map(|o| node::line_column(text, o)),
             message,
+            in_override: false,
+        }
+    }
+
+    /// An error of the file `origin` with no place.
+    fn unplaced(origin: &str, message: String) -> Self {
+        Self::at(origin, "", None, message)
+    }
+
+    /// The error marked as one of an override ([`in_override`](Self::in_override)).
+    #[must_use]
+    pub(crate) fn of_override(self) -> Self {
+        Self {
+            in_override: true,
+            ..self
         }
     }
 }
@@ -142,13 +163,17 @@ impl ModelFile {
     }
 
     /// [`parse`](Self::parse) with overrides `path=value`, each a dotted path
-    /// of table keys (`simulation.h`, `output.every`) and a TOML value
-    /// (`1e-4`, `"hht"`, or a bare word, taken as a string). Overridden
-    /// values have no line in errors.
+    /// of keys — table keys, and in an array of named elements the element's
+    /// `name` (`simulation.h`, `output.every`, `body.upper.mass`,
+    /// `force.drive.function.constant`) — and a TOML value (`1e-4`, `"hht"`,
+    /// or a bare word, taken as a string). Overridden values have no line in
+    /// errors.
     ///
     /// # Errors
-    /// As [`load`](Self::load), and for an override without `=` or with a path
-    /// through something that is not a table.
+    /// As [`load`](Self::load), and for an override without `=`, with a path
+    /// through something that is not a table, an element or key the file does
+    /// not have, or a last key the reader does not know (these errors have
+    /// [`FileError::in_override`] set).
     pub fn parse_with(
         text: &str,
         origin: &str,
@@ -169,13 +194,12 @@ impl ModelFile {
                 simulation: file.simulation,
                 output: file.output,
             }),
-            Mechanism::Spatial(_) => Err(FileError {
-                origin: origin.to_string(),
-                place: None,
-                message: format!(
+            Mechanism::Spatial(_) => Err(FileError::unplaced(
+                origin,
+                format!(
                     "a spatial model ('{SPATIAL_FORMAT}'), where a planar one ('{FORMAT}') is expected"
                 ),
-            }),
+            )),
         }
     }
 }
@@ -257,10 +281,8 @@ impl MechanismFile {
     /// As [`ModelFile::load_with`].
     pub fn load_with(path: &Path, overrides: &[String]) -> Result<Self, FileError> {
         let origin = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| FileError {
-            origin: origin.clone(),
-            place: None,
-            message: format!("cannot read the model file: {e}"),
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            FileError::unplaced(&origin, format!("cannot read the model file: {e}"))
         })?;
         Self::parse_with(&text, &origin, Format::of(path), overrides)
     }
@@ -288,10 +310,8 @@ impl MechanismFile {
             Format::Json => node::parse_json(text, origin)?,
         };
         for o in overrides {
-            settings::apply_override(&mut root, o).map_err(|why| FileError {
-                origin: origin.to_string(),
-                place: None,
-                message: format!("--set {o}: {why}"),
+            settings::apply_override(&mut root, o).map_err(|why| {
+                FileError::unplaced(origin, format!("--set {o}: {why}")).of_override()
             })?;
         }
         let doc = Doc { origin, text };

@@ -37,6 +37,9 @@ pub(crate) struct Entry {
     pub(crate) key: String,
     pub(crate) key_span: Option<Range<usize>>,
     pub(crate) node: Node,
+    /// Added by a command-line override (`--set`), not written in the file:
+    /// an unknown key here is the override's error.
+    pub(crate) created: bool,
 }
 
 impl Value {
@@ -84,6 +87,7 @@ fn toml_table(table: toml::de::DeTable<'_>) -> Vec<Entry> {
                 key: key.into_inner().into_owned(),
                 key_span: Some(key_span),
                 node: toml_node(value),
+                created: false,
             }
         })
         .collect()
@@ -128,6 +132,7 @@ pub(crate) fn parse_json(text: &str, origin: &str) -> Result<Node, FileError> {
         origin: origin.to_string(),
         place: (e.line() > 0).then_some((e.line(), e.column())),
         message: format!("JSON syntax: {e}"),
+        in_override: false,
     })?;
     Ok(json_node(value))
 }
@@ -152,6 +157,7 @@ fn json_node(value: serde_json::Value) -> Node {
                     key,
                     key_span: None,
                     node: json_node(value),
+                    created: false,
                 })
                 .collect(),
         ),
@@ -198,6 +204,7 @@ mod tests {
                             key: e.key.clone(),
                             key_span: None,
                             node: strip(&e.node),
+                            created: false,
                         })
                         .collect();
                     e.sort_by(|a, b| a.key.cmp(&b.key));

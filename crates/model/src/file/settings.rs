@@ -299,41 +299,143 @@ fn consistent(f: &mut Fields<'_>, s: &Simulation) -> Result<(), FileError> {
     Ok(())
 }
 
-/// Applies the override `path=value` to the document `root` (a dotted path
-/// of table keys; the value in TOML syntax, or a bare word as a string).
+/// The tables an override may add when the file has none: the settings,
+/// every key of which is optional.
+const OPTIONAL_TABLES: [&str; 2] = ["simulation", "output"];
+
+/// Applies the override `path=value` to the document `root`. The path is
+/// dotted: a key of a table, or in an array of named tables (`[[body]]`,
+/// `[[joint]]`, `[[force]]`, …) the `name` of an element
+/// (`body.upper.mass`, `force.drive.function.constant`). The value is in TOML
+/// syntax, or a bare word taken as a string.
+///
+/// Every step but the last must exist (but `[simulation]` and `[output]`,
+/// which it adds); the last key may be new, marked as added, and the reader
+/// then refuses it if the table has no such key.
 pub(crate) fn apply_override(root: &mut Node, assignment: &str) -> Result<(), String> {
     let (path, text) = assignment
         .split_once('=')
         .ok_or("expected key=value, e.g. simulation.h=1e-4")?;
-    let keys: Vec<&str> = path.trim().split('.').collect();
+    let keys: Vec<&str> = path.trim().split('.').map(str::trim).collect();
     if keys.iter().any(|k| k.is_empty()) {
         return Err(format!("'{path}' is not a dotted path of keys"));
     }
     let value = override_value(text.trim());
+    let Some((last, through)) = keys.split_last() else {
+        return Err(format!("'{path}' is not a dotted path of keys"));
+    };
     let mut node = root;
-    for (k, key) in keys.iter().enumerate() {
-        let Value::Table(entries) = &mut node.value else {
-            return Err(format!("'{}' is not a table", keys[..k].join(".")));
-        };
-        let at = match entries.iter().position(|e| e.key == *key) {
-            Some(at) => at,
-            None => {
-                let empty = Node {
-                    value: Value::Table(Vec::new()),
-                    span: None,
-                };
-                entries.push(Entry {
-                    key: (*key).to_string(),
-                    key_span: None,
-                    node: empty,
-                });
-                entries.len() - 1
-            }
-        };
-        node = &mut entries[at].node;
+    for (k, key) in through.iter().enumerate() {
+        node = step(node, &keys[..k], key)?;
     }
-    *node = value;
+    let Value::Table(entries) = &mut node.value else {
+        return Err(not_a_table(node, through));
+    };
+    match entries.iter().position(|e| e.key == *last) {
+        Some(at) => entries[at].node = value,
+        None => entries.push(Entry {
+            key: (*last).to_string(),
+            key_span: None,
+            node: value,
+            created: true,
+        }),
+    }
     Ok(())
+}
+
+/// The node `key` names inside `node` (at the path `before`): a key of a
+/// table or the element of an array whose `name` it is.
+fn step<'n>(node: &'n mut Node, before: &[&str], key: &str) -> Result<&'n mut Node, String> {
+    let error = match &node.value {
+        Value::List(_) | Value::Table(_) => None,
+        _ => Some(not_a_table(node, before)),
+    };
+    match &mut node.value {
+        Value::List(items) => element(items, before, key),
+        Value::Table(entries) => table_entry(entries, before, key),
+        _ => Err(error.unwrap_or_default()),
+    }
+}
+
+/// The value of `key` in the table `entries` (at the path `before`);
+/// `[simulation]` or `[output]` added empty when the file has none.
+fn table_entry<'n>(
+    entries: &'n mut Vec<Entry>,
+    before: &[&str],
+    key: &str,
+) -> Result<&'n mut Node, String> {
+    if let Some(at) = entries.iter().position(|e| e.key == key) {
+        return Ok(&mut entries[at].node);
+    }
+    if before.is_empty() && OPTIONAL_TABLES.contains(&key) {
+        entries.push(Entry {
+            key: key.to_string(),
+            key_span: None,
+            node: Node {
+                value: Value::Table(Vec::new()),
+                span: None,
+            },
+            created: true,
+        });
+        let at = entries.len() - 1;
+        return Ok(&mut entries[at].node);
+    }
+    let known: Vec<&str> = entries.iter().map(|e| e.key.as_str()).collect();
+    let place = if before.is_empty() {
+        "the file".to_string()
+    } else {
+        format!("'{}'", before.join("."))
+    };
+    Err(format!(
+        "{place} has no key '{key}'; its keys are: {}",
+        known.join(", ")
+    ))
+}
+
+/// The element named `name` of the array `items` (at the path `before`).
+fn element<'n>(items: &'n mut [Node], before: &[&str], name: &str) -> Result<&'n mut Node, String> {
+    let name_of = |n: &Node| match &n.value {
+        Value::Table(entries) => {
+            entries
+                .iter()
+                .find(|e| e.key == "name")
+                .and_then(|e| match &e.node.value {
+                    Value::Str(s) => Some(s.clone()),
+                    _ => None,
+                })
+        }
+        _ => None,
+    };
+    let array = before.join(".");
+    match items
+        .iter()
+        .position(|n| name_of(n).as_deref() == Some(name))
+    {
+        Some(at) => Ok(&mut items[at]),
+        None => {
+            let names: Vec<String> = items.iter().filter_map(name_of).collect();
+            if names.is_empty() {
+                return Err(format!(
+                    "'{array}' is an array without named elements: no element is named '{name}'"
+                ));
+            }
+            Err(format!(
+                "no element of '{array}' is named '{name}'; the names are: {}",
+                names.join(", ")
+            ))
+        }
+    }
+}
+
+/// The error for a path through `node` (at `path`), which is not a table.
+fn not_a_table(node: &Node, path: &[&str]) -> String {
+    let path = path.join(".");
+    match node.value {
+        Value::List(_) => format!(
+            "'{path}' is an array: the next key is the name of one of its elements, then a key of it (e.g. body.upper.mass)"
+        ),
+        ref v => format!("'{path}' is {}, not a table", v.kind()),
+    }
 }
 
 /// A value written on the command line: TOML syntax, or else a string.
@@ -370,5 +472,70 @@ mod tests {
         assert_eq!(o.every, 5);
         assert!(apply_override(&mut root, "simulation.h").is_err());
         assert!(apply_override(&mut root, "simulation.h.x=1").is_err());
+    }
+
+    #[test]
+    fn overrides_find_array_elements_by_name() {
+        let text = "[[body]]\nname = \"upper\"\nmass = 1.0\n[[body]]\nname = \"lower\"\nmass = 2.0\n\
+                    [[force]]\nname = \"drive\"\nfunction = { constant = 0.2 }\n";
+        let mut root = super::super::node::parse_toml(text, "m").expect("valid");
+        apply_override(&mut root, "body.lower.mass=3").expect("by name");
+        apply_override(&mut root, "force.drive.function.constant=0.5").expect("nested");
+        let Value::Table(top) = &root.value else {
+            panic!("a table")
+        };
+        let Value::List(bodies) = &top[0].node.value else {
+            panic!("an array")
+        };
+        let mass = |body: &Node| match &body.value {
+            Value::Table(e) => e
+                .iter()
+                .find(|e| e.key == "mass")
+                .map(|e| e.node.value.clone()),
+            _ => None,
+        };
+        let num = |value: f64, integer: bool| Some(Value::Num { value, integer });
+        assert_eq!(mass(&bodies[1]), num(3.0, true));
+        assert_eq!(mass(&bodies[0]), num(1.0, false));
+        let e = apply_override(&mut root, "body.uper.mass=3").expect_err("no such body");
+        assert_eq!(
+            e,
+            "no element of 'body' is named 'uper'; the names are: upper, lower"
+        );
+        let e = apply_override(&mut root, "joint.hinge.at=1").expect_err("no joints");
+        assert!(e.starts_with("the file has no key 'joint'"), "{e}");
+        let e = apply_override(&mut root, "force.drive.functon.constant=1").expect_err("typo");
+        assert!(e.starts_with("'force.drive' has no key 'functon'"), "{e}");
+        let e = apply_override(&mut root, "body.mass=1").expect_err("an array");
+        assert!(e.contains("'body' is an array"), "{e}");
+    }
+
+    #[test]
+    fn unknown_keys_of_overrides_are_the_override_s_error() {
+        use super::super::{Format, MechanismFile};
+        let text = "format = \"mstar.planar/1\"\n[[body]]\nname = \"upper\"\nmass = 1.0\n\
+                    inertia = 0.1\npose = [0.0, 0.0, 0.0]\n\
+                    [[force]]\nname = \"drive\"\ntype = \"torque\"\nbody = \"upper\"\n\
+                    function = { constant = 0.2 }\n";
+        let parse =
+            |set: &str| MechanismFile::parse_with(text, "m.toml", Format::Toml, &[set.to_string()]);
+        assert!(parse("body.upper.mass=2").is_ok());
+        let e = parse("body.upper.mas=2").expect_err("a typo");
+        assert!(e.in_override, "{e}");
+        assert!(
+            e.message
+                .contains("unknown key 'mas' (given by --set) (did you mean 'mass'?)"),
+            "{e}"
+        );
+        let e = parse("force.drive.function.constnt=2").expect_err("a typo");
+        assert!(e.in_override, "{e}");
+        let e = parse("simulation.hh=2").expect_err("a typo");
+        assert!(e.in_override, "{e}");
+        let e = parse("body.lower.mass=2").expect_err("no such body");
+        assert!(e.in_override, "{e}");
+        // A value out of range is the model's error.
+        let e = parse("body.upper.mass=-2").expect_err("negative");
+        assert!(!e.in_override, "{e}");
+        assert!(e.message.contains("mass: must be positive"), "{e}");
     }
 }

@@ -465,6 +465,12 @@ impl SpatialBuilder {
         if let Some(e) = self.errors.first() {
             return Err(e.clone());
         }
+        if self.bodies.is_empty() {
+            return Err(ModelError::Invalid {
+                element: "the model".to_string(),
+                what: "no body or point mass: add a [[body]] or [[point_mass]]".to_string(),
+            });
+        }
         self.check_names()?;
         let bodies = self.bodies_data()?;
         let mut joints = Vec::new();

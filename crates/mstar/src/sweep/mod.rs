@@ -1,0 +1,478 @@
+//! Sweeps: one model file run for many values of its keys, the runs spread
+//! over the cores, optionally split into shards for a cluster, and resumable
+//! (`docs/sweeps.md`; the command line is `mstar sweep`).
+//!
+//! A [`Plan`] is the model and its swept [`Param`]s, combined as a grid
+//! (every combination; the first key varies slowest) or zipped (the i-th
+//! value of every key). [`run_plan`] runs the plan's runs of one [`Shard`]
+//! into a directory:
+//!
+//! - `runs/<index>.csv`: each run's CSV file, as `mstar run --set … --out`
+//!   writes it (`[output]` honoured); a run that fails keeps what it
+//!   computed in `runs/<index>.partial.csv`;
+//! - `runs/<index>.row`: its summary row, written once its CSV file is in
+//!   place (a run is complete when it has both; a rerun skips it);
+//! - `summary.csv` (or `summary.<I>of<N>.csv` for shard I of N): one row per
+//!   run, in index order (see [`summary_header`]);
+//! - `sweep.toml`: the plan, which a rerun and [`merge`] check.
+//!
+//! ```no_run
+//! use mstar::sweep::{Combine, Options, Param, Plan, run_plan};
+//! use std::path::Path;
+//!
+//! let params = vec![
+//!     Param::new("body.upper.mass", [1.0, 2.0])?,
+//!     Param::parse("simulation.h=1e-3,5e-4")?,
+//! ];
+//! let plan = Plan::new(Path::new("models/double-pendulum.toml"), params, Combine::Grid)?;
+//! assert_eq!(plan.len(), 4);
+//! let report = run_plan(&plan, &Options::new("sweep-out"), &())?;
+//! println!("{} runs, {} failed", report.ran + report.skipped, report.failed.len());
+//! # Ok::<(), mstar::sweep::SweepError>(())
+//! ```
+
+mod files;
+mod one;
+mod spec;
+
+use std::path::{Path, PathBuf};
+
+use mstar_model::file::{FileError, Format, MechanismFile};
+
+pub use files::{Merged, merge, summary_header};
+pub use spec::Param;
+
+/// Why a sweep does not run (or a merge does not complete).
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SweepError {
+    /// A parameter as written is malformed.
+    #[error("--set {spec}: {why}")]
+    Spec {
+        /// The parameter as given.
+        spec: String,
+        /// What is wrong, and the form to use.
+        why: String,
+    },
+    /// Something else about the plan: no parameters, a key given twice,
+    /// zipped lists of different lengths, a bad shard.
+    #[error("{0}")]
+    Plan(String),
+    /// The model file cannot be read, or a key does not lead to anything in
+    /// it (an unknown element or key: [`FileError::in_override`]).
+    #[error(transparent)]
+    Model(#[from] FileError),
+    /// The output directory holds another sweep's files.
+    #[error(
+        "{} holds another sweep (its sweep.toml records another model file or other parameters): give another --out, or remove the directory to start afresh",
+        .0.display()
+    )]
+    OtherSweep(PathBuf),
+    /// A file could not be read or written.
+    #[error("{}: {source}", .path.display())]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// The I/O error.
+        source: std::io::Error,
+    },
+    /// A file of the sweep is not what the sweep writes (edited by hand?).
+    #[error("{}: {why}", .path.display())]
+    Corrupt {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        why: String,
+    },
+    /// `merge` found runs that no shard's summary has.
+    #[error(
+        "{} of {runs} runs have no row in the shards' summaries (first: {}); run the shards that are missing (the same command with their --shard), then merge again",
+        .missing.len(),
+        .missing.iter().take(10).map(ToString::to_string).collect::<Vec<_>>().join(", ")
+    )]
+    Incomplete {
+        /// The plan's number of runs.
+        runs: usize,
+        /// The indices without a row.
+        missing: Vec<usize>,
+    },
+}
+
+impl SweepError {
+    /// Whether the sweep was refused before running anything because of the
+    /// command line or the model file (the `mstar sweep` exit code 2), rather
+    /// than a failure of files (1).
+    #[must_use]
+    pub fn is_usage(&self) -> bool {
+        matches!(
+            self,
+            Self::Spec { .. } | Self::Plan(_) | Self::Model(_) | Self::OtherSweep(_)
+        )
+    }
+}
+
+/// How the values of several keys make runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Combine {
+    /// Every combination (default): the runs of keys with n₁, n₂, … values
+    /// number n₁ n₂ …; the first key varies slowest.
+    #[default]
+    Grid,
+    /// The i-th value of every key in run i: lists of one length (a key with
+    /// a single value keeps it in every run).
+    Zip,
+}
+
+/// Which of a plan's runs one process runs: those whose index ≡ `index`
+/// (mod `count`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    /// I, from 0.
+    pub index: usize,
+    /// N ≥ 1.
+    pub count: usize,
+}
+
+impl Shard {
+    /// All runs (shard 0 of 1).
+    pub const ALL: Self = Self { index: 0, count: 1 };
+
+    /// Parses `I/N` (`0 ≤ I < N`), e.g. `$SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT`.
+    ///
+    /// # Errors
+    /// [`SweepError::Plan`] for anything else.
+    pub fn parse(text: &str) -> Result<Self, SweepError> {
+        let bad = |why: &str| {
+            SweepError::Plan(format!(
+                "--shard {text}: {why} (I/N runs the runs whose index is I mod N, 0 ≤ I < N, e.g. --shard 0/4)"
+            ))
+        };
+        let (i, n) = text.split_once('/').ok_or_else(|| bad("expected I/N"))?;
+        let (Ok(index), Ok(count)) = (i.trim().parse::<usize>(), n.trim().parse::<usize>()) else {
+            return Err(bad("I and N must be whole numbers"));
+        };
+        if count == 0 || index >= count {
+            return Err(bad("I must be at least 0 and less than N"));
+        }
+        Ok(Self { index, count })
+    }
+
+    /// Whether run `i` is this shard's.
+    #[must_use]
+    pub fn contains(&self, i: usize) -> bool {
+        i % self.count == self.index
+    }
+
+    /// The name of this shard's summary: `summary.csv` for all runs,
+    /// `summary.<I>of<N>.csv` for one shard of several.
+    #[must_use]
+    pub fn summary_name(&self) -> String {
+        if self.count == 1 {
+            "summary.csv".to_string()
+        } else {
+            format!("summary.{}of{}.csv", self.index, self.count)
+        }
+    }
+}
+
+/// A model file and the values of its keys to run it with.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    model: PathBuf,
+    text: String,
+    format: Format,
+    params: Vec<Param>,
+    combine: Combine,
+    /// The coordinates' names (the summary's `u:` columns).
+    coords: Vec<String>,
+}
+
+impl Plan {
+    /// Reads the model file and checks the plan before anything runs: the
+    /// file reads, every key leads to something in it (an element name or a
+    /// key it does not have is an error naming the ones it has), zipped
+    /// lists have one length. A value out of range (a negative mass) is not
+    /// checked here: it is that run's failure.
+    ///
+    /// # Errors
+    /// [`SweepError::Model`] for a file that does not read or a key that
+    /// leads nowhere, [`SweepError::Plan`] for no keys, a key given twice or
+    /// zipped lists of different lengths.
+    pub fn new(model: &Path, params: Vec<Param>, combine: Combine) -> Result<Self, SweepError> {
+        check_params(&params, combine)?;
+        let origin = model.display().to_string();
+        let text = std::fs::read_to_string(model).map_err(|e| SweepError::Io {
+            path: model.to_path_buf(),
+            source: e,
+        })?;
+        let format = Format::of(model);
+        let base = MechanismFile::parse(&text, &origin, format)?;
+        // Each key alone with its first value: an error of the override
+        // itself refuses the plan; an error of the value is the run's.
+        for p in &params {
+            let set = [format!("{}={}", p.key, p.values[0])];
+            match MechanismFile::parse_with(&text, &origin, format, &set) {
+                Err(e) if e.in_override => return Err(e.into()),
+                _ => {}
+            }
+        }
+        let sys = base.mechanism.system();
+        let coords = mstar_model::coord_names(sys);
+        Ok(Self {
+            model: model.to_path_buf(),
+            text,
+            format,
+            params,
+            combine,
+            coords,
+        })
+    }
+
+    /// The model file.
+    #[must_use]
+    pub fn model(&self) -> &Path {
+        &self.model
+    }
+
+    /// The swept keys and their values.
+    #[must_use]
+    pub fn params(&self) -> &[Param] {
+        &self.params
+    }
+
+    /// How the values combine.
+    #[must_use]
+    pub fn combine(&self) -> Combine {
+        self.combine
+    }
+
+    /// The number of runs.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        match self.combine {
+            Combine::Grid => self.params.iter().map(|p| p.values.len()).product(),
+            Combine::Zip => self
+                .params
+                .iter()
+                .map(|p| p.values.len())
+                .max()
+                .unwrap_or(0),
+        }
+    }
+
+    /// Whether the plan has no runs (never, for a plan [`new`](Self::new) made).
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The value of each key in run `index` (< [`len`](Self::len)).
+    #[must_use]
+    pub fn values(&self, index: usize) -> Vec<&str> {
+        match self.combine {
+            Combine::Grid => {
+                // Row-major: the last key varies fastest.
+                let mut rest = index;
+                let mut values: Vec<&str> = self
+                    .params
+                    .iter()
+                    .rev()
+                    .map(|p| {
+                        let v = &p.values[rest % p.values.len()];
+                        rest /= p.values.len();
+                        v.as_str()
+                    })
+                    .collect();
+                values.reverse();
+                values
+            }
+            Combine::Zip => self
+                .params
+                .iter()
+                .map(|p| p.values[index.min(p.values.len() - 1)].as_str())
+                .collect(),
+        }
+    }
+
+    /// The overrides of run `index`, `KEY=VALUE` as `mstar run --set` takes them.
+    #[must_use]
+    pub fn overrides(&self, index: usize) -> Vec<String> {
+        self.params
+            .iter()
+            .zip(self.values(index))
+            .map(|(p, v)| format!("{}={v}", p.key))
+            .collect()
+    }
+}
+
+/// No keys, a key twice, zipped lists of different lengths.
+fn check_params(params: &[Param], combine: Combine) -> Result<(), SweepError> {
+    if params.is_empty() {
+        return Err(SweepError::Plan(
+            "nothing to sweep: give at least one --set KEY=V1,V2,…".into(),
+        ));
+    }
+    for (i, p) in params.iter().enumerate() {
+        if params[..i].iter().any(|q| q.key == p.key) {
+            return Err(SweepError::Plan(format!(
+                "the key {} is given twice: give all its values in one --set {}=V1,V2,…",
+                p.key, p.key
+            )));
+        }
+    }
+    let lists: Vec<&Param> = params.iter().filter(|p| p.values.len() > 1).collect();
+    if combine == Combine::Zip
+        && let Some(other) = lists
+            .iter()
+            .find(|p| p.values.len() != lists[0].values.len())
+    {
+        return Err(SweepError::Plan(format!(
+            "--zip pairs the i-th values of every key, and {} has {} values where {} has {}: give lists of one length (or use --grid for every combination)",
+            other.key,
+            other.values.len(),
+            lists[0].key,
+            lists[0].values.len()
+        )));
+    }
+    Ok(())
+}
+
+/// Where and how [`run_plan`] runs.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// The output directory (created if need be).
+    pub out: PathBuf,
+    /// Runs at once (default: `None`, one per core).
+    pub jobs: Option<usize>,
+    /// The runs to run (default: [`Shard::ALL`]).
+    pub shard: Shard,
+}
+
+impl Options {
+    /// All runs into `out`, one at a time per core.
+    #[must_use]
+    pub fn new(out: impl Into<PathBuf>) -> Self {
+        Self {
+            out: out.into(),
+            jobs: None,
+            shard: Shard::ALL,
+        }
+    }
+}
+
+/// How one run ended.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunOutcome {
+    /// Its index in the plan.
+    pub index: usize,
+    /// `None` when it reached its end; else why not (the summary's status).
+    pub error: Option<String>,
+    /// Wall time, s.
+    pub wall: f64,
+}
+
+/// What [`run_plan`] tells as it goes (implemented by `()` for nothing).
+/// Called from the worker threads.
+pub trait Progress: Sync {
+    /// Before the first run: how many runs it will run and how many it
+    /// skips, complete from an earlier call.
+    fn planned(&self, to_run: usize, skipped: usize) {
+        let _ = (to_run, skipped);
+    }
+
+    /// After each run.
+    fn finished(&self, outcome: &RunOutcome) {
+        let _ = outcome;
+    }
+}
+
+impl Progress for () {}
+
+/// What [`run_plan`] did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Report {
+    /// Runs run now.
+    pub ran: usize,
+    /// Runs skipped, complete from an earlier call.
+    pub skipped: usize,
+    /// The failed runs of the shard (now or before): index and why.
+    pub failed: Vec<(usize, String)>,
+    /// The summary written.
+    pub summary: PathBuf,
+}
+
+/// Runs the runs of `options.shard` that are not complete in `options.out`,
+/// `options.jobs` at a time (each whole run on one thread of a local pool),
+/// and writes the shard's summary. A run that fails does not stop the
+/// others: it is reported in the summary and in [`Report::failed`].
+///
+/// # Errors
+/// [`SweepError::OtherSweep`] when the directory holds another plan's
+/// files, [`SweepError::Io`] when a file cannot be written.
+pub fn run_plan(
+    plan: &Plan,
+    options: &Options,
+    progress: &dyn Progress,
+) -> Result<Report, SweepError> {
+    use rayon::prelude::*;
+    let dir = files::Dir::prepare(&options.out, plan)?;
+    let mine: Vec<usize> = (0..plan.len())
+        .filter(|&i| options.shard.contains(i))
+        .collect();
+    let mut rows = Vec::with_capacity(mine.len());
+    let mut todo = Vec::new();
+    for &i in &mine {
+        match dir.complete(plan, i) {
+            Some(row) => rows.push(row),
+            None => todo.push(i),
+        }
+    }
+    let skipped = rows.len();
+    progress.planned(todo.len(), skipped);
+    let jobs = options
+        .jobs
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(jobs.max(1))
+        .build()
+        .map_err(|e| SweepError::Plan(format!("--jobs {jobs}: {e}")))?;
+    let done: Vec<Result<files::Row, SweepError>> = pool.install(|| {
+        todo.par_iter()
+            .with_max_len(1)
+            .map(|&i| {
+                let row = one::run(plan, &dir, i)?;
+                progress.finished(&row.outcome());
+                Ok(row)
+            })
+            .collect()
+    });
+    for row in done {
+        rows.push(row?);
+    }
+    rows.sort_by_key(|r| r.index);
+    let summary = dir.path().join(options.shard.summary_name());
+    files::write_summary(&summary, &summary_header(plan), &rows)?;
+    Ok(Report {
+        ran: todo.len(),
+        skipped,
+        failed: rows
+            .iter()
+            .filter_map(|r| r.error().map(|e| (r.index, e.to_string())))
+            .collect(),
+        summary,
+    })
+}
+
+/// The exit code of `mstar sweep` for `failed` failed runs: 0 when none
+/// failed, else 10 + the number (at most 110: 100 or more). Distinct from 1
+/// (a file that cannot be written) and 2 (a bad model file or command line,
+/// before anything ran), and below 126.
+#[must_use]
+pub fn exit_code(failed: usize) -> u8 {
+    if failed == 0 {
+        0
+    } else {
+        10 + u8::try_from(failed.min(100)).unwrap_or(100)
+    }
+}

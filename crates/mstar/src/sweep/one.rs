@@ -1,0 +1,134 @@
+//! One run of a sweep: the model with the run's overrides, integrated as
+//! `mstar run` integrates it ([`crate::run::simulate`]), its CSV file written
+//! by [`crate::record::Recorder`], and its summary row.
+
+use std::time::Instant;
+
+use mstar_model::file::MechanismFile;
+
+use super::files::{Dir, Row};
+use super::{Plan, SweepError};
+use crate::csv::{Columns, CsvStream, format_number};
+use crate::record::{Grid, Recorder, Rows};
+use crate::run::ReactionColumns;
+
+/// The figures of a run for its summary row.
+struct Figures {
+    /// `None` when it reached its end, else why not.
+    error: Option<String>,
+    /// The time reached and the last coordinates (none before the start).
+    last: Option<(f64, Vec<f64>)>,
+    max_constraint: Option<f64>,
+    drift: Option<f64>,
+    steps: Option<usize>,
+}
+
+impl Figures {
+    fn failed(why: impl ToString) -> Self {
+        Self {
+            error: Some(why.to_string()),
+            last: None,
+            max_constraint: None,
+            drift: None,
+            steps: None,
+        }
+    }
+}
+
+/// Runs run `index` of `plan` into `dir` and saves its row: a failed run is
+/// a row too (a panic of the run included).
+///
+/// # Errors
+/// Only when the row file cannot be written.
+pub(super) fn run(plan: &Plan, dir: &Dir, index: usize) -> Result<Row, SweepError> {
+    let clock = Instant::now();
+    let figures =
+        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| integrate(plan, dir, index)))
+            .unwrap_or_else(|panic| {
+                let why = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| (*s).to_string())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_default();
+                Figures::failed(format!("the run panicked: {why}"))
+            });
+    let row = row(plan, index, &figures, clock.elapsed().as_secs_f64());
+    dir.save(&row)?;
+    Ok(row)
+}
+
+/// Integrates run `index`, writing its CSV file (or, when it fails, the
+/// samples so far as `<index>.partial.csv`).
+fn integrate(plan: &Plan, dir: &Dir, index: usize) -> Figures {
+    let origin = plan.model().display().to_string();
+    let overrides = plan.overrides(index);
+    let file = match MechanismFile::parse_with(&plan.text, &origin, plan.format, &overrides) {
+        Ok(file) => file,
+        Err(e) => return Figures::failed(e),
+    };
+    let sys = crate::run::lookup(&file.mechanism);
+    let t_end = match crate::run::config(&file.simulation) {
+        Ok((_, t_end)) => t_end,
+        Err(e) => return Figures::failed(e),
+    };
+    let columns = ReactionColumns::new(sys);
+    let stream = match CsvStream::create_with(&dir.csv(index), sys, &columns.names()) {
+        Ok(stream) => stream,
+        Err(e) => return Figures::failed(e),
+    };
+    let grid = match Grid::new(file.output.every_time) {
+        Ok(grid) => grid,
+        Err(e) => return Figures::failed(e),
+    };
+    let rows = Rows {
+        every: file.output.every,
+        grid,
+    };
+    let mut recorder = Recorder::new(Some(stream), Some(&columns), rows, t_end);
+    let result = crate::run::simulate(sys, &file.simulation, &mut recorder);
+    recorder.finish_rows();
+    let mut figures = Figures {
+        error: None,
+        last: recorder.last().map(|(t, u)| (t, u.to_vec())),
+        max_constraint: Some(recorder.max_constraint()),
+        drift: Some(recorder.energy_drift()),
+        steps: None,
+    };
+    let Some(stream) = recorder.into_stream() else {
+        return Figures::failed("no CSV stream");
+    };
+    match result {
+        Ok(stats) => match stream.finish() {
+            Ok(_) => figures.steps = Some(stats.steps),
+            Err(e) => figures.error = Some(e.to_string()),
+        },
+        Err(e) => {
+            let _ = stream.keep_partial(&dir.partial(index));
+            figures.error = Some(e.to_string());
+        }
+    }
+    figures
+}
+
+/// The summary row (see [`super::summary_header`]).
+fn row(plan: &Plan, index: usize, f: &Figures, wall: f64) -> Row {
+    let mut fields = vec![index.to_string()];
+    fields.extend(plan.values(index).into_iter().map(str::to_string));
+    let status = match &f.error {
+        None => "ok".to_string(),
+        // One line, whatever the message.
+        Some(why) => why.split_whitespace().collect::<Vec<_>>().join(" "),
+    };
+    fields.push(status);
+    let number = |x: Option<f64>| x.map(format_number).unwrap_or_default();
+    fields.push(number(f.last.as_ref().map(|l| l.0)));
+    match &f.last {
+        Some((_, u)) => fields.extend(u.iter().map(|&x| format_number(x))),
+        None => fields.extend(plan.coords.iter().map(|_| String::new())),
+    }
+    fields.push(number(f.max_constraint));
+    fields.push(number(f.drift));
+    fields.push(f.steps.map(|s| s.to_string()).unwrap_or_default());
+    fields.push(format!("{wall:.6}"));
+    Row::new(index, plan.params().len() + 1, fields)
+}

@@ -1,0 +1,189 @@
+//! `mstar sweep`: a model file run for many values of its keys
+//! (`mstar::sweep`; `docs/sweeps.md`).
+
+use std::io::IsTerminal as _;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use mstar::sweep::{Combine, Options, Param, Plan, Progress, RunOutcome, Shard, SweepError};
+
+/// Arguments of `mstar sweep`.
+#[derive(clap::Args, Debug)]
+pub struct SweepArgs {
+    /// The model file (TOML or JSON, as for `mstar run`).
+    #[arg(required_unless_present = "merge")]
+    model: Option<PathBuf>,
+    /// A key to sweep and its values: KEY=V1,V2,… (TOML values, as
+    /// `mstar run --set` takes them) or KEY=START:STOP:COUNT (COUNT values
+    /// from START to STOP, both included). Keys are dotted paths into the
+    /// model file, elements of arrays by name: body.upper.mass,
+    /// force.drive.function.constant, simulation.h. Repeatable.
+    #[arg(long = "set", value_name = "KEY=VALUES")]
+    set: Vec<String>,
+    /// Every combination of the values (the default); the first key varies
+    /// slowest.
+    #[arg(long, conflicts_with = "zip")]
+    grid: bool,
+    /// The i-th value of every key in run i (lists of one length).
+    #[arg(long)]
+    zip: bool,
+    /// Runs at once (default: one per core).
+    #[arg(long, value_name = "N")]
+    jobs: Option<usize>,
+    /// Run only the runs whose index is I mod N (0 ≤ I < N), e.g.
+    /// --shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT; the shard's
+    /// summary is DIR/summary.<I>of<N>.csv (join them with --merge DIR).
+    #[arg(long, value_name = "I/N")]
+    shard: Option<String>,
+    /// The output directory: runs/<index>.csv, summary.csv, sweep.toml.
+    /// Rerunning the same command into it skips the runs already complete.
+    #[arg(long, value_name = "DIR", required_unless_present = "merge")]
+    out: Option<PathBuf>,
+    /// Join the shards' summaries of DIR into DIR/summary.csv (instead of
+    /// running).
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["model", "set", "grid", "zip", "jobs", "shard", "out"])]
+    merge: Option<PathBuf>,
+}
+
+/// `mstar sweep`: exit 0 when every run reached its end, 10 + n when n runs
+/// failed (110 for 100 or more), 2 when nothing ran for a bad model file or
+/// command line, 1 when a file could not be read or written.
+pub fn sweep(args: &SweepArgs) -> ExitCode {
+    let result = match &args.merge {
+        Some(dir) => merge(dir),
+        None => run(args),
+    };
+    match result {
+        Ok(failed) => ExitCode::from(mstar::sweep::exit_code(failed)),
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(if e.is_usage() { 2 } else { 1 })
+        }
+    }
+}
+
+/// Plans and runs the sweep; the number of failed runs.
+fn run(args: &SweepArgs) -> Result<usize, SweepError> {
+    let (Some(model), Some(out)) = (&args.model, &args.out) else {
+        return Err(SweepError::Plan("give a model file and --out DIR".into()));
+    };
+    let shard = match &args.shard {
+        Some(s) => Shard::parse(s)?,
+        None => Shard::ALL,
+    };
+    if args.jobs == Some(0) {
+        return Err(SweepError::Plan(
+            "--jobs 0: give at least 1 (the default is one per core)".into(),
+        ));
+    }
+    let params = args
+        .set
+        .iter()
+        .map(|s| Param::parse(s))
+        .collect::<Result<Vec<_>, _>>()?;
+    let combine = if args.zip {
+        Combine::Zip
+    } else {
+        Combine::Grid
+    };
+    let plan = Plan::new(model, params, combine)?;
+    let options = Options {
+        out: out.clone(),
+        jobs: args.jobs,
+        shard,
+    };
+    let progress = Bar::new();
+    let report = mstar::sweep::run_plan(&plan, &options, &progress)?;
+    progress.bar.finish_and_clear();
+    let failed = report.failed.len();
+    println!(
+        "{} runs of {} in this shard: {} run now, {} complete before; {} failed",
+        report.ran + report.skipped,
+        plan.len(),
+        report.ran,
+        report.skipped,
+        failed
+    );
+    println!("wrote {}", report.summary.display());
+    Ok(failed)
+}
+
+/// `--merge DIR`; the number of failed runs.
+fn merge(dir: &std::path::Path) -> Result<usize, SweepError> {
+    let merged = mstar::sweep::merge(dir)?;
+    println!(
+        "wrote {} ({} runs, {} failed)",
+        merged.summary.display(),
+        merged.runs,
+        merged.failed.len()
+    );
+    Ok(merged.failed.len())
+}
+
+/// Runs completed of the total with an estimate of the time left: a bar on
+/// a terminal, else a line per run on standard error.
+struct Bar {
+    bar: ProgressBar,
+    plain: bool,
+    total: AtomicUsize,
+    done: AtomicUsize,
+    start: Instant,
+}
+
+impl Bar {
+    fn new() -> Self {
+        let plain = !std::io::stderr().is_terminal();
+        let target = if plain {
+            ProgressDrawTarget::hidden()
+        } else {
+            ProgressDrawTarget::stderr()
+        };
+        let bar = ProgressBar::with_draw_target(Some(0), target);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{bar:40} {pos}/{len} runs [{elapsed_precise}, {eta} left]",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        Self {
+            bar,
+            plain,
+            total: AtomicUsize::new(0),
+            done: AtomicUsize::new(0),
+            start: Instant::now(),
+        }
+    }
+}
+
+impl Progress for Bar {
+    fn planned(&self, to_run: usize, skipped: usize) {
+        if skipped > 0 {
+            eprintln!("{skipped} runs complete from an earlier sweep: skipped");
+        }
+        self.total.store(to_run, Ordering::Relaxed);
+        self.bar.set_length(to_run as u64);
+    }
+
+    fn finished(&self, o: &RunOutcome) {
+        let done = self.done.fetch_add(1, Ordering::Relaxed) + 1;
+        self.bar.inc(1);
+        let status = match &o.error {
+            None => "ok".to_string(),
+            Some(why) => format!("failed: {why}"),
+        };
+        if self.plain {
+            let total = self.total.load(Ordering::Relaxed);
+            let elapsed = self.start.elapsed().as_secs_f64();
+            let left = elapsed / done as f64 * total.saturating_sub(done) as f64;
+            eprintln!(
+                "run {} {status} ({:.2} s); {done}/{total} done, about {left:.0} s left",
+                o.index, o.wall
+            );
+        } else if o.error.is_some() {
+            self.bar.suspend(|| eprintln!("run {} {status}", o.index));
+        }
+    }
+}
