@@ -184,6 +184,9 @@ impl NativeModel {
         let mechanism = fresh.as_ref().unwrap_or(&self.mechanism);
         let sys = mechanism.system();
         let mut collect = Collect::new(sys.n_coords(), sys.n_constraints());
+        if let Some(rows) = expected_rows(&sim) {
+            collect.reserve(rows);
+        }
         let mut raised = None;
         let outcome = py.detach(|| {
             let mut poll = Poll {
@@ -215,6 +218,17 @@ impl NativeModel {
         error.value(py).setattr("partial", samples)?;
         Err(error)
     }
+}
+
+/// The samples of a run with a fixed step size (`None` with adaptive steps,
+/// or when there would be more than 10⁸).
+fn expected_rows(sim: &Simulation) -> Option<usize> {
+    let (config, t_end) = mstar::run::config(sim).ok()?;
+    if config.error.mode == mstar::newmark::StepMode::Adaptive {
+        return None;
+    }
+    let rows = (t_end / config.h).ceil() + 2.0;
+    (rows.is_finite() && rows < 1e8).then_some(rows as usize)
 }
 
 fn constraint_names(sys: &dyn System) -> Vec<String> {
