@@ -310,18 +310,7 @@ fn main() -> ExitCode {
 /// but without a cause whose text the line already holds (a library error
 /// that quotes its solver's error would otherwise say it twice).
 pub(crate) fn report(e: &anyhow::Error) -> String {
-    let mut line = String::new();
-    for cause in e.chain() {
-        let text = cause.to_string();
-        if line.contains(&text) {
-            continue;
-        }
-        if !line.is_empty() {
-            line.push_str(": ");
-        }
-        line.push_str(&text);
-    }
-    line
+    mstar::run::error_message(e.as_ref())
 }
 
 /// "the sample" or "the n samples".

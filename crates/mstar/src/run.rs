@@ -142,6 +142,13 @@ pub enum RunError {
     /// The start or a step failed.
     #[error(transparent)]
     Integration(#[from] IntegrationError),
+    /// The caller asked the run to stop ([`simulate_until`]) before it
+    /// reached its end.
+    #[error("stopped at t = {t} s")]
+    Stopped {
+        /// How far it got, s.
+        t: f64,
+    },
 }
 
 /// The constraint rows to solve on: `None` for all of them, or (in
@@ -220,6 +227,21 @@ pub fn simulate<S: ModelLookup + ?Sized>(
     sim: &Simulation,
     observer: &mut dyn Observer,
 ) -> Result<RunStats, RunError> {
+    simulate_until(sys, sim, observer, &mut || false)
+}
+
+/// [`simulate`], asking `stop` before every step whether to stop there (a
+/// front end's Ctrl-C); the steps are those of [`simulate`], bit for bit.
+///
+/// # Errors
+/// As [`simulate`], and [`RunError::Stopped`] when `stop` said so (every
+/// sample before has been observed).
+pub fn simulate_until<S: ModelLookup + ?Sized>(
+    sys: &S,
+    sim: &Simulation,
+    observer: &mut dyn Observer,
+    stop: &mut dyn FnMut() -> bool,
+) -> Result<RunStats, RunError> {
     let (config, t_end) = config(sim).map_err(RunError::Settings)?;
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
     match solve_rows(sys, &u0, sim.redundant.unwrap_or_default())? {
@@ -228,7 +250,7 @@ pub fn simulate<S: ModelLookup + ?Sized>(
             let mut integ = Integrator::new(&subset, config, 0.0, &u0, &v0)?;
             left_out_rows_hold(sys, &rows, integ.view().u)?;
             let mut expanded = Expanded::new(&subset, observer);
-            let stats = integ.run(t_end, &mut expanded)?;
+            let stats = drive(&mut integ, t_end, &mut expanded, stop)?;
             match expanded.drifted() {
                 Some(d) => Err(redundancy_changed(sys, d)),
                 None => Ok(stats),
@@ -236,9 +258,51 @@ pub fn simulate<S: ModelLookup + ?Sized>(
         }
         None => {
             let mut integ = Integrator::new(sys, config, 0.0, &u0, &v0)?;
-            Ok(integ.run(t_end, observer)?)
+            drive(&mut integ, t_end, observer, stop)
         }
     }
+}
+
+/// Integrates to `t_end` as [`Integrator::run`] does, the initial state and
+/// every accepted step to `observer`, asking `stop` before every step.
+fn drive<S: System + ?Sized>(
+    integ: &mut Integrator<'_, S>,
+    t_end: f64,
+    observer: &mut dyn Observer,
+    stop: &mut dyn FnMut() -> bool,
+) -> Result<RunStats, RunError> {
+    if !t_end.is_finite() {
+        // The integrator's error for it.
+        return Ok(integ.run(t_end, observer)?);
+    }
+    observer.observe(&integ.view());
+    while !integ.reached(t_end) {
+        if stop() {
+            return Err(RunError::Stopped { t: integ.time() });
+        }
+        integ.step(t_end)?;
+        observer.observe(&integ.view());
+    }
+    Ok(integ.stats())
+}
+
+/// An error as the command line prints it after `error: `: its message and
+/// those of its sources, joined by `: `, each left out when the line already
+/// holds it.
+#[must_use]
+pub fn error_message(e: &(dyn std::error::Error + 'static)) -> String {
+    let mut line = String::new();
+    for cause in std::iter::successors(Some(e), |e| e.source()) {
+        let text = cause.to_string();
+        if line.contains(&text) {
+            continue;
+        }
+        if !line.is_empty() {
+            line.push_str(": ");
+        }
+        line.push_str(&text);
+    }
+    line
 }
 
 /// What `mstar check` finds out about a model before running it.

@@ -319,6 +319,29 @@ impl MechanismFile {
     }
 }
 
+impl Simulation {
+    /// The `[simulation]` of a planar model made in code (no file): the
+    /// defaults with the overrides `simulation.key=value` applied and checked
+    /// as [`MechanismFile::parse_with`] checks a file's (the same messages;
+    /// `origin` names the model in them).
+    ///
+    /// # Errors
+    /// [`FileError`] for a malformed override, an unknown key or a value out
+    /// of range.
+    pub fn with_overrides(origin: &str, overrides: &[String]) -> Result<Self, FileError> {
+        let mut root = node::parse_toml("", origin)?;
+        for o in overrides {
+            settings::apply_override(&mut root, o).map_err(|why| FileError {
+                origin: origin.to_string(),
+                place: None,
+                message: format!("--set {o}: {why}"),
+            })?;
+        }
+        let doc = Doc { origin, text: "" };
+        Ok(settings::read(doc, &root, false)?.0)
+    }
+}
+
 /// Whether the document says `format = "mstar.spatial/1"`.
 fn is_spatial(root: &Node) -> bool {
     let node::Value::Table(entries) = &root.value else {

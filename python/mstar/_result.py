@@ -1,0 +1,150 @@
+"""The samples of a run: :class:`Result` and its :class:`Stats`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Dict, List, Optional
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Stats:
+    """A run's figures, as ``mstar run``'s summary gives them.
+
+    For a partial result (a failed or interrupted run) only ``steps`` and
+    ``wall_time`` are known; the others are None.
+    """
+
+    #: Accepted steps.
+    steps: int
+    #: Stepping time, s (from the initial state on, as ``mstar run``'s
+    #: ``wall time``).
+    wall_time: float
+    #: Rejected step attempts.
+    rejected: Optional[int] = None
+    #: Newton iterations over all attempts.
+    newton_iterations: Optional[int] = None
+    #: The most Newton iterations of an accepted step.
+    max_newton_iterations: Optional[int] = None
+    #: Numeric factorizations of the KKT matrix.
+    factorizations: Optional[int] = None
+    #: Smallest and largest step size used, s.
+    h_min_used: Optional[float] = None
+    h_max_used: Optional[float] = None
+    #: Time reached, s.
+    t: Optional[float] = None
+    #: The largest local error estimate as a ratio to the tolerance.
+    max_error_ratio: Optional[float] = None
+
+
+class Result:
+    """The samples of a run: the initial state and every accepted step.
+
+    Arrays (numpy, one row per sample):
+
+    - ``t`` (n_steps,), s;
+    - ``u``, ``v``, ``a`` (n_steps × n_coords): coordinates, velocities,
+      accelerations, columns in the order of ``coords``;
+    - ``lam`` (n_steps × n_constraints): the multipliers λ, columns in the
+      order of ``constraints``;
+    - ``energy``, ``iterations``, ``residual``, ``constraint`` (n_steps,):
+      the CSV's columns of the same names.
+
+    ``result[name]`` is one column by name (see :meth:`__getitem__`).
+    """
+
+    t: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    lam: np.ndarray
+    energy: np.ndarray
+    iterations: np.ndarray
+    residual: np.ndarray
+    constraint: np.ndarray
+    coords: List[str]
+    constraints: List[str]
+    stats: Stats
+
+    def __init__(self, raw: Dict[str, Any]) -> None:
+        for key in ("t", "u", "v", "a", "lam", "energy", "iterations", "residual", "constraint"):
+            setattr(self, key, raw[key])
+        self.coords = list(raw["coords"])
+        self.constraints = list(raw["constraints"])
+        stats = dict(raw["stats"])
+        stats.setdefault("steps", max(len(self.t) - 1, 0))
+        self.stats = Stats(**stats)
+        self._coord = {name: i for i, name in enumerate(self.coords)}
+        self._row = {name: i for i, name in enumerate(self.constraints)}
+
+    def __len__(self) -> int:
+        """The number of samples."""
+        return len(self.t)
+
+    def columns(self) -> List[str]:
+        """The names of the CSV's standard columns, in its order: ``t``,
+        ``u:<coord>``, ``v:<coord>``, ``a:<coord>``, ``lambda:<i>``,
+        ``energy``, ``iterations``, ``residual``, ``constraint``."""
+        names = ["t"]
+        for prefix in ("u", "v", "a"):
+            names += [f"{prefix}:{c}" for c in self.coords]
+        names += [f"lambda:{i}" for i in range(len(self.constraints))]
+        return names + ["energy", "iterations", "residual", "constraint"]
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        """One column by name (a view into the arrays):
+
+        - ``"t"``, ``"energy"``, ``"iterations"``, ``"residual"``,
+          ``"constraint"``;
+        - a coordinate's name (``"crank.theta"``): its positions, as
+          ``"u:crank.theta"``; ``"v:..."`` and ``"a:..."`` its velocities and
+          accelerations;
+        - ``"lambda:<i>"`` (the CSV's, 0-based) or ``"lambda:<row name>"``
+          (a name in ``constraints``): a multiplier.
+
+        Raises:
+            KeyError: no column has that name.
+        """
+        if name in ("t", "energy", "iterations", "residual", "constraint"):
+            return getattr(self, name)
+        prefix, _, rest = name.partition(":")
+        if name in self._coord:
+            return self.u[:, self._coord[name]]
+        if prefix in ("u", "v", "a") and rest in self._coord:
+            return getattr(self, prefix)[:, self._coord[rest]]
+        if prefix == "lambda":
+            if rest in self._row:
+                return self.lam[:, self._row[rest]]
+            if rest.isdigit() and int(rest) < len(self.constraints):
+                return self.lam[:, int(rest)]
+        raise KeyError(
+            f"no column '{name}': give t, energy, iterations, residual, constraint, "
+            "a coordinate (e.g. "
+            f"{self.coords[0] if self.coords else 'body.x'}), u:/v:/a:<coordinate>, "
+            "or lambda:<i> / lambda:<constraint row>"
+        )
+
+    def to_pandas(self) -> Any:
+        """The samples as a ``pandas.DataFrame`` with the CSV's standard
+        columns (:meth:`columns`).
+
+        Raises:
+            ImportError: pandas is not installed.
+        """
+        try:
+            import pandas as pd
+        except ImportError as e:
+            raise ImportError(
+                "Result.to_pandas() needs pandas, which is not installed: pip install pandas"
+            ) from e
+        data = np.column_stack(
+            [self.t, self.u, self.v, self.a, self.lam, self.energy, self.iterations,
+             self.residual, self.constraint]
+        ) if len(self.t) else np.empty((0, len(self.columns())))
+        frame = pd.DataFrame(data, columns=self.columns())
+        return frame.astype({"iterations": "int64"})
+
+    def __repr__(self) -> str:
+        end = f"t = {self.t[-1]} s" if len(self.t) else "no sample"
+        return f"<mstar.Result: {len(self)} samples to {end}, {len(self.coords)} coordinates, {len(self.constraints)} constraints>"

@@ -1,0 +1,52 @@
+//! The `mstar` Python package's native module, `mstar._native`: model files
+//! and planar builders as models, runs with the GIL released, results as
+//! numpy arrays. The Python layer (`python/mstar/`) wraps it; the API is in
+//! `docs/python.md`.
+//!
+//! Errors carry the messages the command line prints after `error: `
+//! ([`mstar::run::error_message`]): `ModelError` for what `mstar run` exits
+//! 2 on (a file that cannot be read, a key out of range, a setting no solver
+//! has), `IntegrationError` for a run that fails (exit 1), with the samples
+//! up to the failure attached as `partial`.
+
+use pyo3::create_exception;
+use pyo3::prelude::*;
+
+mod builder;
+mod collect;
+mod model;
+
+create_exception!(
+    _native,
+    ModelError,
+    pyo3::exceptions::PyException,
+    "A model that cannot be read or built, or a setting out of range (`mstar run` exits 2)."
+);
+create_exception!(
+    _native,
+    IntegrationError,
+    pyo3::exceptions::PyException,
+    "A run that fails: its start, a step, or refused redundant constraints (`mstar run` exits 1). `partial` holds the samples so far."
+);
+
+/// The message of a library error as the command line prints it.
+pub(crate) fn message(e: &(dyn std::error::Error + 'static)) -> String {
+    mstar::run::error_message(e)
+}
+
+/// `mstar._native`.
+#[pymodule]
+fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let py = m.py();
+    m.add("ModelError", py.get_type::<ModelError>())?;
+    m.add("IntegrationError", py.get_type::<IntegrationError>())?;
+    m.add_class::<model::NativeModel>()?;
+    m.add_class::<builder::PlanarBuilder>()?;
+    m.add_class::<builder::Body>()?;
+    m.add_class::<builder::Point>()?;
+    m.add_class::<builder::TimeFunction>()?;
+    m.add_function(wrap_pyfunction!(model::load_path, m)?)?;
+    m.add_function(wrap_pyfunction!(model::load_text, m)?)?;
+    m.add_function(wrap_pyfunction!(builder::ground, m)?)?;
+    Ok(())
+}

@@ -1,0 +1,265 @@
+//! A model to run: a model file (a path or TOML text) or a planar builder's
+//! system, with its `[simulation]`; runs and checks as `mstar run` and
+//! `mstar check` do them.
+
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use mstar::System;
+use mstar::model::file::{FileError, Format, Mechanism, MechanismFile, Simulation};
+use mstar::run::{CheckReport, RunError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::collect::{Collect, stats_dict};
+use crate::{IntegrationError, ModelError};
+
+/// Where a model came from: what a run with settings re-reads.
+#[derive(Debug)]
+enum Source {
+    /// A model file (TOML, or JSON by its `.json` extension).
+    Path(PathBuf),
+    /// TOML text.
+    Text(String),
+    /// A planar builder (`[simulation]` has its defaults).
+    Built,
+}
+
+/// A model: its mechanism, `[simulation]` settings and where it came from.
+#[pyclass(module = "mstar._native", frozen)]
+#[derive(Debug)]
+pub(crate) struct NativeModel {
+    source: Source,
+    /// What names the model in messages (the path as given).
+    origin: String,
+    mechanism: Mechanism,
+    simulation: Simulation,
+    warnings: Vec<String>,
+}
+
+fn model_error(e: &FileError) -> PyErr {
+    ModelError::new_err(crate::message(e))
+}
+
+/// Reads the model file at `path` (TOML, or JSON by its `.json` extension).
+#[pyfunction]
+pub(crate) fn load_path(path: PathBuf) -> PyResult<NativeModel> {
+    let file = MechanismFile::load_with(&path, &[]).map_err(|e| model_error(&e))?;
+    Ok(NativeModel::of_file(
+        path.display().to_string(),
+        Source::Path(path),
+        file,
+    ))
+}
+
+/// Reads a model from TOML text (named `<string>` in messages).
+#[pyfunction]
+pub(crate) fn load_text(text: String) -> PyResult<NativeModel> {
+    let origin = "<string>".to_string();
+    let file = MechanismFile::parse_with(&text, &origin, Format::Toml, &[])
+        .map_err(|e| model_error(&e))?;
+    Ok(NativeModel::of_file(origin, Source::Text(text), file))
+}
+
+impl NativeModel {
+    fn of_file(origin: String, source: Source, file: MechanismFile) -> Self {
+        Self {
+            source,
+            origin,
+            mechanism: file.mechanism,
+            simulation: file.simulation,
+            warnings: file.warnings,
+        }
+    }
+
+    /// A planar builder's system, with the default settings.
+    pub(crate) fn built(system: mstar::planar::PlanarSystem) -> Self {
+        Self {
+            source: Source::Built,
+            origin: "<builder>".to_string(),
+            mechanism: Mechanism::Planar(system),
+            simulation: Simulation::default(),
+            warnings: Vec::new(),
+        }
+    }
+
+    /// The settings with `overrides` (`simulation.key=value`) applied, read
+    /// as `--set` reads them, and the mechanism read again when they change
+    /// it (`None`: this one).
+    fn settings(&self, overrides: &[String]) -> Result<(Option<Mechanism>, Simulation), FileError> {
+        if overrides.is_empty() {
+            return Ok((None, self.simulation.clone()));
+        }
+        let file = match &self.source {
+            Source::Path(path) => MechanismFile::load_with(path, overrides)?,
+            Source::Text(text) => {
+                MechanismFile::parse_with(text, &self.origin, Format::Toml, overrides)?
+            }
+            Source::Built => {
+                return Ok((None, Simulation::with_overrides(&self.origin, overrides)?));
+            }
+        };
+        Ok((Some(file.mechanism), file.simulation))
+    }
+}
+
+/// Asks Python every 50 ms, with the GIL taken back briefly, whether a
+/// signal handler raised (Ctrl-C: `KeyboardInterrupt`).
+struct Poll<'a> {
+    last: Instant,
+    raised: &'a mut Option<PyErr>,
+}
+
+impl Poll<'_> {
+    const EVERY: Duration = Duration::from_millis(50);
+
+    fn stop(&mut self) -> bool {
+        if self.last.elapsed() < Self::EVERY {
+            return false;
+        }
+        self.last = Instant::now();
+        match Python::attach(|py| py.check_signals()) {
+            Ok(()) => false,
+            Err(e) => {
+                *self.raised = Some(e);
+                true
+            }
+        }
+    }
+}
+
+#[pymethods]
+impl NativeModel {
+    /// What names the model in messages: the path as given, `<string>` or
+    /// `<builder>`.
+    #[getter]
+    fn origin(&self) -> &str {
+        &self.origin
+    }
+
+    /// `"planar"` or `"spatial"`.
+    #[getter]
+    fn kind(&self) -> &'static str {
+        match self.mechanism {
+            Mechanism::Planar(_) => "planar",
+            Mechanism::Spatial(_) => "spatial",
+        }
+    }
+
+    /// The coordinates' names (`body.x`, `body.theta`, ...).
+    #[getter]
+    fn coords(&self) -> Vec<String> {
+        mstar::model::coord_names(self.mechanism.system())
+    }
+
+    /// The constraint rows' names.
+    #[getter]
+    fn constraints(&self) -> Vec<String> {
+        constraint_names(self.mechanism.system())
+    }
+
+    /// The reader's warnings (`mstar run` prints them as `warning: ...`).
+    #[getter]
+    fn warnings(&self) -> Vec<String> {
+        self.warnings.clone()
+    }
+
+    /// `mstar check`'s findings with the settings `overrides`.
+    fn check<'py>(&self, py: Python<'py>, overrides: Vec<String>) -> PyResult<Bound<'py, PyDict>> {
+        let (fresh, sim) = self.settings(&overrides).map_err(|e| model_error(&e))?;
+        let mechanism = fresh.as_ref().unwrap_or(&self.mechanism);
+        let (config, _) = mstar::run::config(&sim)
+            .map_err(|e| ModelError::new_err(format!("{}: {e}", self.origin)))?;
+        let redundant = sim.redundant.unwrap_or_default();
+        let report =
+            py.detach(|| mstar::run::check(mstar::run::lookup(mechanism), &config, redundant));
+        check_dict(py, &report)
+    }
+
+    /// Runs the model with the settings `overrides`, GIL released: a dict of
+    /// arrays and `stats`. On a failure or Ctrl-C, the exception carries the
+    /// samples so far as `partial` (such a dict).
+    fn run<'py>(&self, py: Python<'py>, overrides: Vec<String>) -> PyResult<Bound<'py, PyDict>> {
+        let (fresh, sim) = self.settings(&overrides).map_err(|e| model_error(&e))?;
+        let mechanism = fresh.as_ref().unwrap_or(&self.mechanism);
+        let sys = mechanism.system();
+        let mut collect = Collect::new(sys.n_coords(), sys.n_constraints());
+        if let Some(rows) = expected_rows(&sim) {
+            collect.reserve(rows);
+        }
+        let mut raised = None;
+        let outcome = py.detach(|| {
+            let mut poll = Poll {
+                last: Instant::now(),
+                raised: &mut raised,
+            };
+            let sys = mstar::run::lookup(mechanism);
+            mstar::run::simulate_until(sys, &sim, &mut collect, &mut || poll.stop())
+        });
+        let wall = collect.wall();
+        let names = |d: &Bound<'py, PyDict>| -> PyResult<()> {
+            d.set_item("coords", mstar::model::coord_names(sys))?;
+            d.set_item("constraints", constraint_names(sys))
+        };
+        let samples = collect.into_dict(py)?;
+        names(&samples)?;
+        let error = match outcome {
+            Ok(stats) => {
+                samples.set_item("stats", stats_dict(py, Some(&stats), wall)?)?;
+                return Ok(samples);
+            }
+            Err(RunError::Settings(message)) => return Err(ModelError::new_err(message)),
+            Err(RunError::Stopped { .. }) => raised.unwrap_or_else(|| {
+                pyo3::exceptions::PyKeyboardInterrupt::new_err("the run was stopped")
+            }),
+            Err(e) => IntegrationError::new_err(crate::message(&e)),
+        };
+        samples.set_item("stats", stats_dict(py, None, wall)?)?;
+        error.value(py).setattr("partial", samples)?;
+        Err(error)
+    }
+}
+
+/// The samples of a run with a fixed step size (`None` with adaptive steps,
+/// or when there would be more than 10⁸).
+fn expected_rows(sim: &Simulation) -> Option<usize> {
+    let (config, t_end) = mstar::run::config(sim).ok()?;
+    if config.error.mode == mstar::newmark::StepMode::Adaptive {
+        return None;
+    }
+    let rows = (t_end / config.h).ceil() + 2.0;
+    (rows.is_finite() && rows < 1e8).then_some(rows as usize)
+}
+
+fn constraint_names(sys: &dyn System) -> Vec<String> {
+    (0..sys.n_constraints())
+        .map(|i| sys.constraint_name(i))
+        .collect()
+}
+
+/// [`CheckReport`] as a dict; `report`: the text `mstar check` prints.
+fn check_dict<'py>(py: Python<'py>, r: &CheckReport) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("coordinates", r.coordinates)?;
+    d.set_item("constraints", r.constraints)?;
+    d.set_item("rank", r.rank)?;
+    d.set_item("degrees_of_freedom", r.degrees_of_freedom())?;
+    d.set_item("redundant_constraints", &r.redundant)?;
+    d.set_item("minimum_norm", r.minimum_norm)?;
+    d.set_item("position_violation", r.position_violation.clone())?;
+    d.set_item("velocity_violation", r.velocity_violation.clone())?;
+    let projection = r.projection.clone().map(|[position, velocity]| {
+        let d = PyDict::new(py);
+        d.set_item("position", position)?;
+        d.set_item("velocity", velocity)?;
+        Ok::<_, PyErr>(d)
+    });
+    d.set_item("projection", projection.transpose()?)?;
+    d.set_item("start_error", r.start_error.clone())?;
+    d.set_item("can_run", r.can_run())?;
+    let refused = (!r.redundant.is_empty() && !r.minimum_norm)
+        .then(|| RunError::Redundant(r.redundant.clone()).to_string());
+    d.set_item("error", refused)?;
+    d.set_item("report", r.to_string())?;
+    Ok(d)
+}

@@ -1,0 +1,95 @@
+"""Errors raise the exception of their kind with the message `mstar run` (or
+`mstar check`) prints after `error: `; a failed run keeps its samples in
+`e.partial`, equal bit for bit to the CLI's `<name>.partial.csv`."""
+
+import pytest
+
+import mstar
+from conftest import MODELS, assert_same_columns
+
+BAD_KEY = """format = "mstar.planar/1"
+
+[[body]]
+name = "bob"
+mass = -1.0
+inertia = 0.0
+pose = [1.0, 0.0, 0.0]
+"""
+
+
+def test_a_missing_file_is_a_model_error(run_cli, tmp_path):
+    cli = run_cli(tmp_path / "nope.toml")
+    with pytest.raises(mstar.ModelError) as e:
+        mstar.load(str(tmp_path / "nope.toml"))
+    assert cli.code == 2
+    assert str(e.value) == cli.error()
+
+
+def test_a_value_out_of_range_is_a_model_error(run_cli, tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text(BAD_KEY)
+    cli = run_cli(path)
+    with pytest.raises(mstar.ModelError) as e:
+        mstar.load(path)
+    assert cli.code == 2
+    assert str(e.value) == cli.error()
+    # The same text, not a file: named <string>.
+    with pytest.raises(mstar.ModelError) as e:
+        mstar.load(BAD_KEY)
+    assert str(e.value) == cli.error().replace(str(path), "<string>")
+
+
+@pytest.mark.parametrize(
+    "settings,args",
+    [
+        ({"h": -1.0}, ["--h", "-1"]),
+        ({"kkt": "nope"}, ["--set", "simulation.kkt=nope"]),
+        ({"integrator": "rk4"}, ["--set", "simulation.integrator=rk4"]),
+        ({"no_such_key": 1}, ["--set", "simulation.no_such_key=1"]),
+    ],
+)
+def test_bad_settings_are_model_errors(run_cli, settings, args):
+    path = MODELS / "four-bar.toml"
+    cli = run_cli(path, *args)
+    with pytest.raises(mstar.ModelError) as e:
+        mstar.load(path).run(**settings)
+    assert cli.code == 2
+    assert str(e.value) == cli.error()
+
+
+def test_refused_redundant_constraints_are_an_integration_error(run_cli):
+    path = MODELS / "parallelogram-third-crank.toml"
+    cli = run_cli(path, "--set", "simulation.redundant=refuse")
+    with pytest.raises(mstar.IntegrationError) as e:
+        mstar.load(path).run(redundant="refuse")
+    assert cli.code == 1
+    assert str(e.value) == cli.error()
+    assert len(e.value.partial) == 0
+
+
+def test_a_failed_step_keeps_the_samples_before_it(run_cli):
+    # The paper's undamped Newmark on the pendulum fails near t = 5.7 s.
+    path = MODELS / "pendulum.toml"
+    cli = run_cli(path, "--set", "simulation.integrator=newmark")
+    with pytest.raises(mstar.IntegrationError) as e:
+        mstar.load(path).run(integrator="newmark")
+    assert cli.code == 1
+    assert str(e.value) == cli.error()
+    assert str(e.value).startswith("step size too small at t = 5.7")
+    partial = e.value.partial
+    assert isinstance(partial, mstar.Result)
+    assert 5.7 < partial.t[-1] < 5.8
+    assert partial.stats.steps == len(partial) - 1
+    assert_same_columns(partial, cli)
+
+
+def test_a_builder_error_is_a_model_error():
+    from mstar import planar
+
+    b = planar.Builder()
+    b.point_mass("p", mass=1.0, position=(0.0, 0.0))
+    b.point_mass("p", mass=1.0, position=(1.0, 0.0))
+    with pytest.raises(mstar.ModelError, match="'p'"):
+        b.build()
+    with pytest.raises(ValueError, match="coordinate: expected 'x', 'y' or 'theta', got 'z'"):
+        planar.Builder().driver("d", b.point_mass("q", mass=1.0, position=(0, 0)), "z", 0.0)
