@@ -331,10 +331,8 @@ impl Simulation {
     pub fn with_overrides(origin: &str, overrides: &[String]) -> Result<Self, FileError> {
         let mut root = node::parse_toml("", origin)?;
         for o in overrides {
-            settings::apply_override(&mut root, o).map_err(|why| FileError {
-                origin: origin.to_string(),
-                place: None,
-                message: format!("--set {o}: {why}"),
+            settings::apply_override(&mut root, o).map_err(|why| {
+                FileError::unplaced(origin, format!("--set {o}: {why}")).of_override()
             })?;
         }
         let doc = Doc { origin, text: "" };
