@@ -117,6 +117,7 @@ const REGISTRY: &[Registration] = &[
     sparse_lu::REGISTRATION,
     sparse_ldlt::REGISTRATION,
     schur::REGISTRATION,
+    schur::REGISTRATION_LU,
 ];
 
 /// The registered backends.
@@ -141,6 +142,9 @@ impl Backend {
     pub const SPARSE_LDLT: Self = Self("ldlt");
     /// The Schur complement on a block-diagonal `S` (`crates/kkt/src/schur/`).
     pub const SCHUR: Self = Self("schur");
+    /// The Schur complement on a block-diagonal `S` that need not be
+    /// symmetric, `C` by an envelope LU (`crates/kkt/src/schur/`).
+    pub const SCHUR_LU: Self = Self("schur-lu");
 
     /// The backend called `name` (`"auto"` or a registered name).
     #[must_use]
@@ -203,6 +207,7 @@ mod tests {
             Backend::SPARSE_LU,
             Backend::SPARSE_LDLT,
             Backend::SCHUR,
+            Backend::SCHUR_LU,
         ] {
             assert_eq!(Backend::named(b.name()), Some(b));
             assert!(b.structure().is_some(), "{b}");

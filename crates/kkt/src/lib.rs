@@ -39,12 +39,19 @@
 //!   after AMD. A chain (diagonal `S`, `C` by its envelope) takes one-pass
 //!   paths for the factorization and for the residual check. It is the
 //!   fastest backend on chains (`docs/performance.md`).
+//! - `schur-lu` ([`Backend::SCHUR_LU`]): the same for an `S` whose blocks
+//!   are not symmetric (the exact iteration matrix of bodies in Euler
+//!   parameters, whose gyroscopic blocks are not): `C` has the symmetric
+//!   pattern of `B Bᵀ` and unsymmetric values, and is factored by an LU
+//!   without pivoting on its envelope in the constraints' own order (its
+//!   symmetric part is positive definite when that of `S` is); a wider
+//!   envelope is refused.
 //! - [`Backend::AUTO`] (default): dense up to [`KktOptions::dense_threshold`]
 //!   unknowns; above it, when [`KktOptions::n_primal`] is given, Schur if the
 //!   structure's `S` is block-diagonal with small blocks, else LDLᵀ, else
 //!   sparse LU; sparse LU without `n_primal` ([`KktOptions::candidates`]).
 //!   `ldlt` and `schur` need a symmetric matrix
-//!   ([`Registration::symmetric`]).
+//!   ([`Registration::symmetric`]); an unsymmetric one skips to `schur-lu`.
 //!
 //! A singular or numerically singular matrix is an `Err` naming the unknown that
 //! has no pivot, never NaN or a panic. This crate knows nothing of mechanics:
@@ -70,6 +77,7 @@ mod chain_tests;
 mod csc;
 mod dense;
 mod envelope;
+mod envelope_lu;
 mod norm;
 pub(crate) mod schur;
 mod solver;
@@ -131,10 +139,12 @@ impl KktOptions {
     /// The backends [`KktSolver::new`] tries, in order, for a matrix of
     /// dimension `dim`: the chosen one alone, or for [`Backend::AUTO`] dense up
     /// to [`dense_threshold`](Self::dense_threshold) unknowns, else with
-    /// [`n_primal`](Self::n_primal) Schur, LDLᵀ, then sparse LU (Schur
-    /// refuses a structure whose `S` is not block-diagonal with small blocks,
-    /// LDLᵀ one that is not symmetric; a caller that knows its matrix is not
-    /// symmetric skips both), else sparse LU.
+    /// [`n_primal`](Self::n_primal) Schur, Schur with LU, LDLᵀ, then sparse
+    /// LU (both Schur backends refuse a structure whose `S` is not
+    /// block-diagonal with small blocks, `schur-lu` also one whose `C` has a
+    /// wide envelope, LDLᵀ one that is not symmetric; a caller that knows its
+    /// matrix is not symmetric skips `schur` and `ldlt`, and so takes
+    /// `schur-lu` for an unsymmetric block-diagonal `S`), else sparse LU.
     ///
     /// ```
     /// use mstar_kkt::{Backend, KktOptions};
@@ -143,7 +153,10 @@ impl KktOptions {
     /// assert_eq!(auto.candidates(20), [Backend::DENSE]);
     /// assert_eq!(auto.candidates(50), [Backend::SPARSE_LU]);
     /// let kkt = KktOptions { n_primal: Some(30), ..auto };
-    /// assert_eq!(kkt.candidates(50), [Backend::SCHUR, Backend::SPARSE_LDLT, Backend::SPARSE_LU]);
+    /// assert_eq!(
+    ///     kkt.candidates(50),
+    ///     [Backend::SCHUR, Backend::SCHUR_LU, Backend::SPARSE_LDLT, Backend::SPARSE_LU]
+    /// );
     /// let chosen = KktOptions { backend: Backend::SPARSE_LDLT, ..kkt };
     /// assert_eq!(chosen.candidates(50), [Backend::SPARSE_LDLT]);
     /// ```
@@ -154,7 +167,12 @@ impl KktOptions {
         } else if dim <= self.dense_threshold {
             vec![Backend::DENSE]
         } else if self.n_primal.is_some() {
-            vec![Backend::SCHUR, Backend::SPARSE_LDLT, Backend::SPARSE_LU]
+            vec![
+                Backend::SCHUR,
+                Backend::SCHUR_LU,
+                Backend::SPARSE_LDLT,
+                Backend::SPARSE_LU,
+            ]
         } else {
             vec![Backend::SPARSE_LU]
         }

@@ -68,3 +68,61 @@ fn ten_bar_tip_matches_exudyn() {
         assert!((got - want).abs() < 1e-7, "tip {tip:?}, Exudyn {want}");
     }
 }
+
+/// `(Newton iterations, steps, backend)` of the chain of `n` bars to `t_end`
+/// at the defaults of `mstar chain` (h = 1e-3, tol 1e-10, full Newton).
+fn iterations(sys: &SpatialSystem, t_end: f64) -> (usize, usize, mstar::kkt::Backend) {
+    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+    let config = Config {
+        h: 1e-3,
+        newton: Newton::Full,
+        ..Config::default()
+    };
+    let mut integ = Integrator::new(sys, config, 0.0, &u0, &v0).expect("start");
+    integ
+        .run(t_end, &mut |_: &SampleRef<'_>| {})
+        .expect("integration");
+    let stats = integ.stats();
+    (stats.iterations, stats.steps, integ.backend())
+}
+
+/// With the exact (unsymmetric) iteration matrix the chain takes the
+/// `schur-lu` backend and Newton converges in one iteration a step at the
+/// default tolerance; the symmetrized matrix takes two.
+#[test]
+fn exact_tangent_takes_one_newton_iteration_a_step() {
+    let exact = spatial_bar_chain(50, RotationalMass::Regularized);
+    let (it, steps, backend) = iterations(&exact, 0.3);
+    assert_eq!(backend, mstar::kkt::Backend::SCHUR_LU);
+    assert_eq!((it, steps), (300, 300), "exact tangent");
+    let symmetric = exact.with_symmetric_tangent();
+    let (it, steps, backend) = iterations(&symmetric, 0.3);
+    assert_eq!(backend, mstar::kkt::Backend::SCHUR);
+    assert!(
+        it >= 2 * steps - 5,
+        "symmetrized: {it} iterations, {steps} steps"
+    );
+}
+
+/// The physics is unchanged by the exact tangent: at N = 1000, t = 0.1 s the
+/// tip is where Exudyn 1.13.6 puts it (x = 999.499125074 m, z =
+/// −0.049050000 m), at the defaults of `mstar chain`.
+#[test]
+fn thousand_bar_tip_matches_exudyn_with_the_exact_tangent() {
+    let sys = spatial_bar_chain(1000, RotationalMass::Regularized);
+    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+    let config = Config {
+        h: 1e-3,
+        newton: Newton::Full,
+        ..Config::default()
+    };
+    let mut integ = Integrator::new(&sys, config, 0.0, &u0, &v0).expect("start");
+    let mut last = Vec::new();
+    integ
+        .run(0.1, &mut |s: &SampleRef<'_>| last = s.u.to_vec())
+        .expect("integration");
+    let (x, _) = sys.body("bar1000").expect("the tip bar");
+    let (tip_x, tip_z) = (last[x], last[x + 2]);
+    assert!((tip_x - 999.499_125_074).abs() < 1e-8, "tip x {tip_x}");
+    assert!((tip_z + 0.049_050_000).abs() < 1e-8, "tip z {tip_z}");
+}

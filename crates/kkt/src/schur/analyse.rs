@@ -3,8 +3,9 @@
 //! how `C` is factored (envelope or AMD), the slots every block writes in `C`,
 //! and `B` by primal column.
 
-use super::{Block, CFactor, FILL_SLACK, MAX_BLOCK, Schur};
+use super::{Block, CFactor, FILL_SLACK, MAX_BLOCK, Schur, Symmetry};
 use crate::envelope::EnvelopeLdlt;
+use crate::envelope_lu::EnvelopeLu;
 use crate::sparse_ldlt::{SparseLdlt, kkt_ordering};
 use crate::{Csc, KktError};
 
@@ -51,6 +52,22 @@ impl Schur {
     /// [`MAX_BLOCK`] unknowns, touches more than `u16::MAX` rows, or the
     /// structure is too large for 32-bit indices.
     pub(crate) fn new(a: &Csc, n_primal: usize) -> Result<Self, KktError> {
+        Self::with_symmetry(a, n_primal, Symmetry::Symmetric)
+    }
+
+    /// [`new`](Self::new) for symmetric `S` and `D` ([`Symmetry::Symmetric`],
+    /// `C` by LDLᵀ) or any values on `a`'s pattern ([`Symmetry::General`],
+    /// `C` by LU on its envelope in the constraints' own order).
+    ///
+    /// # Errors
+    /// As [`new`](Self::new); with [`Symmetry::General`] also when `C`'s
+    /// envelope in the constraints' own order is wider than `FILL_SLACK`
+    /// times the factor AMD gives (the LU has no sparse fallback).
+    pub(crate) fn with_symmetry(
+        a: &Csc,
+        n_primal: usize,
+        symmetry: Symmetry,
+    ) -> Result<Self, KktError> {
         let n = n_primal;
         let m = a.n - n;
         let mut parts = Parts::gather(a, n, &components(a, n))?;
@@ -60,10 +77,15 @@ impl Schur {
             .filter(|&(p, _)| a.row_idx[p] >= n)
             .map(|(p, j)| (p, a.row_idx[p] - n, j - n))
             .collect();
-        let order = COrder::choose(&parts, &d_all, m)?;
+        let order = COrder::choose(&parts, &d_all, m, symmetry)?;
         let pairs = pair_slots(&mut parts, &order)?;
         let b = BColumns::new(a, n, &order.inv)?;
-        Self::from_parts(a.n, parts, order, pairs, d_all, b)
+        let mut schur = Self::from_parts(a.n, parts, order, pairs, d_all, b)?;
+        if symmetry == Symmetry::General {
+            schur.refine = true;
+            (schur.refine_b, schur.refine_r) = (vec![0.0; a.n], vec![0.0; a.n]);
+        }
+        Ok(schur)
     }
 
     /// The backend from its analysed parts, with its buffers.
@@ -139,6 +161,9 @@ impl Schur {
             b_col_ptr: b.col_ptr,
             b_rows: b.rows,
             b_pos: b.pos,
+            refine: false,
+            refine_b: Vec::new(),
+            refine_r: Vec::new(),
             blocks: parts.blocks,
             coords: parts.coords,
             s_entries: parts.s_entries,
@@ -283,8 +308,15 @@ impl COrder {
     /// when that is at most `FILL_SLACK` times the factor AMD gives (a chain's
     /// joints in order: a band of width 3, factored and solved in sequential
     /// passes), else by faer's sparse LDLᵀ after AMD, on the one triangle it
-    /// reads (faer then factors it in place).
-    fn choose(parts: &Parts, d_all: &[(usize, usize, usize)], m: usize) -> Result<Self, KktError> {
+    /// reads (faer then factors it in place). With [`Symmetry::General`] the
+    /// envelope is factored by LU on both triangles, and there is no
+    /// fallback: a wider envelope is an error.
+    fn choose(
+        parts: &Parts,
+        d_all: &[(usize, usize, usize)],
+        m: usize,
+        symmetry: Symmetry,
+    ) -> Result<Self, KktError> {
         let mut pattern: Vec<(usize, usize)> = Vec::new();
         for b in &parts.blocks {
             let rows = &parts.rows[b.rows.clone()];
@@ -308,12 +340,27 @@ impl COrder {
         let amd = SparseLdlt::preordered(&c_amd)?;
         let narrow = envelope.filter(|e| e.len() as f64 <= FILL_SLACK * amd.factor_len() as f64);
         if let Some(envelope) = narrow {
-            let identity: Vec<usize> = (0..m).collect();
-            return Ok(Self {
-                fwd: identity.clone(),
-                inv: identity,
-                factor: CFactor::Envelope(envelope),
-            });
+            let factor = match symmetry {
+                Symmetry::Symmetric => Some(CFactor::Envelope(envelope)),
+                // The same envelope: None only beyond 32-bit row pointers,
+                // which the LDLᵀ's has already excluded.
+                Symmetry::General => EnvelopeLu::new(&first).map(CFactor::EnvelopeLu),
+            };
+            if let Some(factor) = factor {
+                let identity: Vec<usize> = (0..m).collect();
+                return Ok(Self {
+                    fwd: identity.clone(),
+                    inv: identity,
+                    factor,
+                });
+            }
+        }
+        if symmetry == Symmetry::General {
+            return Err(KktError::Structure(
+                "the schur-lu backend factors C = B S⁻¹ Bᵀ by its envelope in the constraints' own \
+                 order, and this one is too wide (use lu)"
+                    .to_string(),
+            ));
         }
         Ok(Self {
             fwd,

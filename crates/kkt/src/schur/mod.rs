@@ -37,9 +37,13 @@
 
 mod analyse;
 mod blocks;
+#[cfg(test)]
+mod lu_tests;
+mod refine;
 
 use crate::backend::{Backend, KktBackend, Registration, Structure};
 use crate::envelope::EnvelopeLdlt;
+use crate::envelope_lu::EnvelopeLu;
 use crate::sparse_ldlt::SparseLdlt;
 use crate::{Csc, Finite, KktError, KktOptions, MaxAbs, max_abs};
 
@@ -54,6 +58,31 @@ pub(crate) const REGISTRATION: Registration = Registration {
         Ok(Box::new(Schur::new(a, np)?))
     },
 };
+
+/// The `schur-lu` backend: the same elimination for an `S` whose blocks are
+/// not symmetric (the exact iteration matrix of bodies in Euler parameters,
+/// whose gyroscopic blocks are not; docs/theory.md, "Spatial bodies"), `C`
+/// factored by an envelope LU without pivoting.
+pub(crate) const REGISTRATION_LU: Registration = Registration {
+    backend: Backend::SCHUR_LU,
+    summary: "Schur complement on a block-diagonal, unsymmetric S_T (LU of C by its envelope)",
+    structure: Structure::PLAIN,
+    symmetric: false,
+    analyse: |a, options: &KktOptions| {
+        let np = options.require_n_primal(Backend::SCHUR_LU)?;
+        Ok(Box::new(Schur::with_symmetry(a, np, Symmetry::General)?))
+    },
+};
+
+/// Whether the Schur backend may take `S` (and so `C`) as symmetric.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Symmetry {
+    /// `S` and `D` symmetric: `C` by LDLᵀ on one triangle (`schur`).
+    Symmetric,
+    /// Any values on a symmetric pattern: `C` by LU on both triangles of its
+    /// envelope (`schur-lu`).
+    General,
+}
 
 /// The largest diagonal block of `S` that the Schur backend inverts densely.
 pub const MAX_BLOCK: usize = 12;
@@ -145,6 +174,12 @@ pub(crate) struct Schur {
     banded: bool,
     /// `‖A‖∞` of the last factorization when its one-pass path formed it.
     norm: Option<f64>,
+    /// Whether every solve takes one step of iterative refinement
+    /// (`schur-lu`: `refine.rs` says why), with its scratch `b` and
+    /// `b − A x` (`n + m` each; empty without).
+    refine: bool,
+    refine_b: Vec<f64>,
+    refine_r: Vec<f64>,
 }
 
 impl Schur {
@@ -424,6 +459,9 @@ impl Schur {
     /// Solves in place with the last factorization; returns `‖x‖∞` (as
     /// [`max_abs`] would).
     fn solve(&mut self, rhs: &mut [f64]) -> f64 {
+        if self.refine {
+            return self.solve_refined(rhs).0;
+        }
         if self.diagonal && self.natural {
             return self.solve_diagonal(rhs, false).0;
         }
@@ -431,9 +469,10 @@ impl Schur {
     }
 
     /// Whether [`solve_checked`](Self::solve_checked) forms the residual on
-    /// the way (`S` diagonal, `C` in the constraints' own order).
+    /// the way (`S` diagonal and `C` in the constraints' own order, or a
+    /// refined solve, which forms it anyway).
     pub(crate) fn checks_in_solve(&self) -> bool {
-        self.diagonal && self.natural
+        self.refine || (self.diagonal && self.natural)
     }
 
     /// [`solve`](Self::solve) that also returns
@@ -443,6 +482,9 @@ impl Schur {
     /// Returns `(‖x‖∞, ‖A x − b‖∞)`.
     pub(crate) fn solve_checked(&mut self, rhs: &mut [f64]) -> (f64, f64) {
         debug_assert!(self.checks_in_solve());
+        if self.refine {
+            return self.solve_refined(rhs);
+        }
         self.solve_diagonal(rhs, true)
     }
 
@@ -506,6 +548,7 @@ impl Schur {
         }
         match &mut self.cf {
             CFactor::Envelope(e) => e.solve(g, true),
+            CFactor::EnvelopeLu(e) => e.solve(g),
             cf => {
                 cf.solve_in_place(g);
                 max_abs(g)
@@ -646,6 +689,9 @@ fn for_each_s(
 enum CFactor {
     /// By its lower envelope, in the constraints' own order.
     Envelope(EnvelopeLdlt),
+    /// By LU on its whole envelope, in the constraints' own order (`S` not
+    /// symmetric).
+    EnvelopeLu(EnvelopeLu),
     /// faer's sparse LDLᵀ of the triangle it reads, after AMD.
     Sparse { c: Csc, ldlt: Box<SparseLdlt> },
 }
@@ -655,6 +701,7 @@ impl CFactor {
     fn reads(&self, r: usize, s: usize) -> bool {
         match self {
             Self::Envelope(_) => r >= s,
+            Self::EnvelopeLu(_) => true,
             Self::Sparse { ldlt, .. } => {
                 if ldlt.reads_upper() {
                     r <= s
@@ -674,6 +721,7 @@ impl CFactor {
     fn slot(&self, r: usize, s: usize) -> Result<usize, KktError> {
         let slot = match self {
             Self::Envelope(e) => e.checked_slot(r, s),
+            Self::EnvelopeLu(e) => e.checked_slot(r, s),
             Self::Sparse { c, .. } => c.position(r, s),
         };
         slot.ok_or_else(|| {
@@ -686,6 +734,7 @@ impl CFactor {
     fn values_mut(&mut self) -> &mut [f64] {
         match self {
             Self::Envelope(e) => e.values_mut(),
+            Self::EnvelopeLu(e) => e.values_mut(),
             Self::Sparse { c, .. } => &mut c.values,
         }
     }
@@ -696,6 +745,9 @@ impl CFactor {
             Self::Envelope(e) => e
                 .factor()
                 .map_err(|k| KktError::Singular { unknown: Some(k) }),
+            Self::EnvelopeLu(e) => e
+                .factor()
+                .map_err(|k| KktError::Singular { unknown: Some(k) }),
             Self::Sparse { c, ldlt } => ldlt.factor(c),
         }
     }
@@ -703,6 +755,7 @@ impl CFactor {
     fn solve_in_place(&mut self, y: &mut [f64]) {
         match self {
             Self::Envelope(e) => e.solve_in_place(y),
+            Self::EnvelopeLu(e) => e.solve_in_place(y),
             Self::Sparse { ldlt, .. } => ldlt.solve_in_place(y),
         }
     }

@@ -35,7 +35,7 @@ pub use builder::{
     Attach, DriverKind, JointSpec, JointType, RotationalMass, SpatialBody, SpatialBuilder,
     SpatialInertia, SpatialPointMass, SpringSpec,
 };
-pub use chain::{spatial_bar_chain, spatial_bar_chain_exact};
+pub use chain::spatial_bar_chain;
 pub use examples::element_examples;
 pub use sketch::{SpatialAttachment, SpatialSketch, SpatialSketchBody, SpatialSketchElement};
 pub use system::{SpatialReaction, SpatialSystem};

@@ -419,6 +419,12 @@ impl SpatialSystem {
     /// same solution, linearly instead of quadratically: the dropped skew
     /// parts are `O(ω h)` relative to `M/(β h²)`. Ignored (the tangent stays
     /// exact) when the model has loads.
+    ///
+    /// Not needed for speed: the `schur-lu` backend takes the exact,
+    /// unsymmetric matrix with the same block elimination, and Newton then
+    /// converges in one iteration instead of two (docs/performance.md,
+    /// "Spatial bar chain"). Kept for the symmetric backends (`--kkt schur`
+    /// or `ldlt`) and to compare the two.
     #[must_use]
     pub fn with_symmetric_tangent(mut self) -> Self {
         self.symmetric_tangent = self.loads.is_empty();
@@ -589,8 +595,11 @@ impl System for SpatialSystem {
         const NAMES: [&str; 7] = ["x", "y", "z", "e0", "e1", "e2", "e3"];
         // Bodies are in coordinate order: the last that starts at or before i.
         let k = self.bodies.partition_point(|b| b.x <= i).saturating_sub(1);
-        let b = &self.bodies[k];
-        format!("{}.{}", b.name, NAMES[(i - b.x).min(6)])
+        // (No body: a model without coordinates, asked about coordinate 0.)
+        match self.bodies.get(k) {
+            Some(b) if i < self.n => format!("{}.{}", b.name, NAMES[(i - b.x).min(6)]),
+            _ => format!("coordinate {i}"),
+        }
     }
 
     fn constraint_name(&self, i: usize) -> String {

@@ -1,0 +1,171 @@
+//! The `schur-lu` backend against dense LU on random KKT matrices
+//! `[[S, Bᵀ], [B, 0]]` whose `S` is block-diagonal with unsymmetric blocks of
+//! 1 and 4 unknowns (a body in Euler parameters: `x`, `y`, `z`, `p`), and
+//! whose `B` joins consecutive bodies (a chain: `C` has a narrow envelope).
+
+use crate::testing::{Lcg, relative_difference, relative_residual, vector};
+use crate::{Backend, Csc, KktError, KktOptions, KktSolver};
+
+/// Unknowns per body and constraint rows per body.
+const K: usize = 7;
+const ROWS: usize = 4;
+
+/// Entries `(row, column, value)` of the chain: `S` (unsymmetric, its
+/// symmetric part positive definite), then `B` (rows after `K n` unknowns),
+/// and with `transpose` the `Bᵀ` block. `singular_block`: body whose 4 × 4
+/// block is made singular (two equal rows); `duplicate`: a constraint row
+/// repeated (a redundant constraint), appended last.
+struct Chain {
+    n_bodies: usize,
+    seed: u64,
+    singular_block: Option<usize>,
+    duplicate: Option<usize>,
+}
+
+impl Chain {
+    fn n_primal(&self) -> usize {
+        K * self.n_bodies
+    }
+
+    fn entries(&self, transpose: bool) -> (usize, Vec<(usize, usize, f64)>) {
+        let mut rng = Lcg::new(self.seed);
+        let np = self.n_primal();
+        let mut e = Vec::new();
+        for k in 0..self.n_bodies {
+            let x = K * k;
+            for i in 0..3 {
+                e.push((x + i, x + i, rng.range(0.5, 2.0)));
+            }
+            let mut s = [[0.0; 4]; 4];
+            for (i, row) in s.iter_mut().enumerate() {
+                for (j, v) in row.iter_mut().enumerate() {
+                    *v = rng.range(-0.3, 0.3) + if i == j { rng.range(1.0, 3.0) } else { 0.0 };
+                }
+            }
+            if self.singular_block == Some(k) {
+                s[3] = s[2];
+            }
+            for (i, row) in s.iter().enumerate() {
+                for (j, &v) in row.iter().enumerate() {
+                    e.push((x + 3 + i, x + 3 + j, v));
+                }
+            }
+        }
+        // Body k's rows touch it and (but for the first) body k − 1.
+        let mut rows: Vec<Vec<(usize, f64)>> = Vec::new();
+        for k in 0..self.n_bodies {
+            for _ in 0..ROWS {
+                let mut row: Vec<(usize, f64)> =
+                    (0..K).map(|i| (K * k + i, rng.range(-1.0, 1.0))).collect();
+                if k > 0 {
+                    row.extend((0..K).map(|i| (K * (k - 1) + i, rng.range(-1.0, 1.0))));
+                }
+                rows.push(row);
+            }
+        }
+        if let Some(r) = self.duplicate {
+            rows.push(rows[r].clone());
+        }
+        for (r, row) in rows.iter().enumerate() {
+            for &(j, v) in row {
+                e.push((np + r, j, v));
+                if transpose {
+                    e.push((j, np + r, v));
+                }
+            }
+        }
+        (np + rows.len(), e)
+    }
+
+    /// The matrix as the Schur backends read it (no `Bᵀ`), or whole.
+    fn csc(&self, transpose: bool) -> Csc {
+        let (n, mut e) = self.entries(transpose);
+        e.sort_by_key(|&(i, j, _)| (j, i));
+        let mut a = Csc {
+            n,
+            col_ptr: vec![0; n + 1],
+            ..Csc::default()
+        };
+        for &(i, j, v) in &e {
+            a.col_ptr[j + 1] += 1;
+            a.row_idx.push(i);
+            a.values.push(v);
+        }
+        for j in 0..n {
+            a.col_ptr[j + 1] += a.col_ptr[j];
+        }
+        a
+    }
+}
+
+fn solve(chain: &Chain, backend: Backend, b: &[f64]) -> Result<Vec<f64>, KktError> {
+    let a = chain.csc(backend != Backend::SCHUR_LU);
+    let options = KktOptions {
+        backend,
+        n_primal: Some(chain.n_primal()),
+        ..KktOptions::default()
+    };
+    let mut s = KktSolver::new(&a, &options)?;
+    s.factor(&a.values)?;
+    let mut x = b.to_vec();
+    s.solve_in_place(&mut x)?;
+    Ok(x)
+}
+
+#[test]
+fn schur_lu_solves_unsymmetric_block_diagonal_s_as_dense_lu_does() {
+    for (n_bodies, seed) in [(1, 1), (3, 2), (8, 3), (8, 4)] {
+        let chain = Chain {
+            n_bodies,
+            seed,
+            singular_block: None,
+            duplicate: None,
+        };
+        let whole = chain.csc(true);
+        // S is not symmetric: the symmetric Schur backend would be wrong.
+        let s01 = whole.position(3, 4).map(|p| whole.values[p]);
+        let s10 = whole.position(4, 3).map(|p| whole.values[p]);
+        assert_ne!(s01, s10);
+        let b = vector(whole.n, seed);
+        let dense = solve(&chain, Backend::DENSE, &b).expect("dense LU");
+        let lu = solve(&chain, Backend::SCHUR_LU, &b).expect("schur-lu");
+        let (diff, res) = (
+            relative_difference(&lu, &dense),
+            relative_residual(&whole, &lu, &b),
+        );
+        assert!(
+            diff <= 1e-12,
+            "N = {n_bodies}: ‖x − x_dense‖/‖x‖ = {diff:e}"
+        );
+        assert!(res <= 1e-14, "N = {n_bodies}: relative residual {res:e}");
+    }
+}
+
+#[test]
+fn schur_lu_names_a_singular_block_and_a_redundant_constraint() {
+    let chain = |singular_block, duplicate| Chain {
+        n_bodies: 6,
+        seed: 5,
+        singular_block,
+        duplicate,
+    };
+    let block = chain(Some(2), None);
+    let b = vector(block.csc(true).n, 1);
+    // Rows 3 and 4 of body 2's rotational block are equal: no pivot for
+    // its last unknown.
+    assert_eq!(
+        solve(&block, Backend::SCHUR_LU, &b),
+        Err(KktError::Singular {
+            unknown: Some(K * 2 + 6)
+        })
+    );
+    let redundant = chain(None, Some(9));
+    let m_dup = redundant.n_primal() + ROWS * 6;
+    let b = vector(redundant.csc(true).n, 2);
+    assert_eq!(
+        solve(&redundant, Backend::SCHUR_LU, &b),
+        Err(KktError::Singular {
+            unknown: Some(m_dup)
+        })
+    );
+}
