@@ -746,6 +746,18 @@ fn chain(args: &ChainArgs) -> Result<()> {
             // The regularized rotational mass keeps S_T's blocks regular, as
             // the Schur backend needs; the motion is the singular one's.
             let sys = spatial_bar_chain(n, RotationalMass::Regularized);
+            // A backend that needs a symmetric matrix (--kkt schur, ldlt) gets
+            // the symmetrized tangent: same solution, Newton linear (theory.md).
+            let symmetric = config
+                .kkt
+                .backend
+                .registration()
+                .is_some_and(|r| r.symmetric);
+            let sys = if symmetric {
+                sys.with_symmetric_tangent()
+            } else {
+                sys
+            };
             run_chain(args, config, &sys, clock)
         }
     }

@@ -126,3 +126,42 @@ fn thousand_bar_tip_matches_exudyn_with_the_exact_tangent() {
     assert!((tip_x - 999.499_125_074).abs() < 1e-8, "tip x {tip_x}");
     assert!((tip_z + 0.049_050_000).abs() < 1e-8, "tip z {tip_z}");
 }
+
+/// `mstar chain --kind spatial-bars` with `--kkt schur` or `ldlt`
+/// runs on the symmetrized tangent (the symmetric backends refuse the exact
+/// one) and ends at the same tip as the automatic choice.
+#[test]
+fn the_chain_command_symmetrizes_for_a_symmetric_backend() {
+    let run = |kkt: &str| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_mstar"))
+            .args([
+                "chain",
+                "--kind",
+                "spatial-bars",
+                "--links",
+                "5",
+                "--t-end",
+                "0.05",
+            ])
+            .args(["--kkt", kkt])
+            .output()
+            .expect("mstar runs");
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(
+            out.status.success(),
+            "--kkt {kkt}: {text}{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let solver = format!("KKT solver: {kkt}");
+        assert!(kkt == "auto" || text.contains(&solver), "{text}");
+        let tip = text
+            .lines()
+            .find(|l| l.starts_with("tip "))
+            .map(str::to_string);
+        tip.expect("a tip line")
+    };
+    let auto = run("auto");
+    // The tip is printed to 9 digits: the Newton tolerance (1e-10) is far below.
+    assert_eq!(run("schur"), auto);
+    assert_eq!(run("ldlt"), auto);
+}
