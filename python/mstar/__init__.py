@@ -22,6 +22,7 @@ from ._native import IntegrationError, ModelError
 from ._native import load_path as _load_path
 from ._native import load_text as _load_text
 from ._result import Result, Stats
+from ._sweep import Sweep, sweep
 
 __all__ = [
     "IntegrationError",
@@ -30,7 +31,9 @@ __all__ = [
     "ModelWarning",
     "Result",
     "Stats",
+    "Sweep",
     "load",
+    "sweep",
 ]
 
 

@@ -27,6 +27,14 @@ class NativeModel:
 
 def load_path(path: str) -> NativeModel: ...
 def load_text(text: str) -> NativeModel: ...
+def sweep(
+    model: str,
+    params: List[Tuple[str, List[str]]],
+    out: str,
+    zip: bool = False,
+    jobs: Optional[int] = None,
+    shard: Optional[Tuple[int, int]] = None,
+) -> Dict[str, Any]: ...
 
 class Point: ...
 

@@ -15,6 +15,7 @@ use pyo3::prelude::*;
 mod builder;
 mod collect;
 mod model;
+mod sweep;
 
 create_exception!(
     _native,
@@ -48,5 +49,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(model::load_path, m)?)?;
     m.add_function(wrap_pyfunction!(model::load_text, m)?)?;
     m.add_function(wrap_pyfunction!(builder::ground, m)?)?;
+    m.add_function(wrap_pyfunction!(sweep::sweep, m)?)?;
     Ok(())
 }
