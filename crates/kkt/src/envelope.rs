@@ -14,6 +14,21 @@
 use crate::MaxAbs;
 use crate::sparse_ldlt::PIVOT_TOLERANCE;
 
+/// The start of each row of the lower envelope whose rows `i` hold columns
+/// `first[i] ..= i` (`n + 1` entries), and its length; `None` beyond
+/// `u32::MAX` values (32-bit pointers: the solves stream them for a long
+/// chain). Shared by [`EnvelopeLdlt`] and the envelope LU.
+pub(crate) fn row_pointers(first: &[usize]) -> Option<(Vec<u32>, usize)> {
+    let mut row_ptr = Vec::with_capacity(first.len() + 1);
+    let mut len = 0usize;
+    row_ptr.push(0);
+    for (i, &f) in first.iter().enumerate() {
+        len += i + 1 - f.min(i);
+        row_ptr.push(u32::try_from(len).ok()?);
+    }
+    Some((row_ptr, len))
+}
+
 /// The envelope structure, the matrix values, then the factor in place.
 #[derive(Clone, Debug)]
 pub(crate) struct EnvelopeLdlt {
@@ -32,13 +47,7 @@ impl EnvelopeLdlt {
     /// The envelope of `n` rows whose first stored columns are `first`
     /// (`first[i] ≤ i`); `None` if it has more than `u32::MAX` values.
     pub(crate) fn new(first: &[usize]) -> Option<Self> {
-        let mut row_ptr = Vec::with_capacity(first.len() + 1);
-        let mut len = 0usize;
-        row_ptr.push(0);
-        for (i, &f) in first.iter().enumerate() {
-            len += i + 1 - f.min(i);
-            row_ptr.push(u32::try_from(len).ok()?);
-        }
+        let (row_ptr, len) = row_pointers(first)?;
         Some(Self {
             row_ptr,
             values: vec![0.0; len],

@@ -42,13 +42,7 @@ impl EnvelopeLu {
     /// rows) are `first` (`first[i] ≤ i`); `None` if the lower envelope has
     /// more than `u32::MAX` values.
     pub(crate) fn new(first: &[usize]) -> Option<Self> {
-        let mut row_ptr = Vec::with_capacity(first.len() + 1);
-        let mut len = 0usize;
-        row_ptr.push(0);
-        for (i, &f) in first.iter().enumerate() {
-            len += i + 1 - f.min(i);
-            row_ptr.push(u32::try_from(len).ok()?);
-        }
+        let (row_ptr, len) = crate::envelope::row_pointers(first)?;
         let n = first.len();
         Some(Self {
             row_ptr,
