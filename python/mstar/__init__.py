@@ -21,6 +21,7 @@ from typing import Any, Dict, List, Optional, Union
 from ._native import IntegrationError, ModelError
 from ._native import load_path as _load_path
 from ._native import load_text as _load_text
+from ._literal import toml_literal
 from ._result import Result, Stats
 from ._sweep import Sweep, sweep
 
@@ -41,25 +42,13 @@ class ModelWarning(UserWarning):
     """A value the model reader changed (``mstar run`` prints ``warning: ...``)."""
 
 
-def _toml(value: Any) -> str:
-    """``value`` as a TOML literal, for a ``--set``-style override."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        return repr(value)  # round-trips; inf and nan are TOML too
-    if isinstance(value, str):
-        escaped = value.replace("\\", "\\\\").replace('"', '\\"')
-        return f'"{escaped}"'
-    raise TypeError(
-        f"a [simulation] setting must be a number, a bool or a string, not {type(value).__name__}"
-    )
-
-
 def _overrides(settings: Dict[str, Any]) -> List[str]:
     """``simulation.key=value`` for each setting that is not None."""
-    return [f"simulation.{k}={_toml(v)}" for k, v in settings.items() if v is not None]
+    return [
+        f"simulation.{k}={toml_literal(v, 'a [simulation] setting')}"
+        for k, v in settings.items()
+        if v is not None
+    ]
 
 
 class Model:

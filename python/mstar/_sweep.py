@@ -8,23 +8,8 @@ import os
 from pathlib import Path
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
+from ._literal import toml_literal
 from ._native import sweep as _sweep
-
-
-def _literal(value: Any) -> str:
-    """``value`` as ``--set`` takes it: a TOML literal."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, (int, float)):
-        return repr(value)  # round-trips
-    if isinstance(value, str):
-        escaped = value.replace("\\", "\\\\").replace('"', '\\"')
-        return f'"{escaped}"'
-    if isinstance(value, (list, tuple)):
-        return "[" + ", ".join(_literal(v) for v in value) + "]"
-    raise TypeError(
-        f"a swept value must be a number, a bool, a string or a list of them, not {type(value).__name__}"
-    )
 
 
 class Sweep:
@@ -93,7 +78,10 @@ def sweep(
             lists differ in length, a bad shard — with ``mstar sweep``'s message.
         OSError: a file cannot be written.
     """
-    items = [(key, [_literal(v) for v in values]) for key, values in params.items()]
+    items = [
+        (key, [toml_literal(v, "a swept value", lists=True) for v in values])
+        for key, values in params.items()
+    ]
     out_path = Path(os.fspath(out))
     raw = _sweep(os.fspath(model), items, os.fspath(out_path), zip, jobs, shard)
     return Sweep(out_path, raw)
