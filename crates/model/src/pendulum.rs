@@ -236,6 +236,10 @@ impl System for PendulumChain {
         }
     }
 
+    fn conserves_energy(&self) -> bool {
+        true
+    }
+
     fn potential_energy(&self, _t: f64, u: &[f64]) -> f64 {
         self.links
             .iter()

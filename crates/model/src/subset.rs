@@ -120,6 +120,9 @@ impl<S: System + ?Sized> System for RowSubset<'_, S> {
     fn potential_energy(&self, t: f64, u: &[f64]) -> f64 {
         self.inner.potential_energy(t, u)
     }
+    fn conserves_energy(&self) -> bool {
+        self.inner.conserves_energy()
+    }
     fn phi_t_into(&self, t: f64, u: &[f64], phi_t: &mut [f64]) {
         self.rows_of(phi_t, |full| self.inner.phi_t_into(t, u, full));
     }

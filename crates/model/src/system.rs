@@ -155,6 +155,16 @@ pub trait System: Send + Sync {
         0.0
     }
 
+    /// Whether the exact motion keeps the energy `½ u̇ᵀ M u̇ + V` constant
+    /// (default: `false`): every force in `g` is an inertia force (which does
+    /// no work) or derives from [`potential_energy`](System::potential_energy),
+    /// and the constraints do not depend on time (no drivers). Integrators
+    /// then report the energy drift of a run as a check of its accuracy
+    /// (`docs/theory.md`, "Energy drift").
+    fn conserves_energy(&self) -> bool {
+        false
+    }
+
     /// Length of the scratch buffer [`phi_b_into`](System::phi_b_into) uses
     /// (default: 0).
     fn workspace_len(&self) -> usize {

@@ -2,7 +2,7 @@
 //! a fixed-step run whose estimate exceeded the tolerance, with the option
 //! that fixes it (`docs/reliability.md`).
 
-use mstar_newmark::{Config, RunStats, Scheme};
+use mstar_newmark::{Config, RunStats, Scheme, StepMode};
 
 /// The exit code of a run that reached its end with steps whose estimated
 /// error exceeded the tolerance: its output is complete, and not accurate
@@ -30,6 +30,56 @@ pub fn verdict(warned: bool) -> Result<(), Inaccurate> {
 /// of `mstar run` when `files` (`--set simulation.…`).
 #[must_use]
 pub fn warning(
+    stats: &RunStats,
+    config: &Config,
+    coord_name: &dyn Fn(usize) -> String,
+    files: bool,
+) -> Option<String> {
+    let local = local_warning(stats, config, coord_name, files);
+    let energy = energy_warning(stats, config, files);
+    match (local, energy) {
+        (Some(l), Some(e)) => Some(format!("{l}\n{e}")),
+        (l, e) => l.or(e),
+    }
+}
+
+/// The warning of the energy drift of a model that conserves energy
+/// ([`mstar_newmark::EnergyReport`]), with a step size that brings it within
+/// the tolerance ([`advised_h`]; adaptive runs get it as their largest step,
+/// `--h-max`).
+fn energy_warning(stats: &RunStats, config: &Config, files: bool) -> Option<String> {
+    let e = &stats.energy;
+    let rtol = config.error.rtol;
+    if !e.exceeded(rtol) {
+        return None;
+    }
+    let h = advised_h(stats, config);
+    let adaptive = config.error.mode == StepMode::Adaptive;
+    let advice = match (adaptive, files) {
+        (false, _) => format!("rerun with --h {}", short(h)),
+        (true, false) => format!("rerun with --h {0} --h-max {0}", short(h)),
+        (true, true) => format!("rerun with --h {0} --set simulation.h_max={0}", short(h)),
+    };
+    let why = if adaptive {
+        "adaptive steps keep each step's local error within the tolerance, not the run's, and \
+         their errors added up to this loss"
+    } else {
+        "each step's error, however small, adds up over the run"
+    };
+    Some(format!(
+        "warning: the energy of this model, which conserves energy, drifted by {} J by t = {} s, \
+         {} times the tolerance 2 rtol · (largest kinetic energy {} J): {why}; the results are not \
+         accurate to that tolerance; {advice}",
+        short(e.drift),
+        short(e.t_drift),
+        short(e.drift / e.limit(rtol)),
+        short(e.kinetic_max),
+    ))
+}
+
+/// The warning of the local error estimate (`None` when every step was
+/// within the tolerance).
+fn local_warning(
     stats: &RunStats,
     config: &Config,
     coord_name: &dyn Fn(usize) -> String,
@@ -74,18 +124,7 @@ pub fn warning(
                 "the estimated local error exceeded the tolerance ({tolerance}) {steps}, in '{}'",
                 coord_name(i)
             ),
-            if e.max_ratio <= FAR {
-                format!(
-                    "rerun with --h {} (estimated to bring every step within it) or with --adaptive",
-                    short(e.suggested_h())
-                )
-            } else {
-                format!(
-                    "rerun with --adaptive, or with --h {} or smaller (an estimate this far beyond the \
-                     tolerance is rough: check the rerun's warning again)",
-                    short(e.suggested_h())
-                )
-            },
+            step_advice(stats, config),
         ),
         None => (
             format!(
@@ -102,6 +141,54 @@ pub fn warning(
     Some(format!(
         "warning: {what}: the results are not accurate to that tolerance; {advice} (--strict stops at the first such step)"
     ))
+}
+
+/// The advice of a step size beyond the tolerance: the `h` that brings every
+/// step within it and, for a model that does not conserve energy, adaptive
+/// steps. A conservative model is not advised adaptive steps: their errors
+/// add up over the run and show in its energy drift (`energy_warning`),
+/// measured larger than at fixed steps of the same count
+/// (`docs/reliability.md`).
+fn step_advice(stats: &RunStats, config: &Config) -> String {
+    let e = &stats.error;
+    let adaptive = !stats.energy.tracked;
+    let h = short(advised_h(stats, config));
+    match (e.max_ratio <= FAR, adaptive) {
+        (true, true) => format!(
+            "rerun with --h {h} (estimated to bring every step within it) or with --adaptive"
+        ),
+        (true, false) => format!("rerun with --h {h} (estimated to bring every step within it)"),
+        (false, _) => format!(
+            "rerun with {}--h {h} or smaller (an estimate this far beyond the tolerance is rough: \
+             check the rerun's warning again)",
+            if adaptive { "--adaptive, or with " } else { "" },
+        ),
+    }
+}
+
+/// The step size both warnings advise: the smaller of the one that brings
+/// every step's local error within the tolerance (`O(h³)`,
+/// [`mstar_newmark::ErrorReport::suggested_h`]) and the one that brings the
+/// energy drift within it (second order: the drift falls like `h²`, so
+/// `h_max · (limit / 4 drift)^(1/2)`, a quarter of the limit for margin).
+fn advised_h(stats: &RunStats, config: &Config) -> f64 {
+    let (e, rtol) = (&stats.energy, config.error.rtol);
+    let local = if stats.error.exceeded_tolerance() {
+        stats.error.suggested_h()
+    } else {
+        f64::INFINITY
+    };
+    let energy = if e.exceeded(rtol) {
+        let h = stats.h_max_used * (0.25 * e.limit(rtol) / e.drift).sqrt();
+        if h.is_finite() {
+            h
+        } else {
+            stats.h_min_used / 8.0
+        }
+    } else {
+        f64::INFINITY
+    };
+    local.min(energy)
 }
 
 /// Beyond this ratio the estimate's `O(h³)` scaling is rough (the step is

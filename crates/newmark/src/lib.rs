@@ -34,6 +34,6 @@ mod resample;
 
 pub use error::{IntegrationError, Short};
 pub use integrator::{Integrator, StartReport};
-pub use output::{ErrorReport, Observer, RunStats, Trajectory};
+pub use output::{EnergyReport, ErrorReport, Observer, RunStats, Trajectory};
 pub use params::{AlphaParams, Config, ErrorControl, Newton, Predictor, Scheme, Start, StepMode};
 pub use resample::Resample;

@@ -59,6 +59,60 @@ pub struct RunStats {
     pub t: f64,
     /// The local error estimate over the accepted steps.
     pub error: ErrorReport,
+    /// The energy balance of a system that conserves energy
+    /// ([`System::conserves_energy`](mstar_model::System::conserves_energy)).
+    pub energy: EnergyReport,
+}
+
+/// The energy drift of a run of a system whose exact motion keeps
+/// `E = ½ u̇ᵀ M u̇ + V` constant (`docs/theory.md`, "Energy drift"): a global
+/// check that the local error estimate cannot make, since it sees one step at
+/// a time. The drift is within tolerance when
+/// `max |E − E₀| ≤ 2 rtol · T_max`, `T_max` the largest kinetic energy of the
+/// run (the energy that the motion exchanges), with a round-off floor: an
+/// oscillation's energy goes with its amplitude squared, so amplitudes
+/// within `rtol` keep it within `2 rtol`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct EnergyReport {
+    /// Whether the energy was tracked (the system conserves it).
+    pub tracked: bool,
+    /// `E₀`, J.
+    pub e0: f64,
+    /// `max |E − E₀|` over the accepted steps, J (NaN once `E` was NaN).
+    pub drift: f64,
+    /// When it was largest.
+    pub t_drift: f64,
+    /// The largest kinetic energy, J.
+    pub kinetic_max: f64,
+}
+
+impl EnergyReport {
+    /// Records the energy of a state at `t`.
+    pub(crate) fn record(&mut self, t: f64, kinetic: f64, potential: f64) {
+        let e = kinetic + potential;
+        if !self.tracked {
+            (self.tracked, self.e0, self.drift, self.t_drift) = (true, e, 0.0, t);
+        }
+        let d = (e - self.e0).abs();
+        if d > self.drift || d.is_nan() && !self.drift.is_nan() {
+            (self.drift, self.t_drift) = (d, t);
+        }
+        self.kinetic_max = self.kinetic_max.max(kinetic);
+    }
+
+    /// The drift allowed with relative tolerance `rtol`: `2 rtol · T_max`,
+    /// and never below the round-off of summing the energies.
+    #[must_use]
+    pub fn limit(&self, rtol: f64) -> f64 {
+        let round_off = 1e-12 * (self.e0.abs() + self.kinetic_max);
+        (2.0 * rtol * self.kinetic_max).max(round_off)
+    }
+
+    /// Whether the drift exceeded [`limit`](Self::limit) (NaN exceeds).
+    #[must_use]
+    pub fn exceeded(&self, rtol: f64) -> bool {
+        self.tracked && !(self.drift <= self.limit(rtol))
+    }
 }
 
 /// The local error estimate over a run's accepted steps, as a ratio to the
@@ -123,5 +177,36 @@ impl ErrorReport {
     #[must_use]
     pub fn suggested_h(&self) -> f64 {
         self.h_max * (0.5 / self.max_ratio).cbrt()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::EnergyReport;
+
+    #[test]
+    fn the_drift_is_judged_against_twice_rtol_times_the_largest_kinetic_energy() {
+        let mut e = EnergyReport::default();
+        assert!(!e.exceeded(1e-3), "nothing tracked, nothing exceeded");
+        e.record(0.0, 0.0, -10.0);
+        e.record(1.0, 10.0, -19.99);
+        // |E − E₀| = 0.01 J against 2 · 1e-3 · 10 J = 0.02 J.
+        assert!((e.drift - 0.01).abs() < 1e-12 && e.t_drift == 1.0);
+        assert!(!e.exceeded(1e-3));
+        assert!(e.exceeded(1e-4));
+        e.record(2.0, 5.0, f64::NAN);
+        assert!(e.drift.is_nan() && e.exceeded(1.0), "NaN never passes");
+        e.record(3.0, 5.0, -15.0);
+        assert!(e.drift.is_nan(), "a NaN drift stays NaN");
+    }
+
+    #[test]
+    fn a_body_at_rest_is_judged_at_round_off() {
+        let mut e = EnergyReport::default();
+        e.record(0.0, 0.0, 5.0);
+        e.record(1.0, 0.0, 5.0 + 1e-13);
+        assert!(!e.exceeded(1e-3), "round-off of E₀");
+        e.record(2.0, 0.0, 5.0 + 1e-9);
+        assert!(e.exceeded(1e-3));
     }
 }

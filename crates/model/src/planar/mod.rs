@@ -468,6 +468,11 @@ impl System for PlanarSystem {
         }
     }
 
+    fn conserves_energy(&self) -> bool {
+        self.forces.iter().all(Force::is_conservative)
+            && self.constraints.iter().all(|c| !c.element.is_driver())
+    }
+
     fn potential_energy(&self, _t: f64, u: &[f64]) -> f64 {
         let gravity: f64 = self
             .bodies

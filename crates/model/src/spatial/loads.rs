@@ -30,6 +30,11 @@ pub(crate) trait SpatialLoad: Send + Sync + Debug {
     fn potential(&self, _a: &Frame<f64>, _b: &Frame<f64>) -> f64 {
         0.0
     }
+    /// Whether its forces derive from [`potential`](Self::potential) alone
+    /// (default: no; an undamped spring does).
+    fn conservative(&self) -> bool {
+        false
+    }
 }
 
 macro_rules! load_evals {
@@ -155,6 +160,9 @@ impl SpatialLoad for Spring {
         let e = dot(d, d).sqrt() - self.length;
         0.5 * self.stiffness * e * e + self.preload * e
     }
+    fn conservative(&self) -> bool {
+        self.damping == 0.0
+    }
 }
 
 /// A rotational spring-damper about a revolute axis `h_A`: the torque
@@ -198,5 +206,8 @@ impl SpatialLoad for RotationalSpring {
     fn potential(&self, a: &Frame<f64>, b: &Frame<f64>) -> f64 {
         let e = self.theta(a, b) - self.angle;
         0.5 * self.stiffness * e * e
+    }
+    fn conservative(&self) -> bool {
+        self.damping == 0.0
     }
 }

@@ -786,6 +786,11 @@ impl System for SpatialSystem {
         }
     }
 
+    fn conserves_energy(&self) -> bool {
+        self.loads.iter().all(|l| l.element.conservative())
+            && self.joints.iter().all(|j| !j.element.is_driver())
+    }
+
     fn potential_energy(&self, t: f64, u: &[f64]) -> f64 {
         let _ = t;
         let gravity: f64 = self

@@ -230,7 +230,21 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         this.lin.eval_residual(sys, t0, &s.u, &s.v, &s.a, &s.lambda);
         this.residual = this.lin.residual_norm();
         this.constraint = this.lin.constraint_norm();
+        this.record_energy();
         Ok(this)
+    }
+
+    /// Adds the current state's energy to the run's energy report when the
+    /// system conserves energy ([`System::conserves_energy`]; `output.rs`,
+    /// [`EnergyReport`](crate::EnergyReport)).
+    fn record_energy(&mut self) {
+        if !self.sys.conserves_energy() {
+            return;
+        }
+        let s = &self.state;
+        let kinetic = kinetic_energy(self.lin.mass_pattern(), self.lin.mass(), &s.v);
+        let potential = self.sys.potential_energy(self.t, &s.u);
+        self.stats.energy.record(self.t, kinetic, potential);
     }
 
     /// The Newton variant in use.
@@ -524,6 +538,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         st.error
             .record(estimate.ratio, self.t, h, estimate.coordinate);
         st.error.record_newton(estimate.newton);
+        self.record_energy();
         self.h_last = h;
         if self.config.error.mode == StepMode::Adaptive {
             self.adapt(h, &estimate);

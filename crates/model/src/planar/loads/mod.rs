@@ -48,6 +48,12 @@ pub(crate) trait LoadElement: Send + Sync + std::fmt::Debug {
         0.0
     }
 
+    /// Whether its forces derive from [`potential`](Self::potential) alone
+    /// (default: no; an undamped spring does).
+    fn conservative(&self) -> bool {
+        false
+    }
+
     /// Whether its Jacobians are symmetric at every state (default: yes).
     fn symmetric(&self) -> bool {
         true
@@ -148,6 +154,11 @@ impl Force {
         let pattern = if wrt_v { &self.g_v } else { &self.g_u };
         self.element
             .jacobian(&self.place(t, u, v), wrt_v, pattern, out);
+    }
+
+    /// Whether its forces derive from its potential energy alone.
+    pub(crate) fn is_conservative(&self) -> bool {
+        self.element.conservative()
     }
 
     /// Potential energy of a conservative load.

@@ -88,4 +88,9 @@ impl LoadElement for RotationalSpring {
         let rel = x.theta(1, x.u) - x.theta(0, x.u) - self.angle;
         0.5 * self.k * rel * rel
     }
+
+    /// Without damping its torque is the gradient of its potential.
+    fn conservative(&self) -> bool {
+        self.c == 0.0
+    }
 }

@@ -128,6 +128,11 @@ impl LoadElement for Spring {
         0.5 * self.k * (l - self.rest) * (l - self.rest)
     }
 
+    /// Without damping its force is the gradient of its potential.
+    fn conservative(&self) -> bool {
+        self.c == 0.0
+    }
+
     /// A damper's `∂g/∂q` holds `c ∂ℓ̇/∂q ∂ℓ/∂qᵀ`, not symmetric.
     fn symmetric(&self) -> bool {
         self.c == 0.0
