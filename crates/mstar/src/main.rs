@@ -541,6 +541,7 @@ fn describe(run: &PendulumRun) -> String {
     let newton = match c.newton {
         Newton::Full => "full Newton".to_string(),
         Newton::Modified { max_rate } => format!("modified Newton (rate ≤ {})", Short(max_rate)),
+        Newton::Automatic => "automatic Newton".to_string(),
     };
     format!(
         "pendulum m = {} kg, l = {} m, g = {} m/s², θ₀ = {} rad, θ̇₀ = {} rad/s; {scheme}, {start}, {newton}, h = {} s, t_end = {} s",
@@ -834,10 +835,7 @@ fn run_chain<S: ChainModel>(
     println!(
         "KKT solver: {}; Newton: {}",
         integ.backend(),
-        match integ.newton() {
-            Newton::Modified { max_rate } => format!("modified (rate ≤ {max_rate})"),
-            Newton::Full => "full (a fresh Jacobian at every iteration)".to_string(),
-        }
+        integ.newton()
     );
     let clock = Instant::now();
     let mut progress = Progress::new(args.t_end);

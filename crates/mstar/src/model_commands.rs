@@ -322,7 +322,7 @@ fn integrate<S: System + ?Sized>(
     let mut integ = Integrator::new(sys, config, 0.0, u0, v0)?;
     check_start(integ.view().u)?;
     println!(
-        "KKT solver: {}; Newton: {:?}",
+        "KKT solver: {}; Newton: {}",
         integ.backend(),
         integ.newton()
     );

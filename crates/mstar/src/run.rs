@@ -81,7 +81,8 @@ pub fn config(sim: &Simulation) -> Result<(Config, f64), String> {
     }
     c.newton = match sim.newton {
         Some(NewtonChoice::Full) => Newton::Full,
-        Some(NewtonChoice::Modified) | None => Newton::MODIFIED,
+        Some(NewtonChoice::Modified) => Newton::MODIFIED,
+        _ => Newton::Automatic,
     };
     if let Some(name) = &sim.kkt {
         c.kkt.backend = Backend::named(name).ok_or_else(|| {

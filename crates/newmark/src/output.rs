@@ -111,7 +111,7 @@ impl EnergyReport {
     /// Whether the drift exceeded [`limit`](Self::limit) (NaN exceeds).
     #[must_use]
     pub fn exceeded(&self, rtol: f64) -> bool {
-        self.tracked && !(self.drift <= self.limit(rtol))
+        self.tracked && (self.drift.is_nan() || self.drift > self.limit(rtol))
     }
 }
 

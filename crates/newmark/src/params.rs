@@ -209,7 +209,7 @@ pub enum Start {
 }
 
 /// Newton-Raphson variant.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Newton {
     /// Refactor the iteration matrix at every iteration. With the Schur
     /// backend one iteration per step meets the tolerance and it is the
@@ -221,23 +221,53 @@ pub enum Newton {
     /// Keep the factorization across iterations and steps while the observed
     /// contraction rate `‖Δu_k‖/‖Δu_{k−1}‖` stays below `max_rate`; refactor when it
     /// does not, when the step size changes, after a step that needed more than
-    /// 4 iterations, or after a failed attempt (default, `max_rate = 0.5`).
+    /// 4 iterations, or after a failed attempt ([`Newton::MODIFIED`]: `max_rate = 0.5`).
     Modified {
         /// Largest accepted contraction rate before a refactorization (in (0, 1)).
         max_rate: f64,
     },
+    /// Chosen with the KKT backend when the integrator is made
+    /// ([`Newton::resolve`]): full Newton with the Schur backends, whose
+    /// factorization (small blocks and the banded `C`) costs about one solve
+    /// and whose exact tangent converges in one iteration a step; modified
+    /// Newton with the others, whose factorization dominates a step
+    /// (docs/performance.md, "Newton variant"). The default.
+    #[default]
+    Automatic,
 }
 
 impl Newton {
     /// The modified variant with its usual rate bound, 0.5.
     pub const MODIFIED: Self = Self::Modified { max_rate: 0.5 };
-}
 
-impl Default for Newton {
-    fn default() -> Self {
-        Self::MODIFIED
+    /// The variant to use with `backend`: [`Automatic`](Self::Automatic)
+    /// resolved, the others as they are.
+    #[must_use]
+    pub fn resolve(self, backend: mstar_kkt::Backend) -> Self {
+        match self {
+            Self::Automatic if backend.is_schur() => Self::Full,
+            Self::Automatic => Self::MODIFIED,
+            chosen => chosen,
+        }
     }
 }
+
+impl std::fmt::Display for Newton {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Full => f.write_str("full (a fresh Jacobian at every iteration)"),
+            Self::Modified { max_rate } => write!(
+                f,
+                "modified (the Jacobian kept while each iteration contracts by {} or better)",
+                crate::Short(*max_rate)
+            ),
+            Self::Automatic => {
+                f.write_str("automatic (full with the Schur backends, else modified)")
+            }
+        }
+    }
+}
+
 
 /// Configuration of an [`Integrator`](crate::Integrator). Each field states its
 /// default; [`Config::paper`] is the paper's setting.

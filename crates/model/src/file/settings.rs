@@ -19,11 +19,14 @@ pub enum IntegratorChoice {
 
 /// The Newton variant of `[simulation] newton`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
 pub enum NewtonChoice {
-    /// `"modified"` (default): reuse the factorization while it contracts.
+    /// `"modified"`: reuse the factorization while it contracts.
     Modified,
     /// `"full"`: refactor at every iteration.
     Full,
+    /// `"auto"` (the default): full with the Schur backends, else modified.
+    Auto,
 }
 
 /// What to do with redundant constraints, `[simulation] redundant`.
@@ -205,10 +208,11 @@ fn simulation(mut f: Fields<'_>, spatial: bool) -> Result<Simulation, FileError>
         tol: f.optional("tol", number_in(|x| x > 0.0 && x < 1.0, "in (0, 1)"))?,
         max_iterations: f.optional("max_iterations", count(1))?,
         newton: f
-            .optional("newton", choice(&["modified", "full"]))?
+            .optional("newton", choice(&["auto", "modified", "full"]))?
             .map(|c| match c {
                 "full" => NewtonChoice::Full,
-                _ => NewtonChoice::Modified,
+                "modified" => NewtonChoice::Modified,
+                _ => NewtonChoice::Auto,
             }),
         kkt: f.optional("kkt", string)?.map(str::to_string),
         redundant: f

@@ -19,11 +19,13 @@ use crate::planar::{ModelError, TimeFunction};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum RotationalMass {
     /// `4 Gᵀ J' G`, singular (rank 3): the paper's case, handled by
-    /// `M* = M + BᵀB` (the default).
-    #[default]
+    /// `M* = M + BᵀB`; backends that factor `M` block by block (`schur`,
+    /// `schur-lu`) cannot take it.
     Singular,
     /// `4 Gᵀ J' G + κ p pᵀ` with `κ = 4 tr(J')/3`: regular, the same motion
-    /// (only the normalization multiplier changes).
+    /// (only the normalization multiplier changes); every backend takes it
+    /// (the default).
+    #[default]
     Regularized,
 }
 
@@ -237,7 +239,7 @@ impl SpatialBuilder {
     pub fn new() -> Self {
         Self {
             gravity: [0.0, 0.0, -9.81],
-            rotational_mass: RotationalMass::Singular,
+            rotational_mass: RotationalMass::Regularized,
             bodies: Vec::new(),
             joints: Vec::new(),
             loads: Vec::new(),

@@ -187,6 +187,10 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             });
         }
         let (lin, solver) = linear_algebra(sys, &config, t0, u0)?;
+        let config = Config {
+            newton: config.newton.resolve(solver.backend()),
+            ..config
+        };
         let h = config.h;
         let mut this = Self {
             sys,
@@ -555,7 +559,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         // and regrowing would step straight back into it (a whip).
         let easy = match self.config.newton {
             Newton::Full => 2,
-            Newton::Modified { .. } => (self.config.max_iterations / 4).max(3),
+            Newton::Modified { .. } | Newton::Automatic => (self.config.max_iterations / 4).max(3),
         };
         if iterations <= easy {
             self.easy_steps += 1;
@@ -631,8 +635,8 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
 /// that needs a symmetric matrix is only tried when the system's tangent is
 /// symmetric ([`System::tangent_is_symmetric`]; chosen explicitly for an
 /// unsymmetric one, it is an error), and one that works on `S_T` without the
-/// `BᵀB` term (whose blocks then hold `β' M`) only when `M`'s diagonal is
-/// positive at the start.
+/// `BᵀB` term (whose blocks then hold `β' M`) only when `M`'s blocks are
+/// positive definite at the start ([`singular_mass_coordinate`]).
 fn linear_algebra<S: System + ?Sized>(
     sys: &S,
     config: &Config,
@@ -667,7 +671,7 @@ fn linear_algebra<S: System + ?Sized>(
             )));
         }
         if !structure.augmented
-            && let Some(i) = massless_coordinate(sys, t0, u0)
+            && let Some(i) = singular_mass_coordinate(sys, t0, u0)
         {
             if auto {
                 continue;
@@ -700,19 +704,97 @@ fn analysis_error(t: f64, h: f64, source: KktError) -> IntegrationError {
     }
 }
 
-/// The first coordinate whose diagonal entry of `M(u₀)` is not positive
-/// (`None` when all are: necessary for a positive definite `M`).
-fn massless_coordinate<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Option<usize> {
+/// Largest block of `M` checked for positive definiteness: larger blocks
+/// are left to the backends (the Schur backends refuse them).
+const MASS_BLOCK_CHECKED: usize = 16;
+
+/// The first coordinate at which `M(u₀)` is not positive definite, block by
+/// block (`None` when every block is, as backends that factor `M` without
+/// `BᵀB` need). The blocks are the connected groups of coordinates in `M`'s
+/// pattern (a body's coordinates); each is factored by Cholesky, and a pivot
+/// at the rounding level of its block's diagonal marks it singular. A
+/// positive diagonal is not enough: an Euler-parameter body's rotational
+/// block `4 Gᵀ J' G` has rank 3 in any orientation, with a positive
+/// diagonal once the body is turned.
+fn singular_mass_coordinate<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Option<usize> {
+    let n = sys.n_coords();
     let pattern = sys.mass_pattern();
     let mut mass = vec![0.0; pattern.len()];
     sys.mass_into(t, u, &mut mass);
-    let mut diagonal = vec![0.0; sys.n_coords()];
-    for (&(i, j), &v) in pattern.entries.iter().zip(&mass) {
-        if i == j && i < diagonal.len() {
-            diagonal[i] += v;
+    let blocks = mass_blocks(n, &pattern.entries);
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); n];
+    for i in 0..n {
+        members[blocks[i]].push(i);
+    }
+    let mut local = vec![usize::MAX; n];
+    let mut dense: Vec<Vec<f64>> = vec![Vec::new(); n];
+    for (b, m) in members.iter().enumerate() {
+        if m.len() <= MASS_BLOCK_CHECKED {
+            dense[b] = vec![0.0; m.len() * m.len()];
+            for (k, &i) in m.iter().enumerate() {
+                local[i] = k;
+            }
         }
     }
-    diagonal.iter().position(|&d| d <= 0.0 || d.is_nan())
+    for (&(i, j), &v) in pattern.entries.iter().zip(&mass) {
+        let b = blocks[i];
+        if !dense[b].is_empty() {
+            let k = members[b].len();
+            dense[b][local[i] * k + local[j]] += v;
+        }
+    }
+    members
+        .iter()
+        .zip(&dense)
+        .filter(|(m, d)| !m.is_empty() && !d.is_empty())
+        .find_map(|(m, d)| cholesky_fails(d, m.len()).map(|k| m[k]))
+}
+
+/// The block (a representative coordinate) of every coordinate: the
+/// connected components of `M`'s pattern, by union-find.
+fn mass_blocks(n: usize, entries: &[(usize, usize)]) -> Vec<usize> {
+    fn root(parent: &mut [usize], mut i: usize) -> usize {
+        while parent[i] != i {
+            parent[i] = parent[parent[i]];
+            i = parent[i];
+        }
+        i
+    }
+    let mut parent: Vec<usize> = (0..n).collect();
+    for &(i, j) in entries {
+        if i < n && j < n {
+            let (a, b) = (root(&mut parent, i), root(&mut parent, j));
+            parent[a.max(b)] = a.min(b);
+        }
+    }
+    (0..n).map(|i| root(&mut parent, i)).collect()
+}
+
+/// The first pivot of the Cholesky factorization of the symmetric `k × k`
+/// matrix `a` (row-major) that is not positive beyond rounding (relative to
+/// the largest diagonal entry), or NaN.
+fn cholesky_fails(a: &[f64], k: usize) -> Option<usize> {
+    let scale = (0..k).map(|i| a[i * k + i].abs()).fold(0.0, f64::max);
+    let mut l = a.to_vec();
+    for c in 0..k {
+        let mut d = l[c * k + c];
+        for p in 0..c {
+            d -= l[c * k + p] * l[c * k + p];
+        }
+        if d.is_nan() || d <= 1e-12 * scale {
+            return Some(c);
+        }
+        let d = d.sqrt();
+        l[c * k + c] = d;
+        for r in c + 1..k {
+            let mut x = l[r * k + c];
+            for p in 0..c {
+                x -= l[r * k + p] * l[c * k + p];
+            }
+            l[r * k + c] = x / d;
+        }
+    }
+    None
 }
 
 /// A backend that factors `S` without `BᵀB` chosen for a model whose `M` is
@@ -731,9 +813,11 @@ fn singular_mass_error<S: System + ?Sized>(
         .map(|r| r.backend.name())
         .collect();
     IntegrationError::Config(format!(
-        "the {backend} KKT backend needs a mass matrix with a positive diagonal (it factors M without \
-         the BᵀB term), and this model's has none for coordinate '{}' (the paper's singular M); \
-         use the {} backend, or the automatic choice, which factor M + BᵀB",
+        "the {backend} KKT backend needs a mass matrix with a positive diagonal and no singular \
+         block (it factors M without the BᵀB term), and this model's is singular at coordinate \
+         '{}' (the paper's singular M: a coordinate without mass, or a spatial body's rotational \
+         block with rotational_mass = \"singular\"); use the {} backend, or the automatic \
+         choice, which factor M + BᵀB",
         sys.coord_name(i),
         match working.split_last() {
             Some((last, [])) => (*last).to_string(),

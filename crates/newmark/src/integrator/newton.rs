@@ -74,7 +74,10 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             }
             let refactor = match self.config.newton {
                 Newton::Full => true,
-                Newton::Modified { .. } => force_refactor || self.factored_h != Some(h),
+                // (Automatic is resolved when the integrator is made.)
+                Newton::Modified { .. } | Newton::Automatic => {
+                    force_refactor || self.factored_h != Some(h)
+                }
             };
             if refactor {
                 self.refactor(&k, h)?;
@@ -121,6 +124,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             a_p: 1.0 / (self.p.beta * h * h),
             max_rate: match self.config.newton {
                 Newton::Modified { max_rate } => max_rate,
+                Newton::Automatic => 0.5,
                 Newton::Full => f64::INFINITY,
             },
             shift: kept - in_matrix,
