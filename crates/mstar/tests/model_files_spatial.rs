@@ -476,3 +476,41 @@ fn bodies_that_start_turned_run_under_the_defaults_on_every_backend() {
     assert!(worst < 1e-7, "top: {worst:e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 21 (12): a revolute joint whose two axes are not parallel at the
+/// start was reported as redundant, and the advice (minimum-norm
+/// multipliers) then failed. It is refused at the key, naming both axes in
+/// global axes and the angle between them; the advice (`axis`, global) runs.
+#[test]
+fn revolute_axes_that_are_not_parallel_at_the_start_are_named() {
+    let text = bar(
+        "revolute",
+        "axes = [[0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]",
+        [0.5, 0.0, 0.0],
+    );
+    let e = error(&text);
+    assert!(e.starts_with("m.toml:15:"), "{e}");
+    assert!(
+        e.contains("the two axes must be parallel at the initial pose"),
+        "{e}"
+    );
+    assert!(
+        e.contains("[0.0000, 1.0000, 0.0000] and [0.0000, 0.0000, 1.0000], 90.0000°"),
+        "{e}"
+    );
+    assert!(!e.contains("redundant"), "{e}");
+    // Antiparallel axes are the same line: accepted.
+    let flipped = bar(
+        "revolute",
+        "axes = [[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]]",
+        [0.5, 0.0, 0.0],
+    );
+    let (_, rows) = run_text("antiparallel", &flipped);
+    assert!(rows.len() > 1);
+    // The advice: one global axis.
+    let (_, rows) = run_text(
+        "global-axis",
+        &bar("revolute", "axis = [0.0, 1.0, 0.0]", [0.5, 0.0, 0.0]),
+    );
+    assert!(rows.len() > 1);
+}

@@ -268,7 +268,6 @@ impl std::fmt::Display for Newton {
     }
 }
 
-
 /// Configuration of an [`Integrator`](crate::Integrator). Each field states its
 /// default; [`Config::paper`] is the paper's setting.
 #[derive(Clone, Debug, PartialEq)]

@@ -353,13 +353,36 @@ impl<'a> Model<'a> {
                 return Err(f.bad(e, format!("axis {} must not be zero", k + 1)));
             }
         }
+        let g = [sides[0].global(axes[0]), sides[1].global(axes[1])];
+        let g = [
+            sub(g[0], sides[0].global([0.0; 3])),
+            sub(g[1], sides[1].global([0.0; 3])),
+        ];
+        let c = dot(g[0], g[1]) / (dot(g[0], g[0]) * dot(g[1], g[1])).sqrt();
+        let parallel = matches!(
+            kind,
+            JointType::Revolute | JointType::Prismatic | JointType::Cylindrical
+        );
+        // The joint keeps its axes as they are at the start: axes that are
+        // not parallel there would make its rows contradict the start
+        // (reported as redundant, with advice that fails). The same bound as
+        // the universal joint's: 1e-6 rad.
+        let apart = (1.0 - c * c).max(0.0).sqrt().asin();
+        if parallel && axis.is_none() && (apart.is_nan() || apart > 1e-6) {
+            let e = f.entry("axes").expect("read above");
+            return Err(f.bad(
+                e,
+                format!(
+                    "the two axes must be parallel at the initial pose: in global axes they are \
+                     [{}] and [{}], {:.4}° apart; give each body's axis so that both point along the \
+                     joint axis at the start, or write 'axis = [x, y, z]' (global) instead",
+                    global_text(g[0]),
+                    global_text(g[1]),
+                    apart.to_degrees()
+                ),
+            ));
+        }
         if kind == JointType::Universal {
-            let g = [sides[0].global(axes[0]), sides[1].global(axes[1])];
-            let g = [
-                sub(g[0], sides[0].global([0.0; 3])),
-                sub(g[1], sides[1].global([0.0; 3])),
-            ];
-            let c = dot(g[0], g[1]) / (dot(g[0], g[0]) * dot(g[1], g[1])).sqrt();
             if c.abs() > 1e-6 {
                 let e = f.entry("axes").expect("read above");
                 return Err(f.bad(
@@ -654,6 +677,12 @@ fn two_vectors(node: &Node) -> Result<[[f64; 3]; 2], String> {
 
 fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+
+/// A direction for a message, unit length, 4 decimals.
+fn global_text(a: [f64; 3]) -> String {
+    let n = dot(a, a).sqrt();
+    a.map(|x| format!("{:.4}", x / n)).join(", ")
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
