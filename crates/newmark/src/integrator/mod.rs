@@ -132,6 +132,9 @@ pub struct Integrator<'s, S: System + ?Sized> {
     constraint: f64,
     iterations: usize,
     observed_start: bool,
+    /// The current state's kinetic and potential energies, when
+    /// [`record_energy`](Self::record_energy) evaluated them.
+    energies: Option<(f64, f64)>,
 }
 
 impl<S: System + ?Sized> std::fmt::Debug for Integrator<'_, S> {
@@ -223,6 +226,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             constraint: 0.0,
             iterations: 0,
             observed_start: false,
+            energies: None,
             config,
         };
         this.state.u.copy_from_slice(u0);
@@ -242,13 +246,22 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     /// system conserves energy ([`System::conserves_energy`]; `output.rs`,
     /// [`EnergyReport`](crate::EnergyReport)).
     fn record_energy(&mut self) {
+        self.energies = None;
         if !self.sys.conserves_energy() {
             return;
         }
-        let s = &self.state;
-        let kinetic = kinetic_energy(self.lin.mass_pattern(), self.lin.mass(), &s.v);
-        let potential = self.sys.potential_energy(self.t, &s.u);
+        let (kinetic, potential) = self.energies_now();
         self.stats.energy.record(self.t, kinetic, potential);
+        self.energies = Some((kinetic, potential));
+    }
+
+    /// The current state's kinetic and potential energies.
+    fn energies_now(&self) -> (f64, f64) {
+        let s = &self.state;
+        (
+            kinetic_energy(self.lin.mass_pattern(), self.lin.mass(), &s.v),
+            self.sys.potential_energy(self.t, &s.u),
+        )
     }
 
     /// The Newton variant in use.
@@ -311,11 +324,10 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     /// The current state, with its energies (else NaN).
     fn view_with(&self, energy: bool) -> SampleRef<'_> {
         let s = &self.state;
+        // Evaluated once a step: [`record_energy`](Self::record_energy) may
+        // have done it already.
         let (kinetic, potential) = if energy {
-            (
-                kinetic_energy(self.lin.mass_pattern(), self.lin.mass(), &s.v),
-                self.sys.potential_energy(self.t, &s.u),
-            )
+            self.energies.unwrap_or_else(|| self.energies_now())
         } else {
             (f64::NAN, f64::NAN)
         };
