@@ -103,9 +103,31 @@ fn main() -> Result<()> {
 }
 
 /// The workspace root (the parent of `xtask/`).
+/// The checkout the studies run in and write to: the nearest directory at or
+/// above the current one that holds this workspace (`Cargo.toml` and
+/// `xtask/Cargo.toml`), else the one `cargo run` names at run time
+/// (`CARGO_MANIFEST_DIR`), else the one that compiled this binary. The
+/// compile-time path alone would send a copied checkout's studies into the
+/// original.
 fn project_root() -> PathBuf {
-    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
-    manifest.parent().unwrap_or(manifest).to_path_buf()
+    let from_cwd = std::env::current_dir()
+        .ok()
+        .and_then(|d| workspace_at_or_above(&d));
+    let from_cargo = std::env::var_os("CARGO_MANIFEST_DIR")
+        .map(PathBuf::from)
+        .and_then(|d| workspace_at_or_above(&d));
+    from_cwd.or(from_cargo).unwrap_or_else(|| {
+        let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+        manifest.parent().unwrap_or(manifest).to_path_buf()
+    })
+}
+
+/// The nearest directory at or above `dir` with `Cargo.toml` and
+/// `xtask/Cargo.toml`.
+fn workspace_at_or_above(dir: &Path) -> Option<PathBuf> {
+    dir.ancestors()
+        .find(|d| d.join("Cargo.toml").is_file() && d.join("xtask/Cargo.toml").is_file())
+        .map(Path::to_path_buf)
 }
 
 /// `target/studies/<study>/`, created if missing (relative to the root).
@@ -116,4 +138,37 @@ fn study_dir(study: &str) -> Result<PathBuf> {
     let dir = Path::new("target").join("studies").join(study);
     std::fs::create_dir_all(&dir).with_context(|| format!("could not create {}", dir.display()))?;
     Ok(dir)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::workspace_at_or_above;
+
+    /// A copied checkout finds itself, from its root or any folder in it,
+    /// not the checkout that compiled the binary.
+    #[test]
+    fn the_workspace_is_found_from_where_the_studies_run() {
+        let copy = std::env::temp_dir().join(format!("mstar-xtask-root-{}", std::process::id()));
+        let deep = copy.join("crates/mstar/src");
+        std::fs::create_dir_all(&deep).expect("scratch tree");
+        std::fs::create_dir_all(copy.join("xtask")).expect("xtask dir");
+        std::fs::write(copy.join("Cargo.toml"), "[workspace]\n").expect("write");
+        std::fs::write(copy.join("xtask/Cargo.toml"), "[package]\n").expect("write");
+        assert_eq!(
+            workspace_at_or_above(&deep).as_deref(),
+            Some(copy.as_path())
+        );
+        assert_eq!(
+            workspace_at_or_above(&copy).as_deref(),
+            Some(copy.as_path())
+        );
+        let outside = std::env::temp_dir().join(format!("mstar-xtask-none-{}", std::process::id()));
+        std::fs::create_dir_all(&outside).expect("scratch dir");
+        assert_ne!(
+            workspace_at_or_above(&outside).as_deref(),
+            Some(copy.as_path())
+        );
+        std::fs::remove_dir_all(&copy).ok();
+        std::fs::remove_dir_all(&outside).ok();
+    }
 }
