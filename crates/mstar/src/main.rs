@@ -104,7 +104,7 @@ enum ChainKind {
 #[derive(clap::Args, Debug)]
 struct ChainArgs {
     /// Number of links N.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     links: usize,
     /// What the links are.
     #[arg(long, value_enum, default_value_t = ChainKind::Bars)]
@@ -119,7 +119,7 @@ struct ChainArgs {
     out: Option<PathBuf>,
     /// Write the state every DT seconds instead of every step (interpolated
     /// within the steps: cubic Hermite on u and u̇), and the last state.
-    #[arg(long, value_name = "DT")]
+    #[arg(long, value_name = "DT", allow_negative_numbers = true)]
     output_every: Option<f64>,
 }
 
@@ -212,15 +212,15 @@ struct IntegratorArgs {
     #[arg(long, allow_negative_numbers = true)]
     tol: Option<f64>,
     /// Newton iterations per step attempt [default: 20].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     max_iter: Option<usize>,
     /// Relative tolerance of the local error estimate on the positions
     /// [default: 1e-3]: a step is within it when its estimated error is at
     /// most atol + rtol·|u| in every coordinate.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     rtol: Option<f64>,
     /// Absolute tolerance of the local error estimate, m or rad [default: 1e-6].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     atol: Option<f64>,
     /// Adapt the step size to the error estimate (--h is the first step;
     /// ρ∞ defaults to 0.5). Without it the step size is fixed and the
@@ -232,7 +232,7 @@ struct IntegratorArgs {
     #[arg(long)]
     strict: bool,
     /// Largest step size with --adaptive, s [default: none].
-    #[arg(long, requires = "adaptive")]
+    #[arg(long, requires = "adaptive", allow_negative_numbers = true)]
     h_max: Option<f64>,
 }
 
@@ -275,7 +275,12 @@ struct PendulumArgs {
     out: Option<PathBuf>,
     /// Write the state every DT seconds instead of every step (interpolated
     /// within the steps: cubic Hermite on u and u̇), and the last state.
-    #[arg(long, value_name = "DT", conflicts_with = "reference")]
+    #[arg(
+        long,
+        value_name = "DT",
+        conflicts_with = "reference",
+        allow_negative_numbers = true
+    )]
     output_every: Option<f64>,
 }
 
@@ -562,6 +567,14 @@ fn check_output(
     (t_end, h): (f64, f64),
     (every, every_time): (Option<usize>, Option<f64>),
 ) -> Result<()> {
+    if let Some(dt) = every_time
+        && !(dt > 0.0 && dt.is_finite())
+    {
+        return Err(output::usage(format!(
+            "--output-every must be a finite positive number of seconds (got {})",
+            Short(dt)
+        )));
+    }
     let Some(path) = out else {
         return Ok(());
     };
@@ -570,6 +583,11 @@ fn check_output(
         Some(dt) => t_end / dt + 2.0,
         None => t_end / h / every.unwrap_or(1) as f64 + 1.0,
     };
+    // Also for devices and standard output, which have no free space to
+    // tell: rows at a tiny Δt are not bounded by the steps.
+    if let Some(dt) = every_time {
+        limits::check_rows(rows, t_end, dt)?;
+    }
     let o = limits::Output {
         path,
         rows,
