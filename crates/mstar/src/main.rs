@@ -286,6 +286,17 @@ struct PendulumArgs {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    match thread_pool() {
+        Ok(pool) => pool.install(|| dispatch(cli)),
+        Err(e) => {
+            eprintln!("error: could not start the thread pool: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Runs the command.
+fn dispatch(cli: Cli) -> ExitCode {
     let integrates = matches!(
         cli.command,
         Command::Run(_) | Command::Pendulum(_) | Command::Chain(_)
@@ -309,6 +320,30 @@ fn main() -> ExitCode {
         Command::Chain(args) => chain(&args),
     };
     ExitCode::from(output::exit_code(result, false, 1))
+}
+
+/// The thread pool the program runs in: one thread a core, or as many as
+/// start under a limit on processes (`ulimit -u`) or on the address space
+/// (`ulimit -v`), else the main thread alone. (rayon's global pool would
+/// panic on first use when its threads cannot start.)
+///
+/// # Errors
+/// When not even the main thread can serve as the pool.
+fn thread_pool() -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
+    // The main thread's stack: the program runs on a worker.
+    const STACK: usize = 8 << 20;
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    let builder = || rayon::ThreadPoolBuilder::new().stack_size(STACK);
+    builder()
+        .num_threads(cores)
+        .build()
+        .or_else(|_| builder().num_threads(1).build())
+        .or_else(|_| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .use_current_thread()
+                .build()
+        })
 }
 
 /// An error and its causes on one line, `a: b: c` as `{:#}` prints them,
