@@ -153,7 +153,7 @@ fn cause(stop: Stop, write: Option<std::io::Error>, t: f64) -> anyhow::Error {
         }
         .into(),
         (Stop::Write, Some(e)) => e.into(),
-        (Stop::Write, None) => anyhow::anyhow!("a write failed at t = {t} s"),
+        (Stop::Write, None) => anyhow::anyhow!("a write failed at t = {} s", mstar::newmark::Short(t)),
     }
 }
 
