@@ -195,7 +195,8 @@ fn check_stdout() -> io::Result<()> {
     let flags = unsafe { libc::fcntl(1, libc::F_GETFL) };
     let null = std::fs::metadata("/dev/null").map(|m| m.rdev()).ok();
     let stdout = std::fs::metadata("/proc/self/fd/1").map(|m| m.rdev()).ok();
-    let replaced = flags != -1 && flags & libc::O_ACCMODE == libc::O_RDWR && null.is_some() && null == stdout;
+    let replaced =
+        flags != -1 && flags & libc::O_ACCMODE == libc::O_RDWR && null.is_some() && null == stdout;
     if flags == -1 || replaced {
         return Err(io::Error::new(
             io::ErrorKind::BrokenPipe,

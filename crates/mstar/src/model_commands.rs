@@ -34,10 +34,10 @@ pub struct RunArgs {
     #[arg(long)]
     pub(crate) out: Option<PathBuf>,
     /// End time, s (overrides [simulation] t_end).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     t_end: Option<f64>,
     /// Step size, s (overrides [simulation] h).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     h: Option<f64>,
     /// Adapt the step size to the local error estimate (sets
     /// [simulation] error_control = "adaptive"; ρ∞ defaults to 0.5).
@@ -49,18 +49,18 @@ pub struct RunArgs {
     strict: bool,
     /// Relative tolerance of the local error estimate (overrides
     /// [simulation] rtol).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     rtol: Option<f64>,
     /// Absolute tolerance of the local error estimate, m or rad (overrides
     /// [simulation] atol).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     atol: Option<f64>,
     /// Newton tolerance (overrides [simulation] tol).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     tol: Option<f64>,
     /// Write the state every DT seconds instead of every step, interpolated
     /// within the steps (overrides [output] every_time and every).
-    #[arg(long, value_name = "DT", allow_negative_numbers = true)]
+    #[arg(long, value_name = "DT", allow_hyphen_values = true)]
     output_every: Option<f64>,
     /// Override a key of the file, e.g. --set simulation.rho=0.8,
     /// --set output.every=10, or of an element by its name,
@@ -130,7 +130,8 @@ impl Model {
 /// SIGTERM, 1 on any other failure.
 pub fn run(args: &RunArgs) -> ExitCode {
     if let (Some(out), Some(file)) = (&args.out, &args.model)
-        && let Err(e) = crate::output::refuse_overwrites(&[("the model file", file)], &[("--out", out)])
+        && let Err(e) =
+            crate::output::refuse_overwrites(&[("the model file", file)], &[("--out", out)])
     {
         return failed(e, None);
     }
@@ -437,7 +438,7 @@ fn check_tolerances(error: &mstar::ErrorControl, u0: &[f64]) -> Result<()> {
         Short(error.rtol),
         Short(error.atol),
         Short(RTOL_MIN),
-        Short(RTOL_MIN * scale)
+        crate::limits::round2(RTOL_MIN * scale, true)
     )))
 }
 

@@ -153,7 +153,9 @@ fn cause(stop: Stop, write: Option<std::io::Error>, t: f64) -> anyhow::Error {
         }
         .into(),
         (Stop::Write, Some(e)) => e.into(),
-        (Stop::Write, None) => anyhow::anyhow!("a write failed at t = {} s", mstar::newmark::Short(t)),
+        (Stop::Write, None) => {
+            anyhow::anyhow!("a write failed at t = {} s", mstar::newmark::Short(t))
+        }
     }
 }
 
@@ -268,7 +270,10 @@ fn identity(path: &Path) -> Option<Identity> {
 ///
 /// # Errors
 /// [`Usage`], naming both.
-pub fn refuse_overwrites(inputs: &[(&str, &Path)], outputs: &[(&str, &Path)]) -> anyhow::Result<()> {
+pub fn refuse_overwrites(
+    inputs: &[(&str, &Path)],
+    outputs: &[(&str, &Path)],
+) -> anyhow::Result<()> {
     let ids: Vec<Option<Identity>> = outputs.iter().map(|(_, p)| identity(p)).collect();
     for (k, ((option, path), id)) in outputs.iter().zip(&ids).enumerate() {
         let Some(id) = id else { continue };
@@ -281,7 +286,11 @@ pub fn refuse_overwrites(inputs: &[(&str, &Path)], outputs: &[(&str, &Path)]) ->
                 )));
             }
         }
-        for ((other, earlier), _) in outputs[..k].iter().zip(&ids).filter(|(_, e)| e.as_ref() == Some(id)) {
+        for ((other, earlier), _) in outputs[..k]
+            .iter()
+            .zip(&ids)
+            .filter(|(_, e)| e.as_ref() == Some(id))
+        {
             return Err(usage(format!(
                 "{option} {} names the same file as {other} {}: name another file for each output",
                 path.display(),

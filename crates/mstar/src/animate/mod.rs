@@ -161,12 +161,19 @@ pub fn animate(args: &AnimateArgs) -> ExitCode {
 /// ([`crate::output::refuse_overwrites`]), a `--png` whose extension is no
 /// picture format, and a non-finite `--at`.
 fn check_outputs(args: &AnimateArgs) -> Result<()> {
-    let outputs: Vec<(&str, &Path)> = [("--gif", &args.gif), ("--html", &args.html), ("--png", &args.png)]
-        .into_iter()
-        .filter_map(|(option, path)| path.as_deref().map(|p| (option, p)))
-        .collect();
+    let outputs: Vec<(&str, &Path)> = [
+        ("--gif", &args.gif),
+        ("--html", &args.html),
+        ("--png", &args.png),
+    ]
+    .into_iter()
+    .filter_map(|(option, path)| path.as_deref().map(|p| (option, p)))
+    .collect();
     crate::output::refuse_overwrites(
-        &[("the model file", &args.model), ("the results file", &args.results)],
+        &[
+            ("the model file", &args.model),
+            ("the results file", &args.results),
+        ],
         &outputs,
     )?;
     if let Some(png) = &args.png {
@@ -455,7 +462,10 @@ mod tests {
     /// advises passes.
     #[test]
     fn absurd_gifs_are_refused_with_advice_that_passes() {
-        let huge = GifPlan::new(1.0, &args(&["--max-frames", "100000000", "--speed", "1e-9"]));
+        let huge = GifPlan::new(
+            1.0,
+            &args(&["--max-frames", "100000000", "--speed", "1e-9"]),
+        );
         let e = huge.check(640, 480).expect_err("refused").to_string();
         assert!(e.contains("--max-frames 325520 or fewer"), "{e}");
         let fits = GifPlan::new(1.0, &args(&["--max-frames", "325520", "--speed", "1e-9"]));

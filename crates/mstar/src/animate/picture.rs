@@ -235,7 +235,9 @@ pub fn check_picture_name(path: &Path) -> Result<()> {
 
 /// A drawing error in words: the I/O or encoder error behind plotters'
 /// wrappers, whose own messages print Rust's debug form.
-fn in_words(e: DrawingAreaErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>) -> anyhow::Error {
+fn in_words(
+    e: DrawingAreaErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>,
+) -> anyhow::Error {
     type Bitmap = <BitMapBackend<'static> as DrawingBackend>::ErrorType;
     match e {
         DrawingAreaErrorKind::BackendError(DrawingErrorKind::DrawingError(b)) => match b {
@@ -269,7 +271,11 @@ pub fn write_gif(
     let size = (canvas.view.width, canvas.view.height);
     via_temporary(path, |tmp| {
         let root = BitMapBackend::gif(tmp, size, 10 * delay_cs)
-            .map_err(|e| in_words(DrawingAreaErrorKind::BackendError(DrawingErrorKind::DrawingError(e))))?
+            .map_err(|e| {
+                in_words(DrawingAreaErrorKind::BackendError(
+                    DrawingErrorKind::DrawingError(e),
+                ))
+            })?
             .into_drawing_area();
         for (t, u) in frames {
             canvas.draw(&root, *t, u).map_err(in_words)?;
