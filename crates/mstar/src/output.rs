@@ -286,10 +286,10 @@ pub fn refuse_overwrites(
                 )));
             }
         }
-        for ((other, earlier), _) in outputs[..k]
+        if let Some(((other, earlier), _)) = outputs[..k]
             .iter()
             .zip(&ids)
-            .filter(|(_, e)| e.as_ref() == Some(id))
+            .find(|(_, e)| e.as_ref() == Some(id))
         {
             return Err(usage(format!(
                 "{option} {} names the same file as {other} {}: name another file for each output",

@@ -11,7 +11,7 @@ use std::io::{BufRead as _, BufReader};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
-use common::{model, mstar, scratch, text};
+use common::{model, scratch, text};
 
 const BIN: &str = env!("CARGO_BIN_EXE_mstar");
 
