@@ -299,7 +299,7 @@ fn main() -> ExitCode {
 fn dispatch(cli: Cli) -> ExitCode {
     let integrates = matches!(
         cli.command,
-        Command::Run(_) | Command::Pendulum(_) | Command::Chain(_)
+        Command::Run(_) | Command::Pendulum(_) | Command::Chain(_) | Command::Animate(_)
     );
     signals::install(integrates);
     let out = match &cli.command {
@@ -738,7 +738,7 @@ fn pendulum_reference(args: &PendulumArgs, run: &PendulumRun) -> Result<()> {
     println!("RK4 reference (minimal coordinate θ): {}", describe(run));
     println!("samples: {}", samples.len());
     if let Some(last) = samples.last() {
-        println!("θ(t_end) = {:.9} rad at t = {}", last.u[2], last.t);
+        println!("θ(t_end) = {:.9} rad at t = {}", last.u[2], Short(last.t));
     }
     let mut ended = Ok(());
     if let Some(stream) = stream.as_mut() {
@@ -952,7 +952,7 @@ fn chain_summary<S: ChainModel>(
         .collect();
     println!(
         "tip ({name}) at t = {}: {}; max ‖Φ‖∞ = {:.3e} m",
-        s.t,
+        Short(s.t),
         at.join(", "),
         s.constraint
     );

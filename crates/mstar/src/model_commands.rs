@@ -263,8 +263,9 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         (&drift, &args.out)
     {
         eprintln!(
-            "note: {} holds the whole run, and from t = {t} s on it is not the mechanism's motion",
-            out.display()
+            "note: {} holds the whole run, and from t = {} s on it is not the mechanism's motion",
+            out.display(),
+            Short(*t)
         );
     }
     if let Some(e) = drift {

@@ -434,3 +434,33 @@ fn numbers_in_the_summary_have_at_most_6_digits() {
     let out = text(&run.stdout);
     assert!(out.contains("t reached: 3.8756e-6 s"), "{out}");
 }
+
+/// Ctrl-C while `mstar animate` draws a GIF: exit 130, no GIF and no
+/// temporary file.
+#[test]
+fn an_interrupted_animation_leaves_no_temporary_file() {
+    let dir = four_bar("edges-animate-signal");
+    let child = Command::new(BIN)
+        .args(["animate", "fb.toml", "fb.csv", "--gif", "long.gif"])
+        .args(["--speed", "1e-6", "--max-frames", "20000"])
+        .current_dir(&dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("starts");
+    // (20 000 frames take minutes: the signal comes while it draws.)
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let pid = i32::try_from(child.id()).expect("a pid");
+    // SAFETY: kill has no memory effects.
+    assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    let run = child.wait_with_output().expect("ends");
+    let err = text(&run.stderr);
+    assert_eq!(run.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted by SIGINT"), "{err}");
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .expect("dir")
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(!names.iter().any(|n| n.contains("long.gif")), "{names:?}");
+}

@@ -150,6 +150,9 @@ pub fn animate(args: &AnimateArgs) -> ExitCode {
     let n_coords = file.mechanism.system().n_coords();
     match render(args, figure, n_coords) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<crate::signals::Interrupted>().is_some() => {
+            ExitCode::from(crate::output::exit_code(Err(e), false, 1))
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::from(1)

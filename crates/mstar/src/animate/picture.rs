@@ -278,6 +278,10 @@ pub fn write_gif(
             })?
             .into_drawing_area();
         for (t, u) in frames {
+            // Ctrl-C, SIGTERM, SIGHUP: stop, and the temporary file goes.
+            if let Some(signal) = crate::signals::received() {
+                return Err(crate::signals::Interrupted { signal, t: *t }.into());
+            }
             canvas.draw(&root, *t, u).map_err(in_words)?;
             root.present().map_err(in_words)?;
             progress.inc(1);
