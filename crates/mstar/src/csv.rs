@@ -160,6 +160,52 @@ pub fn target(path: &Path) -> io::Result<Target> {
     Ok(Target::Direct)
 }
 
+/// Refuses to replace a file its owner could not write: one without write
+/// permission (mode 444, even for root, who could), or one the user may not
+/// write (access(2)); the rename would replace it all the same.
+fn check_writable(path: &Path, target: &Path) -> io::Result<()> {
+    use std::os::unix::fs::PermissionsExt as _;
+    let Ok(m) = std::fs::metadata(target) else {
+        return Ok(());
+    };
+    let c = std::ffi::CString::new(target.as_os_str().as_encoded_bytes()).ok();
+    // SAFETY: `c` is a NUL-terminated path.
+    let denied = c.is_some_and(|c| unsafe { libc::access(c.as_ptr(), libc::W_OK) } != 0);
+    if !m.permissions().readonly() && !denied {
+        return Ok(());
+    }
+    Err(io::Error::new(
+        io::ErrorKind::PermissionDenied,
+        format!(
+            "could not write {}: it is read-only (mode {:o}); make it writable (chmod u+w {}) or name another file",
+            display(path),
+            m.permissions().mode() & 0o7777,
+            target.display()
+        ),
+    ))
+}
+
+/// Refuses standard output when it was closed (`>&-`): Rust's start-up
+/// code then opens `/dev/null` in its place, read-write, and the rows would
+/// be lost with a report of success. (A shell's `>/dev/null` opens it
+/// write-only, and is written.)
+fn check_stdout() -> io::Result<()> {
+    use std::os::unix::fs::MetadataExt as _;
+    // SAFETY: fcntl(F_GETFL) only reads the descriptor's flags.
+    let flags = unsafe { libc::fcntl(1, libc::F_GETFL) };
+    let null = std::fs::metadata("/dev/null").map(|m| m.rdev()).ok();
+    let stdout = std::fs::metadata("/proc/self/fd/1").map(|m| m.rdev()).ok();
+    let replaced =
+        flags != -1 && flags & libc::O_ACCMODE == libc::O_RDWR && null.is_some() && null == stdout;
+    if flags == -1 || replaced {
+        return Err(io::Error::new(
+            io::ErrorKind::BrokenPipe,
+            "could not write standard output: it was closed when mstar started",
+        ));
+    }
+    Ok(())
+}
+
 /// The error for an output path that names a directory, with a file to name
 /// instead.
 fn directory(path: &Path) -> io::Error {
@@ -283,6 +329,7 @@ impl CsvStream {
         let mut removed = Vec::new();
         let sink = match target(path)? {
             Target::Replace(target) => {
+                check_writable(path, &target)?;
                 removed = remove_leftovers(&target);
                 let tmp = temporary_path(&target);
                 let file = std::fs::File::create(&tmp).map_err(|e| described(path, e))?;
@@ -292,7 +339,10 @@ impl CsvStream {
                 }
                 Sink::Temporary { file, tmp, target }
             }
-            Target::Stdout => Sink::Direct(Box::new(io::stdout())),
+            Target::Stdout => {
+                check_stdout()?;
+                Sink::Direct(Box::new(io::stdout()))
+            }
             Target::Direct => Sink::Direct(Box::new(
                 std::fs::File::create(path).map_err(|e| described(path, e))?,
             )),
@@ -567,6 +617,7 @@ pub fn write_atomically(path: &Path, contents: &[u8]) -> io::Result<()> {
     let target = match target(path)? {
         Target::Replace(target) => target,
         Target::Stdout => {
+            check_stdout()?;
             let mut out = io::stdout().lock();
             return out
                 .write_all(contents)
@@ -579,6 +630,7 @@ pub fn write_atomically(path: &Path, contents: &[u8]) -> io::Result<()> {
                 .map_err(|e| described(path, e));
         }
     };
+    check_writable(path, &target)?;
     remove_leftovers(&target);
     let tmp = temporary_path(&target);
     let result = (|| {

@@ -6,6 +6,7 @@
 use std::path::Path;
 
 use anyhow::{Result, bail};
+use mstar::newmark::Short;
 
 /// The most steps one run may take: 10⁹ steps are hours of computing and,
 /// with an output file, hundreds of gigabytes; a longer run is a mistake in
@@ -51,14 +52,23 @@ pub fn bytes(x: f64) -> String {
     format!("{v:.1} {}", units[unit])
 }
 
-/// A number for messages: plain from 1e-4 to 1e15, else in exponent form.
+/// A number for messages: at most 6 significant digits ([`Short`]).
 pub fn num(x: f64) -> String {
-    if x == 0.0 || (1e-4..1e15).contains(&x.abs()) {
-        format!("{x}")
+    Short(x).to_string()
+}
+
+/// A count for messages: "about 1.2e10", or "more than 1e308" when it
+/// overflows.
+pub fn about(x: f64) -> String {
+    if x.is_finite() {
+        format!("about {}", Short(x))
     } else {
-        format!("{x:e}")
+        "more than 1e308".to_string()
     }
 }
+
+/// The time resolution of a run, in step sizes (`Integrator::reached`).
+pub const RESOLUTION: f64 = 1e-9;
 
 /// `x` to two significant digits, rounded up (`up`) or down, as text that
 /// parses back to a value on the same side of `x`.
@@ -90,18 +100,61 @@ pub fn round2(x: f64, up: bool) -> String {
 /// # Errors
 /// Too many steps, with the estimate and a `--h` and a `--t-end` that pass.
 pub fn check_steps(t_end: f64, h: f64) -> Result<f64> {
+    // `Integrator::reached` counts a t_end within 1e-9 h as reached: the
+    // run would end at t = 0 without a step.
+    let resolution = RESOLUTION * h;
+    if t_end <= resolution {
+        return Err(crate::output::usage(format!(
+            "t_end = {} s is within the time resolution of a run with h = {} s ({} s): it would \
+             end at t = 0 without a step; use a --t-end above {} s, or a smaller --h",
+            num(t_end),
+            num(h),
+            num(resolution),
+            num(resolution)
+        )));
+    }
     let steps = t_end / h;
     if steps <= MAX_STEPS {
         return Ok(steps);
     }
     bail!(
-        "t_end = {} s with h = {} s is about {steps:.1e} steps, more than the {MAX_STEPS:e} \
+        "t_end = {} s with h = {} s is {} steps, more than the {MAX_STEPS:e} \
          that mstar takes in one run: use a larger step (--h {} or more) or a shorter run \
          (--t-end {} or less)",
         num(t_end),
         num(h),
+        about(steps),
         round2(t_end / MAX_STEPS, true),
         round2(h * MAX_STEPS, false)
+    )
+}
+
+/// The most rows one output may get with rows every Δt (`--output-every`),
+/// as [`MAX_STEPS`] for steps: also for devices and standard output, which
+/// have no free space to check.
+pub const MAX_ROWS: f64 = 1e9;
+
+/// Refuses more than [`MAX_ROWS`] rows (`rows`: the grid's `t_end / dt`
+/// and the last state).
+///
+/// # Errors
+/// Too many rows, with the estimate and an `--output-every` and a `--t-end`
+/// that pass.
+pub fn check_rows(rows: f64, t_end: f64, dt: f64) -> Result<()> {
+    if rows <= MAX_ROWS {
+        return Ok(());
+    }
+    // Room for the grid's two extra rows (t = 0 and the last state).
+    let fit = MAX_ROWS - 2.0;
+    bail!(
+        "--output-every {} s to t_end = {} s is {} rows, more than the {MAX_ROWS:e} \
+         that mstar writes in one run: write fewer rows (--output-every {} or more) or a \
+         shorter run (--t-end {} or less)",
+        Short(dt),
+        Short(t_end),
+        about(rows),
+        round2(t_end / fit, true),
+        round2(dt * fit, false)
     )
 }
 

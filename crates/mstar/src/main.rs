@@ -104,7 +104,7 @@ enum ChainKind {
 #[derive(clap::Args, Debug)]
 struct ChainArgs {
     /// Number of links N.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     links: usize,
     /// What the links are.
     #[arg(long, value_enum, default_value_t = ChainKind::Bars)]
@@ -119,7 +119,7 @@ struct ChainArgs {
     out: Option<PathBuf>,
     /// Write the state every DT seconds instead of every step (interpolated
     /// within the steps: cubic Hermite on u and u̇), and the last state.
-    #[arg(long, value_name = "DT")]
+    #[arg(long, value_name = "DT", allow_negative_numbers = true)]
     output_every: Option<f64>,
 }
 
@@ -212,15 +212,15 @@ struct IntegratorArgs {
     #[arg(long, allow_negative_numbers = true)]
     tol: Option<f64>,
     /// Newton iterations per step attempt [default: 20].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     max_iter: Option<usize>,
     /// Relative tolerance of the local error estimate on the positions
     /// [default: 1e-3]: a step is within it when its estimated error is at
     /// most atol + rtol·|u| in every coordinate.
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     rtol: Option<f64>,
     /// Absolute tolerance of the local error estimate, m or rad [default: 1e-6].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     atol: Option<f64>,
     /// Adapt the step size to the error estimate (--h is the first step;
     /// ρ∞ defaults to 0.5). Without it the step size is fixed and the
@@ -232,7 +232,7 @@ struct IntegratorArgs {
     #[arg(long)]
     strict: bool,
     /// Largest step size with --adaptive, s [default: none].
-    #[arg(long, requires = "adaptive")]
+    #[arg(long, requires = "adaptive", allow_negative_numbers = true)]
     h_max: Option<f64>,
 }
 
@@ -275,15 +275,31 @@ struct PendulumArgs {
     out: Option<PathBuf>,
     /// Write the state every DT seconds instead of every step (interpolated
     /// within the steps: cubic Hermite on u and u̇), and the last state.
-    #[arg(long, value_name = "DT", conflicts_with = "reference")]
+    #[arg(
+        long,
+        value_name = "DT",
+        conflicts_with = "reference",
+        allow_negative_numbers = true
+    )]
     output_every: Option<f64>,
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    match thread_pool() {
+        Ok(pool) => pool.install(|| dispatch(cli)),
+        Err(e) => {
+            eprintln!("error: could not start the thread pool: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Runs the command.
+fn dispatch(cli: Cli) -> ExitCode {
     let integrates = matches!(
         cli.command,
-        Command::Run(_) | Command::Pendulum(_) | Command::Chain(_)
+        Command::Run(_) | Command::Pendulum(_) | Command::Chain(_) | Command::Animate(_)
     );
     signals::install(integrates);
     let out = match &cli.command {
@@ -304,6 +320,30 @@ fn main() -> ExitCode {
         Command::Chain(args) => chain(&args),
     };
     ExitCode::from(output::exit_code(result, false, 1))
+}
+
+/// The thread pool the program runs in: one thread a core, or as many as
+/// start under a limit on processes (`ulimit -u`) or on the address space
+/// (`ulimit -v`), else the main thread alone. (rayon's global pool would
+/// panic on first use when its threads cannot start.)
+///
+/// # Errors
+/// When not even the main thread can serve as the pool.
+fn thread_pool() -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
+    // The main thread's stack: the program runs on a worker.
+    const STACK: usize = 8 << 20;
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    let builder = || rayon::ThreadPoolBuilder::new().stack_size(STACK);
+    builder()
+        .num_threads(cores)
+        .build()
+        .or_else(|_| builder().num_threads(1).build())
+        .or_else(|_| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(1)
+                .use_current_thread()
+                .build()
+        })
 }
 
 /// An error and its causes on one line, `a: b: c` as `{:#}` prints them,
@@ -563,6 +603,14 @@ fn check_output(
     (t_end, h): (f64, f64),
     (every, every_time): (Option<usize>, Option<f64>),
 ) -> Result<()> {
+    if let Some(dt) = every_time
+        && !(dt > 0.0 && dt.is_finite())
+    {
+        return Err(output::usage(format!(
+            "--output-every must be a finite positive number of seconds (got {})",
+            Short(dt)
+        )));
+    }
     let Some(path) = out else {
         return Ok(());
     };
@@ -571,6 +619,11 @@ fn check_output(
         Some(dt) => t_end / dt + 2.0,
         None => t_end / h / every.unwrap_or(1) as f64 + 1.0,
     };
+    // Also for devices and standard output, which have no free space to
+    // tell: rows at a tiny Δt are not bounded by the steps.
+    if let Some(dt) = every_time {
+        limits::check_rows(rows, t_end, dt)?;
+    }
     let o = limits::Output {
         path,
         rows,
@@ -686,7 +739,7 @@ fn pendulum_reference(args: &PendulumArgs, run: &PendulumRun) -> Result<()> {
     println!("RK4 reference (minimal coordinate θ): {}", describe(run));
     println!("samples: {}", samples.len());
     if let Some(last) = samples.last() {
-        println!("θ(t_end) = {:.9} rad at t = {}", last.u[2], last.t);
+        println!("θ(t_end) = {:.9} rad at t = {}", last.u[2], Short(last.t));
     }
     let mut ended = Ok(());
     if let Some(stream) = stream.as_mut() {
@@ -897,7 +950,7 @@ fn chain_summary<S: ChainModel>(
         .collect();
     println!(
         "tip ({name}) at t = {}: {}; max ‖Φ‖∞ = {:.3e} m",
-        s.t,
+        Short(s.t),
         at.join(", "),
         s.constraint
     );

@@ -34,10 +34,10 @@ pub struct RunArgs {
     #[arg(long)]
     pub(crate) out: Option<PathBuf>,
     /// End time, s (overrides [simulation] t_end).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     t_end: Option<f64>,
     /// Step size, s (overrides [simulation] h).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_hyphen_values = true)]
     h: Option<f64>,
     /// Adapt the step size to the local error estimate (sets
     /// [simulation] error_control = "adaptive"; ρ∞ defaults to 0.5).
@@ -49,18 +49,18 @@ pub struct RunArgs {
     strict: bool,
     /// Relative tolerance of the local error estimate (overrides
     /// [simulation] rtol).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     rtol: Option<f64>,
     /// Absolute tolerance of the local error estimate, m or rad (overrides
     /// [simulation] atol).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     atol: Option<f64>,
     /// Newton tolerance (overrides [simulation] tol).
-    #[arg(long)]
+    #[arg(long, allow_hyphen_values = true)]
     tol: Option<f64>,
     /// Write the state every DT seconds instead of every step, interpolated
     /// within the steps (overrides [output] every_time and every).
-    #[arg(long, value_name = "DT")]
+    #[arg(long, value_name = "DT", allow_hyphen_values = true)]
     output_every: Option<f64>,
     /// Override a key of the file, e.g. --set simulation.rho=0.8,
     /// --set output.every=10, or of an element by its name,
@@ -129,6 +129,12 @@ impl Model {
 /// the model file cannot be read (as `mstar check`), 130/143 after SIGINT /
 /// SIGTERM, 1 on any other failure.
 pub fn run(args: &RunArgs) -> ExitCode {
+    if let (Some(out), Some(file)) = (&args.out, &args.model)
+        && let Err(e) =
+            crate::output::refuse_overwrites(&[("the model file", file)], &[("--out", out)])
+    {
+        return failed(e, None);
+    }
     let model = match load(args) {
         Ok(model) => model,
         Err(e) => return failed(e, None),
@@ -150,6 +156,9 @@ fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
         return ExitCode::from(crate::output::exit_code(Err(e), true, 1));
     }
     eprintln!("error: {}", crate::report(&e));
+    if e.downcast_ref::<crate::output::Usage>().is_some() {
+        return ExitCode::from(2);
+    }
     let settings = matches!(
         e.downcast_ref::<mstar::run::RunError>(),
         Some(mstar::run::RunError::Settings(_))
@@ -194,21 +203,13 @@ fn start_hint(sys: &dyn ModelLookup, e: &IntegrationError) -> Option<String> {
 }
 
 fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
-    if let (Some(out), Some(file)) = (&args.out, &args.model)
-        && std::fs::canonicalize(out).ok() == std::fs::canonicalize(file).ok()
-        && out.exists()
-    {
-        bail!(
-            "--out {} names the model file itself: name another file for the results",
-            out.display()
-        );
-    }
     let (every, every_time) = match args.output_every {
         Some(dt) => (1, Some(dt)),
         None => (model.every, model.every_time),
     };
     let (config, t_end) =
         mstar::run::config(&model.simulation).map_err(mstar::run::RunError::Settings)?;
+    check_tolerances(&config.error, &model.u0)?;
     let sys = model.system.system();
     println!(
         "{}: {} coordinates, {} constraints; h = {} s, t_end = {} s",
@@ -262,8 +263,9 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         (&drift, &args.out)
     {
         eprintln!(
-            "note: {} holds the whole run, and from t = {t} s on it is not the mechanism's motion",
-            out.display()
+            "note: {} holds the whole run, and from t = {} s on it is not the mechanism's motion",
+            out.display(),
+            Short(*t)
         );
     }
     if let Some(e) = drift {
@@ -340,6 +342,7 @@ fn integrate<S: System + ?Sized>(
 
 /// The model of `mstar run`: a file or a built-in.
 fn load(args: &RunArgs) -> Result<Loaded> {
+    check_options(args)?;
     let mut set = args.set.clone();
     for (key, value) in [
         ("t_end", args.t_end),
@@ -375,6 +378,69 @@ fn load(args: &RunArgs) -> Result<Loaded> {
         simulation: file.simulation,
         system: Model::Named(Box::new(file.mechanism)),
     })
+}
+
+/// Refuses a command-line value out of range, naming the option (before
+/// it becomes a `--set` of the model file, which would blame the file).
+///
+/// # Errors
+/// [`crate::output::Usage`].
+fn check_options(args: &RunArgs) -> Result<()> {
+    let positive = [
+        ("--t-end", args.t_end),
+        ("--h", args.h),
+        ("--tol", args.tol),
+        ("--output-every", args.output_every),
+    ];
+    for (option, value) in positive {
+        if let Some(v) = value
+            && !(v > 0.0 && v.is_finite())
+        {
+            return Err(crate::output::usage(format!(
+                "{option} must be a finite positive number (got {})",
+                Short(v)
+            )));
+        }
+    }
+    for (option, value) in [("--rtol", args.rtol), ("--atol", args.atol)] {
+        if let Some(v) = value
+            && !(v >= 0.0 && v.is_finite())
+        {
+            return Err(crate::output::usage(format!(
+                "{option} must be a finite number ≥ 0 (got {})",
+                Short(v)
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The smallest relative tolerance of the error estimate: below it, the
+/// estimate is round-off (double precision's 2.2e-16 times the few hundred
+/// operations of a step).
+const RTOL_MIN: f64 = 1e-14;
+
+/// Refuses an error tolerance below round-off: `rtol` under [`RTOL_MIN`]
+/// with an `atol` under `RTOL_MIN` times the largest initial coordinate
+/// (at least 1): no step could meet it, and the advice the accuracy warning
+/// works out from it would be meaningless.
+///
+/// # Errors
+/// [`crate::output::Usage`] with tolerances that work.
+fn check_tolerances(error: &mstar::ErrorControl, u0: &[f64]) -> Result<()> {
+    let scale = u0.iter().fold(1.0_f64, |m, x| m.max(x.abs()));
+    if error.rtol >= RTOL_MIN || error.atol >= RTOL_MIN * scale {
+        return Ok(());
+    }
+    Err(crate::output::usage(format!(
+        "the error tolerance rtol = {}, atol = {} is below what double precision resolves \
+         (round-off is about 1e-14 of the coordinates): use --rtol {} or more, or --atol {} \
+         or more (or [simulation] rtol, atol)",
+        Short(error.rtol),
+        Short(error.atol),
+        Short(RTOL_MIN),
+        crate::limits::round2(RTOL_MIN * scale, true)
+    )))
 }
 
 /// One override of a built-in model: the command line's `--t-end`, `--h`,
@@ -509,7 +575,7 @@ impl Observer for RunOutput<'_> {
 
 fn print_summary(st: mstar::RunStats, t: f64, out: &RunOutput<'_>, wall: f64) {
     let steps = st.steps.max(1) as f64;
-    println!("t reached: {t} s");
+    println!("t reached: {} s", Short(t));
     // Iterations count every attempt, the maximum accepted steps only.
     let per_step = if st.steps == 0 {
         "no step accepted".to_string()

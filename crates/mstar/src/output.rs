@@ -153,7 +153,9 @@ fn cause(stop: Stop, write: Option<std::io::Error>, t: f64) -> anyhow::Error {
         }
         .into(),
         (Stop::Write, Some(e)) => e.into(),
-        (Stop::Write, None) => anyhow::anyhow!("a write failed at t = {t} s"),
+        (Stop::Write, None) => {
+            anyhow::anyhow!("a write failed at t = {} s", mstar::newmark::Short(t))
+        }
     }
 }
 
@@ -190,6 +192,10 @@ pub fn exit_code(result: anyhow::Result<()>, files: bool, failure: u8) -> u8 {
     if e.downcast_ref::<mstar::accuracy::Inaccurate>().is_some() {
         return mstar::accuracy::EXIT_INACCURATE;
     }
+    if e.downcast_ref::<Usage>().is_some() {
+        note(format_args!("error: {e}"));
+        return 2;
+    }
     if let Some(i) = e.downcast_ref::<Interrupted>() {
         if i.signal != libc::SIGPIPE {
             note(format_args!("mstar: {i}"));
@@ -207,3 +213,90 @@ pub fn exit_code(result: anyhow::Result<()>, files: bool, failure: u8) -> u8 {
 }
 
 pub use mstar::record::Grid;
+
+/// A command line the program refuses before doing anything (a value out of
+/// range, an output that would overwrite an input): exit 2.
+#[derive(Debug)]
+pub struct Usage(pub String);
+
+impl std::fmt::Display for Usage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Usage {}
+
+/// A usage error ([`Usage`]) with `message`.
+pub fn usage(message: String) -> anyhow::Error {
+    Usage(message).into()
+}
+
+/// Which file a path names, to tell whether two paths are one file: the
+/// device and inode of an existing regular file (through symbolic and hard
+/// links), the canonical directory and name of a new path, standard output;
+/// `None` for what is written directly and never replaced (a device, a FIFO).
+#[derive(Debug, PartialEq, Eq)]
+enum Identity {
+    Inode(u64, u64),
+    New(PathBuf),
+    Stdout,
+}
+
+fn identity(path: &Path) -> Option<Identity> {
+    use std::os::unix::fs::MetadataExt as _;
+    if is_stdout(Some(path)) {
+        return Some(Identity::Stdout);
+    }
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() => Some(Identity::Inode(m.dev(), m.ino())),
+        Ok(_) => None,
+        Err(_) => {
+            let dir = match path.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d,
+                _ => Path::new("."),
+            };
+            let name = path.file_name()?;
+            Some(Identity::New(std::fs::canonicalize(dir).ok()?.join(name)))
+        }
+    }
+}
+
+/// Refuses an output that names one of the inputs or another output, by
+/// [`Identity`] (through symbolic links, hard links and relative paths):
+/// writing it would destroy the input, or one output would overwrite the
+/// other. Each path comes with what it is for messages (`"--gif"`, `"the
+/// model file"`).
+///
+/// # Errors
+/// [`Usage`], naming both.
+pub fn refuse_overwrites(
+    inputs: &[(&str, &Path)],
+    outputs: &[(&str, &Path)],
+) -> anyhow::Result<()> {
+    let ids: Vec<Option<Identity>> = outputs.iter().map(|(_, p)| identity(p)).collect();
+    for (k, ((option, path), id)) in outputs.iter().zip(&ids).enumerate() {
+        let Some(id) = id else { continue };
+        for (what, input) in inputs {
+            if identity(input).as_ref() == Some(id) {
+                return Err(usage(format!(
+                    "{option} {} names {what} {}: name another file for the output",
+                    path.display(),
+                    input.display()
+                )));
+            }
+        }
+        if let Some(((other, earlier), _)) = outputs[..k]
+            .iter()
+            .zip(&ids)
+            .find(|(_, e)| e.as_ref() == Some(id))
+        {
+            return Err(usage(format!(
+                "{option} {} names the same file as {other} {}: name another file for each output",
+                path.display(),
+                earlier.display()
+            )));
+        }
+    }
+    Ok(())
+}

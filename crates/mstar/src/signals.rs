@@ -1,4 +1,4 @@
-//! Signals: Ctrl-C (SIGINT) and SIGTERM stop a run at the next step, so that
+//! Signals: Ctrl-C (SIGINT), SIGTERM and SIGHUP stop a run at the next step, so that
 //! the samples so far are kept and no temporary file outlives the program;
 //! a file-size limit (SIGXFSZ) becomes a write error with a message.
 
@@ -20,7 +20,7 @@ extern "C" fn on_stop(signal: libc::c_int) {
     }
 }
 
-/// For the commands that integrate: SIGINT and SIGTERM set the flag
+/// For the commands that integrate: SIGINT, SIGTERM and SIGHUP set the flag
 /// [`received`] reads. For every command: a write beyond the file-size limit
 /// (`ulimit -f`) returns an error (EFBIG) instead of killing the program
 /// without a word. (SIGPIPE is already ignored by Rust's start-up code: a
@@ -34,6 +34,8 @@ pub fn install(stop: bool) {
             let handler = on_stop as extern "C" fn(libc::c_int) as libc::sighandler_t;
             libc::signal(libc::SIGINT, handler);
             libc::signal(libc::SIGTERM, handler);
+            // A closed terminal: the run is kept as for SIGTERM.
+            libc::signal(libc::SIGHUP, handler);
         }
     }
 }
@@ -68,10 +70,15 @@ impl std::fmt::Display for Interrupted {
         let name = match self.signal {
             libc::SIGINT => "SIGINT (Ctrl-C)".to_string(),
             libc::SIGTERM => "SIGTERM".to_string(),
+            libc::SIGHUP => "SIGHUP (the terminal closed)".to_string(),
             libc::SIGPIPE => "a closed pipe".to_string(),
             s => format!("signal {s}"),
         };
-        write!(f, "interrupted by {name} at t = {} s", self.t)
+        write!(
+            f,
+            "interrupted by {name} at t = {} s",
+            mstar::newmark::Short(self.t)
+        )
     }
 }
 

@@ -289,8 +289,9 @@ fn output_every_writes_the_requested_times() {
     ]);
     assert_eq!(code, Some(0), "{stderr}");
     expect(&csv, 0.125, 0.5);
+    // A value out of range: exit 2, as every bad value.
     let (code, stderr) = run(&["pendulum", "--output-every", "0", "--out", &p]);
-    assert_eq!(code, Some(1), "{stderr}");
+    assert_eq!(code, Some(2), "{stderr}");
     assert!(stderr.contains("--output-every"), "{stderr}");
     let _ = std::fs::remove_dir_all(dir);
 }

@@ -18,6 +18,7 @@ use std::process::ExitCode;
 
 use anyhow::{Result, bail};
 use mstar::model::file::{Mechanism, MechanismFile};
+use mstar::newmark::Short;
 
 use figure::{Figure, PlanarFigure};
 use picture::Canvas;
@@ -54,17 +55,27 @@ pub struct AnimateArgs {
     at: Option<f64>,
     /// GIF frames per second, 1 to 50 (a GIF keeps delays in 1/100 s: 30 fps
     /// plays at 33.3, and the frames are taken at that rate).
-    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..=50))]
+    #[arg(
+        long,
+        default_value_t = 30,
+        value_parser = clap::value_parser!(u32).range(1..=50),
+        allow_negative_numbers = true
+    )]
     fps: u32,
     /// Simulated seconds per second of GIF [default: 1, real time; a run
     /// shorter than 1 s is slowed down to last 1 s].
-    #[arg(long, value_parser = positive, conflicts_with = "duration")]
+    #[arg(long, value_parser = positive, conflicts_with = "duration", allow_negative_numbers = true)]
     speed: Option<f64>,
     /// The GIF's length, s: the whole run in that time (instead of --speed).
-    #[arg(long, value_parser = positive)]
+    #[arg(long, value_parser = positive, allow_negative_numbers = true)]
     duration: Option<f64>,
     /// The most GIF frames: a longer GIF is played faster to fit (with a note).
-    #[arg(long, default_value_t = 600, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(
+        long,
+        default_value_t = 600,
+        value_parser = clap::value_parser!(u32).range(1..),
+        allow_negative_numbers = true
+    )]
     max_frames: u32,
     /// Picture size in pixels, WIDTHxHEIGHT (GIF and PNG; the HTML page's
     /// drawing, which scales with the window).
@@ -118,6 +129,10 @@ fn positive(text: &str) -> Result<f64, String> {
 /// do not fit the model or an output cannot be written, 2 when the model
 /// file cannot be read (as `mstar check`).
 pub fn animate(args: &AnimateArgs) -> ExitCode {
+    if let Err(e) = check_outputs(args) {
+        eprintln!("error: {e}");
+        return ExitCode::from(2);
+    }
     let file = match MechanismFile::load_with(&args.model, &args.set) {
         Ok(file) => file,
         Err(e) => {
@@ -135,11 +150,44 @@ pub fn animate(args: &AnimateArgs) -> ExitCode {
     let n_coords = file.mechanism.system().n_coords();
     match render(args, figure, n_coords) {
         Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.downcast_ref::<crate::signals::Interrupted>().is_some() => {
+            ExitCode::from(crate::output::exit_code(Err(e), false, 1))
+        }
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::from(1)
         }
     }
+}
+
+/// Refuses an output that names the model, the results or another output
+/// ([`crate::output::refuse_overwrites`]), a `--png` whose extension is no
+/// picture format, and a non-finite `--at`.
+fn check_outputs(args: &AnimateArgs) -> Result<()> {
+    let outputs: Vec<(&str, &Path)> = [
+        ("--gif", &args.gif),
+        ("--html", &args.html),
+        ("--png", &args.png),
+    ]
+    .into_iter()
+    .filter_map(|(option, path)| path.as_deref().map(|p| (option, p)))
+    .collect();
+    crate::output::refuse_overwrites(
+        &[
+            ("the model file", &args.model),
+            ("the results file", &args.results),
+        ],
+        &outputs,
+    )?;
+    if let Some(png) = &args.png {
+        picture::check_picture_name(png)?;
+    }
+    if let Some(t) = args.at
+        && !t.is_finite()
+    {
+        bail!("--at must be a finite time in seconds (got {})", Short(t));
+    }
+    Ok(())
 }
 
 /// The mechanism as drawn: a planar one in its plane (which takes no
@@ -167,6 +215,10 @@ fn render(args: &AnimateArgs, figure: Box<dyn Figure>, n_coords: usize) -> Resul
         scene: &scene,
         view,
     };
+    if args.gif.is_some() {
+        let (t0, t1) = run.span();
+        GifPlan::new(t1 - t0, args).check(view.width, view.height)?;
+    }
     if let Some(path) = &args.html {
         write_html(path, args, &canvas, &run)?;
     }
@@ -174,7 +226,12 @@ fn render(args: &AnimateArgs, figure: Box<dyn Figure>, n_coords: usize) -> Resul
         let (t0, t1) = run.span();
         let t = args.at.unwrap_or(t0);
         if !(t0..=t1).contains(&t) {
-            bail!("--at {t}: the run goes from t = {t0} to {t1} s");
+            bail!(
+                "--at {}: the run goes from t = {} to {} s",
+                Short(t),
+                Short(t0),
+                Short(t1)
+            );
         }
         picture::write_png(path, &canvas, t, &run.at(t))?;
         println!(
@@ -201,9 +258,11 @@ fn write_html(path: &Path, args: &AnimateArgs, canvas: &Canvas<'_>, run: &Result
     let frames = run.at_most(html::MAX_FRAMES);
     let (t0, t1) = run.span();
     let title = format!(
-        "mstar animate: {} with {} (t = {t0} … {t1} s, {} frames)",
+        "mstar animate: {} with {} (t = {} … {} s, {} frames)",
         file_name(&args.model),
         file_name(&args.results),
+        Short(t0),
+        Short(t1),
         frames.times.len()
     );
     let page = html::page(canvas.scene, &canvas.view, &frames, &title);
@@ -306,6 +365,34 @@ impl GifPlan {
     }
 }
 
+/// The most pixels a GIF may draw (frames × width × height): 10¹¹ are
+/// about 330 000 frames of 640×480, hours of drawing and, uncompressed,
+/// 100 GB; a request for more is a mistake in `--speed` or `--max-frames`.
+const MAX_GIF_PIXELS: f64 = 1e11;
+
+impl GifPlan {
+    /// Refuses a GIF of more than [`MAX_GIF_PIXELS`] at `width`×`height`.
+    ///
+    /// # Errors
+    /// With the estimate and a `--max-frames` that passes.
+    fn check(&self, width: u32, height: u32) -> Result<()> {
+        let picture = f64::from(width) * f64::from(height);
+        let pixels = self.count as f64 * picture;
+        if pixels <= MAX_GIF_PIXELS {
+            return Ok(());
+        }
+        bail!(
+            "the GIF would have {} frames of {width}×{height}, {} pixels (about {} uncompressed), \
+             more than the {MAX_GIF_PIXELS:e} that mstar draws: use --max-frames {} or fewer, \
+             a larger --speed, or a smaller --size",
+            self.count,
+            Short(pixels),
+            crate::limits::bytes(pixels),
+            (MAX_GIF_PIXELS / picture).floor()
+        )
+    }
+}
+
 /// A 1 m bar named `name`, hinged at the origin, lying along +x: the model
 /// of the drawing tests.
 #[cfg(test)]
@@ -372,6 +459,22 @@ mod tests {
             "{:?}",
             capped.note
         );
+    }
+
+    /// An absurd GIF is refused, and the `--max-frames` the refusal
+    /// advises passes.
+    #[test]
+    fn absurd_gifs_are_refused_with_advice_that_passes() {
+        let huge = GifPlan::new(
+            1.0,
+            &args(&["--max-frames", "100000000", "--speed", "1e-9"]),
+        );
+        let e = huge.check(640, 480).expect_err("refused").to_string();
+        assert!(e.contains("--max-frames 325520 or fewer"), "{e}");
+        let fits = GifPlan::new(1.0, &args(&["--max-frames", "325520", "--speed", "1e-9"]));
+        assert_eq!(fits.count, 325_520);
+        assert!(fits.check(640, 480).is_ok());
+        assert!(GifPlan::new(1.0, &args(&[])).check(640, 480).is_ok());
     }
 
     #[test]

@@ -8,6 +8,7 @@ use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 use plotters::style::{FontStyle, RGBAColor};
+use plotters_backend::DrawingErrorKind;
 
 use super::scene::{Colour, INK, Item, Scene, Shape, View, body_colour};
 
@@ -206,6 +207,52 @@ fn via_temporary(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result
     result.with_context(|| format!("could not write {}", path.display()))
 }
 
+/// The picture formats `--png` writes, by extension (the encoder goes by it).
+const PICTURE_EXTENSIONS: [&str; 4] = ["png", "jpg", "jpeg", "bmp"];
+
+/// Refuses a `--png` path whose extension names no picture format.
+///
+/// # Errors
+/// With the extensions that work.
+pub fn check_picture_name(path: &Path) -> Result<()> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    // (A device or standard output is written as the encoder can.)
+    let direct = matches!(
+        mstar::csv::target(path),
+        Ok(mstar::csv::Target::Direct | mstar::csv::Target::Stdout)
+    );
+    if direct || PICTURE_EXTENSIONS.contains(&ext.as_str()) {
+        return Ok(());
+    }
+    Err(anyhow!(
+        "--png {}: the picture format follows the extension; name a file ending in .png (or .jpg, .bmp)",
+        path.display()
+    ))
+}
+
+/// A drawing error in words: the I/O or encoder error behind plotters'
+/// wrappers, whose own messages print Rust's debug form.
+fn in_words(
+    e: DrawingAreaErrorKind<<BitMapBackend<'static> as DrawingBackend>::ErrorType>,
+) -> anyhow::Error {
+    type Bitmap = <BitMapBackend<'static> as DrawingBackend>::ErrorType;
+    match e {
+        DrawingAreaErrorKind::BackendError(DrawingErrorKind::DrawingError(b)) => match b {
+            Bitmap::IOError(io) => io.into(),
+            Bitmap::GifEncodingError(g) => anyhow!("{g}"),
+            Bitmap::ImageError(i) => anyhow!("{i}"),
+            Bitmap::InvalidBuffer => anyhow!("the picture buffer has the wrong size"),
+        },
+        DrawingAreaErrorKind::BackendError(DrawingErrorKind::FontError(f)) => {
+            anyhow!("the font: {f}")
+        }
+        other => anyhow!("{other}"),
+    }
+}
+
 /// Writes the frames `(t, u)` as a looping GIF, each shown `delay_cs`
 /// hundredths of a second (the GIF's unit of time), counting them on
 /// `progress`.
@@ -223,10 +270,20 @@ pub fn write_gif(
     register_font()?;
     let size = (canvas.view.width, canvas.view.height);
     via_temporary(path, |tmp| {
-        let root = BitMapBackend::gif(tmp, size, 10 * delay_cs)?.into_drawing_area();
+        let root = BitMapBackend::gif(tmp, size, 10 * delay_cs)
+            .map_err(|e| {
+                in_words(DrawingAreaErrorKind::BackendError(
+                    DrawingErrorKind::DrawingError(e),
+                ))
+            })?
+            .into_drawing_area();
         for (t, u) in frames {
-            canvas.draw(&root, *t, u)?;
-            root.present()?;
+            // Ctrl-C, SIGTERM, SIGHUP: stop, and the temporary file goes.
+            if let Some(signal) = crate::signals::received() {
+                return Err(crate::signals::Interrupted { signal, t: *t }.into());
+            }
+            canvas.draw(&root, *t, u).map_err(in_words)?;
+            root.present().map_err(in_words)?;
             progress.inc(1);
         }
         Ok(())
@@ -243,8 +300,8 @@ pub fn write_png(path: &Path, canvas: &Canvas<'_>, t: f64, u: &[f64]) -> Result<
     let size = (canvas.view.width, canvas.view.height);
     via_temporary(path, |tmp| {
         let root = BitMapBackend::new(tmp, size).into_drawing_area();
-        canvas.draw(&root, t, u)?;
-        root.present()?;
+        canvas.draw(&root, t, u).map_err(in_words)?;
+        root.present().map_err(in_words)?;
         Ok(())
     })
 }

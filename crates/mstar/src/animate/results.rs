@@ -85,7 +85,11 @@ pub fn parse(
         if let Some(&before) = out.times.last()
             && t < before
         {
-            bail!("{name}:{line}: t = {t} comes before the previous row's t = {before}");
+            bail!(
+                "{name}:{line}: t = {} comes before the previous row's t = {}",
+                mstar::newmark::Short(t),
+                mstar::newmark::Short(before)
+            );
         }
         let mut u = vec![0.0; n_coords];
         for c in &columns {
