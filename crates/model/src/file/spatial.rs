@@ -382,16 +382,14 @@ impl<'a> Model<'a> {
                 ),
             ));
         }
-        if kind == JointType::Universal {
-            if c.abs() > 1e-6 {
-                let e = f.entry("axes").expect("read above");
-                return Err(f.bad(
-                    e,
-                    format!(
-                        "the two cross axes must be perpendicular at the initial pose (the cosine of their angle is {c:.3e})"
-                    ),
-                ));
-            }
+        if kind == JointType::Universal && c.abs() > 1e-6 {
+            let e = f.entry("axes").expect("read above");
+            return Err(f.bad(
+                e,
+                format!(
+                    "the two cross axes must be perpendicular at the initial pose (the cosine of their angle is {c:.3e})"
+                ),
+            ));
         }
         Ok(axes)
     }
