@@ -55,7 +55,8 @@ pub use mstar_rk4 as rk4;
 pub use mstar_model::planar;
 pub use mstar_model::{FnSystem, Link, Pattern, PendulumChain, Sample, SampleRef, System};
 pub use mstar_newmark::{
-    AlphaParams, Config, ErrorControl, ErrorReport, IntegrationError, Integrator, Newton, Observer,
-    Predictor, Resample, RunStats, Scheme, Start, StepMode, Trajectory,
+    AlphaParams, Config, EnergyReport, ErrorControl, ErrorReport, IntegrationError, Integrator,
+    Newton, Observer, Predictor, Resample, RunStats, Scheme, Start, StartReport, StepMode,
+    Trajectory,
 };
 pub use mstar_rk4::{ChainOracle, pendulum_period};

@@ -514,3 +514,44 @@ fn revolute_axes_that_are_not_parallel_at_the_start_are_named() {
     );
     assert!(rows.len() > 1);
 }
+
+/// Issue 21 (also found): a bar on a ball joint given only an angular
+/// velocity had its rates shared with its centre's velocity by the start's
+/// projection (ė₃ from 0.5 to 0.25), shown as a note only. `mstar run`
+/// warns, naming the value; with the centre's velocity `ω × r` given too,
+/// nothing is changed and nothing is said.
+#[test]
+fn a_start_that_changes_given_velocities_warns() {
+    let text = |velocity: &str| {
+        format!(
+            "format = \"mstar.spatial/1\"\n[[body]]\nname = \"bar\"\nmass = 1.0\n\
+             inertia = [0.001, 0.1, 0.1]\nposition = [0.5, 0.0, 0.0]\n\
+             orientation = [1.0, 0.0, 0.0, 0.0]\n{velocity}angular_velocity = [0.0, 0.0, 1.0]\n\
+             [[joint]]\nname = \"pin\"\ntype = \"spherical\"\nbodies = [\"ground\", \"bar\"]\n\
+             points = [[0.0, 0.0, 0.0], [-0.5, 0.0, 0.0]]\n[simulation]\nt_end = 0.01\n"
+        )
+    };
+    let dir = scratch("projection-warning");
+    let model = dir.join("m.toml");
+    let stderr = |velocity: &str| {
+        std::fs::write(&model, text(velocity)).expect("write");
+        let run = mstar(&["run", model.to_str().expect("UTF-8")]);
+        assert_eq!(
+            run.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        String::from_utf8_lossy(&run.stderr).to_string()
+    };
+    let e = stderr("");
+    assert!(
+        e.contains("warning: the start changed the given velocities"),
+        "{e}"
+    );
+    // ė₃ = ω/2 = 0.5 given, 0.25 after the projection (and ẏ = 0.25 m/s).
+    assert!(e.contains("'bar.e3' from 0.5 to 0.25"), "{e}");
+    let e = stderr("velocity = [0.0, 0.5, 0.0]\n");
+    assert!(!e.contains("warning"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
