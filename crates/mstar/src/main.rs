@@ -283,7 +283,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let integrates = matches!(
         cli.command,
-        Command::Run(_) | Command::Pendulum(_) | Command::Chain(_)
+        Command::Run(_) | Command::Pendulum(_) | Command::Chain(_) | Command::Sweep(_)
     );
     signals::install(integrates);
     let out = match &cli.command {
