@@ -515,3 +515,22 @@ fn sigint_and_sigterm_stop_a_sweep_with_its_summary_so_far() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn ranges_of_large_floats_are_floats_that_run() {
+    let dir = scratch("sweep-large");
+    let out = dir.join("s");
+    // Relative tolerances of 1e19 and 2e19: floats (an integer that large
+    // does not read as a TOML value).
+    let done = pendulum_sweep(&out, &["--set", "simulation.rtol=1e19:2e19:2"]);
+    assert_eq!(done.status.code(), Some(0), "{}", text(&done.stderr));
+    let (h, rows) = summary(&out.join("summary.csv"));
+    assert_eq!(column(&h, &rows, "simulation.rtol"), ["1e19", "2e19"]);
+    assert_eq!(column(&h, &rows, "status"), ["ok", "ok"]);
+    // The middle of ±1e308 is 0 (not NaN), each a float.
+    let wide = pendulum_sweep(&dir.join("w"), &["--set", "body.bob.mass=1e308:-1e308:3"]);
+    let (h, rows) = summary(&dir.join("w/summary.csv"));
+    let masses = column(&h, &rows, "body.bob.mass");
+    assert_eq!(masses, ["1e308", "0.0", "-1e308"], "{}", text(&wide.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
