@@ -257,7 +257,8 @@ fn a_rerun_skips_complete_runs_and_completes_the_others() {
     let run2 = std::fs::read(out.join("runs/2.csv")).expect("run 2");
     // Run 0's file is not rewritten when skipped: the same inode (a
     // rewrite renames a new file into place).
-    let inode = |p: &Path| std::os::unix::fs::MetadataExt::ino(&std::fs::metadata(p).expect("a file"));
+    let inode =
+        |p: &Path| std::os::unix::fs::MetadataExt::ino(&std::fs::metadata(p).expect("a file"));
     let run0 = inode(&out.join("runs/0.csv"));
     // Run 1 lost its row, run 2 its CSV file: both incomplete.
     std::fs::remove_file(out.join("runs/1.row")).expect("remove");
@@ -366,10 +367,7 @@ fn a_run_beyond_the_error_tolerance_is_not_ok_and_exits_3() {
     let again = pendulum_sweep(&out, &["--set", "simulation.h=0.001,0.2"]);
     assert_eq!(again.status.code(), Some(3), "{}", text(&again.stderr));
     // A failed run outweighs one beyond the tolerance: 10 + 1.
-    let mixed = pendulum_sweep(
-        &dir.join("m"),
-        &["--set", "simulation.h=0.001,0.2,-1"],
-    );
+    let mixed = pendulum_sweep(&dir.join("m"), &["--set", "simulation.h=0.001,0.2,-1"]);
     assert_eq!(mixed.status.code(), Some(11), "{}", text(&mixed.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -387,7 +385,11 @@ fn a_merge_refuses_rows_of_another_sweep_or_without_run_files() {
     assert_eq!(done.status.code(), Some(0), "{}", text(&done.stderr));
     let merge = || mstar(&["sweep", "--merge", &ours.display().to_string()]);
     // Another sweep's shard summary copied in.
-    std::fs::copy(theirs.join("summary.1of2.csv"), ours.join("summary.1of2.csv")).expect("copy");
+    std::fs::copy(
+        theirs.join("summary.1of2.csv"),
+        ours.join("summary.1of2.csv"),
+    )
+    .expect("copy");
     let mixed = merge();
     let e = text(&mixed.stderr);
     assert_eq!(mixed.status.code(), Some(1), "{e}");
@@ -402,14 +404,20 @@ fn a_merge_refuses_rows_of_another_sweep_or_without_run_files() {
     let gone = merge();
     let e = text(&gone.stderr);
     assert_eq!(gone.status.code(), Some(1), "{e}");
-    assert!(e.contains("line 2 (run 1)") && e.contains("runs/1.csv"), "{e}");
+    assert!(
+        e.contains("line 2 (run 1)") && e.contains("runs/1.csv"),
+        "{e}"
+    );
     let csv0 = ours.join("runs/0.csv");
     let bytes = std::fs::read(&csv0).expect("run 0");
     std::fs::write(&csv0, &bytes[..bytes.len() / 2]).expect("cut");
     let cut = merge();
     let e = text(&cut.stderr);
     assert_eq!(cut.status.code(), Some(1), "{e}");
-    assert!(e.contains("runs/0.csv has") && e.contains("incomplete"), "{e}");
+    assert!(
+        e.contains("runs/0.csv has") && e.contains("incomplete"),
+        "{e}"
+    );
     for shard in ["0/2", "1/2"] {
         let redo = sweep(&ours, &["--set", "body.upper.mass=1,2", "--shard", shard]);
         assert_eq!(redo.status.code(), Some(0), "{}", text(&redo.stderr));
@@ -466,7 +474,10 @@ fn jobs_beyond_the_runs_and_cores_are_capped() {
     let cores = std::thread::available_parallelism().map_or(1, usize::from);
     let threads = cores.min(3);
     assert!(most >= 1 && most <= threads + 2, "{most} threads: {e}");
-    assert!(e.contains(&format!("note: --jobs 1000000 capped to {threads}")), "{e}");
+    assert!(
+        e.contains(&format!("note: --jobs 1000000 capped to {threads}")),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -507,7 +518,10 @@ fn sigint_and_sigterm_stop_a_sweep_with_its_summary_so_far() {
         let output = child.wait_with_output().expect("output");
         let e = text(&output.stderr);
         assert_eq!(output.status.code(), Some(code), "{e}");
-        assert!(e.contains("the summary holds the runs complete so far"), "{e}");
+        assert!(
+            e.contains("the summary holds the runs complete so far"),
+            "{e}"
+        );
         let (h, rows) = summary(&out.join("summary.csv"));
         assert_eq!(column(&h, &rows, "index"), ["0"], "{e}");
         assert_eq!(column(&h, &rows, "status"), ["ok"]);
@@ -532,5 +546,39 @@ fn ranges_of_large_floats_are_floats_that_run() {
     let (h, rows) = summary(&dir.join("w/summary.csv"));
     let masses = column(&h, &rows, "body.bob.mass");
     assert_eq!(masses, ["1e308", "0.0", "-1e308"], "{}", text(&wide.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn sweeps_of_too_many_runs_are_refused_before_they_start() {
+    let dir = scratch("sweep-huge");
+    let out = dir.join("s");
+    // 10⁵ values each of three keys: 10¹⁵ runs.
+    let done = pendulum_sweep(
+        &out,
+        &[
+            "--set",
+            "simulation.rtol=1:2:100000",
+            "--set",
+            "simulation.atol=1:2:100000",
+            "--set",
+            "simulation.tol=1:2:100000",
+        ],
+    );
+    let e = text(&done.stderr);
+    assert_eq!(done.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("the plan has 1.0e15 runs, more than the 1000000"),
+        "{e}"
+    );
+    assert!(!out.exists(), "{e}");
+    // A range of 10¹⁵ values is refused before a value is made.
+    let done = pendulum_sweep(&out, &["--set", "simulation.rtol=1:2:1000000000000000"]);
+    let e = text(&done.stderr);
+    assert_eq!(done.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("COUNT 1000000000000000 is more than the 1000000 runs"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -310,7 +310,47 @@ pub(crate) fn values_of(params: &[Param], combine: Combine, index: usize) -> Vec
     }
 }
 
-/// No keys, a key twice, zipped lists of different lengths.
+/// The most runs a plan may have: each run writes two files into one
+/// directory (`runs/`) and its summary row is kept in memory, and 10⁶ runs
+/// of even a millisecond are a quarter of an hour of computing; a larger
+/// count is a mistake in a range far more often than it is meant.
+pub const MAX_RUNS: usize = 1_000_000;
+
+/// Refuses a plan of more than [`MAX_RUNS`] runs (counted without
+/// overflow), with the number of values of its longest list that fits.
+fn check_runs(params: &[Param], combine: Combine) -> Result<(), SweepError> {
+    let counts = params.iter().map(|p| p.values.len());
+    let runs = match combine {
+        Combine::Grid => counts.fold(Some(1usize), |r, n| r?.checked_mul(n)),
+        Combine::Zip => counts.max(),
+    };
+    if runs.is_some_and(|r| r <= MAX_RUNS) {
+        return Ok(());
+    }
+    let Some(longest) = params.iter().max_by_key(|p| p.values.len()) else {
+        return Ok(());
+    };
+    // The runs of the other keys together (at most MAX_RUNS + 1 counted).
+    let others = match combine {
+        Combine::Grid => params
+            .iter()
+            .filter(|p| p.key != longest.key)
+            .fold(1usize, |r, p| r.saturating_mul(p.values.len())),
+        Combine::Zip => 1,
+    };
+    let runs = runs.map_or_else(|| "more than 1.8e19".to_string(), |r| format!("{r:.1e}"));
+    let fits = MAX_RUNS / others.max(1);
+    let advice = if fits >= 1 {
+        format!("give {} at most {fits} values", longest.key)
+    } else {
+        "give fewer keys or values".to_string()
+    };
+    Err(SweepError::Plan(format!(
+        "the plan has {runs} runs, more than the {MAX_RUNS} a sweep takes: {advice}"
+    )))
+}
+
+/// No keys, a key twice, zipped lists of different lengths, too many runs.
 fn check_params(params: &[Param], combine: Combine) -> Result<(), SweepError> {
     if params.is_empty() {
         return Err(SweepError::Plan(
@@ -339,7 +379,7 @@ fn check_params(params: &[Param], combine: Combine) -> Result<(), SweepError> {
             lists[0].values.len()
         )));
     }
-    Ok(())
+    check_runs(params, combine)
 }
 
 /// Where and how [`run_plan`] runs.
@@ -521,5 +561,48 @@ pub fn exit_code(failed: usize, beyond: usize) -> u8 {
         crate::accuracy::EXIT_INACCURATE
     } else {
         0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A plan of `MAX_RUNS` runs and more is refused, and the advised count
+    /// of values passes.
+    #[test]
+    fn too_many_runs_are_refused_with_a_count_that_passes() {
+        let keys = |n: usize| -> Vec<Param> {
+            ["a", "b", "c"]
+                .iter()
+                .map(|k| Param::parse(&format!("{k}=1:2:{n}")).expect("a range"))
+                .collect()
+        };
+        let params = keys(200);
+        let e = check_params(&params, Combine::Grid)
+            .expect_err("8e6 runs")
+            .to_string();
+        assert!(e.contains("the plan has 8.0e6 runs"), "{e}");
+        let fits: usize = e
+            .rsplit("at most ")
+            .next()
+            .and_then(|t| t.split(' ').next())
+            .and_then(|t| t.parse().ok())
+            .unwrap_or_else(|| panic!("no count in: {e}"));
+        let mut advised = params.clone();
+        advised[0] = Param::parse(&format!("a=1:2:{fits}")).expect("a range");
+        assert!(check_params(&advised, Combine::Grid).is_ok(), "{e}");
+        advised[0] = Param::parse(&format!("a=1:2:{}", fits + 1)).expect("a range");
+        assert!(check_params(&advised, Combine::Grid).is_err(), "{e}");
+        assert!(check_params(&keys(100), Combine::Grid).is_ok());
+        assert!(check_params(&keys(1000), Combine::Zip).is_ok());
+        // Counts that overflow: refused, not wrapped.
+        let many: Vec<Param> = (0..8)
+            .map(|k| Param::parse(&format!("k{k}=1:2:300000")).expect("a range"))
+            .collect();
+        let e = check_params(&many, Combine::Grid)
+            .expect_err("overflow")
+            .to_string();
+        assert!(e.contains("more than 1.8e19 runs"), "{e}");
     }
 }

@@ -129,6 +129,14 @@ fn range(item: &str) -> Result<Vec<String>, String> {
         .ok()
         .filter(|&n| n >= 2)
         .ok_or_else(|| malformed("COUNT must be a whole number ≥ 2"))?;
+    if n > super::MAX_RUNS {
+        // Before a value is made: 10¹⁵ values do not fit in memory.
+        return Err(malformed(&format!(
+            "COUNT {n} is more than the {} runs a sweep takes (give COUNT {} or less)",
+            super::MAX_RUNS,
+            super::MAX_RUNS
+        )));
+    }
     // Integers stay integers (`output.every=10:100:10`) when both ends are
     // written as integers and the value is one, exactly (|x| ≤ 2⁵³).
     let integers = start.parse::<i64>().is_ok() && stop.parse::<i64>().is_ok();
