@@ -319,9 +319,9 @@ pub const MAX_RUNS: usize = 1_000_000;
 /// Refuses a plan of more than [`MAX_RUNS`] runs (counted without
 /// overflow), with the number of values of its longest list that fits.
 fn check_runs(params: &[Param], combine: Combine) -> Result<(), SweepError> {
-    let counts = params.iter().map(|p| p.values.len());
+    let mut counts = params.iter().map(|p| p.values.len());
     let runs = match combine {
-        Combine::Grid => counts.fold(Some(1usize), |r, n| r?.checked_mul(n)),
+        Combine::Grid => counts.try_fold(1usize, usize::checked_mul),
         Combine::Zip => counts.max(),
     };
     if runs.is_some_and(|r| r <= MAX_RUNS) {
