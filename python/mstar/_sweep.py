@@ -21,6 +21,9 @@ class Sweep:
         runs: the plan's number of runs (all shards).
         ran: runs run by this call; ``skipped``: complete from an earlier one.
         failed: ``(index, message)`` of each failed run of the shard.
+        beyond: ``(index, warning)`` of each run of the shard that reached its
+            end with steps beyond the error tolerance (status
+            ``beyond tolerance: …``; ``mstar run`` exits 3 for it).
     """
 
     def __init__(self, out: Path, raw: Dict[str, Any]) -> None:
@@ -30,6 +33,7 @@ class Sweep:
         self.ran: int = raw["ran"]
         self.skipped: int = raw["skipped"]
         self.failed: List[Tuple[int, str]] = list(raw["failed"])
+        self.beyond: List[Tuple[int, str]] = list(raw.get("beyond", []))
 
     @property
     def summary(self) -> List[Dict[str, str]]:

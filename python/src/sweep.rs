@@ -55,6 +55,7 @@ pub(crate) fn sweep(
     dict.set_item("ran", report.ran)?;
     dict.set_item("skipped", report.skipped)?;
     dict.set_item("failed", report.failed)?;
+    dict.set_item("beyond", report.beyond)?;
     dict.set_item("summary", report.summary)?;
     dict.set_item("runs", plan.len())?;
     Ok(dict.unbind())

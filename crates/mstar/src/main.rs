@@ -299,7 +299,11 @@ fn main() -> ExitCode {
 fn dispatch(cli: Cli) -> ExitCode {
     let integrates = matches!(
         cli.command,
-        Command::Run(_) | Command::Pendulum(_) | Command::Chain(_) | Command::Animate(_)
+        Command::Run(_)
+            | Command::Pendulum(_)
+            | Command::Chain(_)
+            | Command::Animate(_)
+            | Command::Sweep(_)
     );
     signals::install(integrates);
     let out = match &cli.command {

@@ -48,16 +48,22 @@ pub struct SweepArgs {
     merge: Option<PathBuf>,
 }
 
-/// `mstar sweep`: exit 0 when every run reached its end, 10 + n when n runs
-/// failed (110 for 100 or more), 2 when nothing ran for a bad model file or
-/// command line, 1 when a file could not be read or written.
+/// `mstar sweep`: exit 0 when every run reached its end within the error
+/// tolerance, 10 + n when n runs failed (110 for 100 or more), 3 when none
+/// failed and some ended beyond the tolerance, 2 when nothing ran for a bad
+/// model file or command line, 1 when a file could not be read or written,
+/// 130/143 after SIGINT/SIGTERM (the summary of the runs complete so far
+/// written).
 pub fn sweep(args: &SweepArgs) -> ExitCode {
     let result = match &args.merge {
         Some(dir) => merge(dir),
         None => run(args),
     };
     match result {
-        Ok(failed) => ExitCode::from(mstar::sweep::exit_code(failed)),
+        Ok(Ended::Counted { failed, beyond }) => {
+            ExitCode::from(mstar::sweep::exit_code(failed, beyond))
+        }
+        Ok(Ended::Signal(signal)) => ExitCode::from(u8::try_from(128 + signal).unwrap_or(1)),
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(if e.is_usage() { 2 } else { 1 })
@@ -65,8 +71,17 @@ pub fn sweep(args: &SweepArgs) -> ExitCode {
     }
 }
 
-/// Plans and runs the sweep; the number of failed runs.
-fn run(args: &SweepArgs) -> Result<usize, SweepError> {
+/// How a sweep ended, for its exit code.
+enum Ended {
+    /// Every run of the shard (or the merge) done: the failed runs and the
+    /// runs beyond the error tolerance.
+    Counted { failed: usize, beyond: usize },
+    /// Stopped by this signal.
+    Signal(i32),
+}
+
+/// Plans and runs the sweep.
+fn run(args: &SweepArgs) -> Result<Ended, SweepError> {
     let (Some(model), Some(out)) = (&args.model, &args.out) else {
         return Err(SweepError::Plan("give a model file and --out DIR".into()));
     };
@@ -95,32 +110,54 @@ fn run(args: &SweepArgs) -> Result<usize, SweepError> {
         jobs: args.jobs,
         shard,
     };
-    let progress = Bar::new();
+    let progress = Bar::new(args.jobs);
     let report = mstar::sweep::run_plan(&plan, &options, &progress)?;
     progress.bar.finish_and_clear();
-    let failed = report.failed.len();
+    let (failed, beyond) = (report.failed.len(), report.beyond.len());
     println!(
-        "{} runs of {} in this shard: {} run now, {} complete before; {} failed",
-        report.ran + report.skipped,
+        "{} runs of {} in this shard: {} run now, {} complete before; {} failed, {} beyond the error tolerance",
+        report.ran + report.skipped + report.stopped,
         plan.len(),
         report.ran,
         report.skipped,
-        failed
+        failed,
+        beyond
     );
     println!("wrote {}", report.summary.display());
-    Ok(failed)
+    if let Some(signal) = crate::signals::received() {
+        eprintln!(
+            "interrupted by {}: {} runs not run; the summary holds the runs complete so far; rerun the same command to run the others",
+            signal_name(signal),
+            report.stopped
+        );
+        return Ok(Ended::Signal(signal));
+    }
+    Ok(Ended::Counted { failed, beyond })
 }
 
-/// `--merge DIR`; the number of failed runs.
-fn merge(dir: &std::path::Path) -> Result<usize, SweepError> {
+/// SIGINT or SIGTERM as messages name them.
+fn signal_name(signal: i32) -> String {
+    match signal {
+        libc::SIGINT => "SIGINT (Ctrl-C)".to_string(),
+        libc::SIGTERM => "SIGTERM".to_string(),
+        s => format!("signal {s}"),
+    }
+}
+
+/// `--merge DIR`.
+fn merge(dir: &std::path::Path) -> Result<Ended, SweepError> {
     let merged = mstar::sweep::merge(dir)?;
     println!(
-        "wrote {} ({} runs, {} failed)",
+        "wrote {} ({} runs, {} failed, {} beyond the error tolerance)",
         merged.summary.display(),
         merged.runs,
-        merged.failed.len()
+        merged.failed.len(),
+        merged.beyond.len()
     );
-    Ok(merged.failed.len())
+    Ok(Ended::Counted {
+        failed: merged.failed.len(),
+        beyond: merged.beyond.len(),
+    })
 }
 
 /// Runs completed of the total with an estimate of the time left: a bar on
@@ -131,10 +168,12 @@ struct Bar {
     total: AtomicUsize,
     done: AtomicUsize,
     start: Instant,
+    /// `--jobs`, to say so when the pool has fewer threads.
+    jobs: Option<usize>,
 }
 
 impl Bar {
-    fn new() -> Self {
+    fn new(jobs: Option<usize>) -> Self {
         let plain = !std::io::stderr().is_terminal();
         let target = if plain {
             ProgressDrawTarget::hidden()
@@ -154,6 +193,7 @@ impl Bar {
             total: AtomicUsize::new(0),
             done: AtomicUsize::new(0),
             start: Instant::now(),
+            jobs,
         }
     }
 }
@@ -167,12 +207,25 @@ impl Progress for Bar {
         self.bar.set_length(to_run as u64);
     }
 
+    fn started(&self, threads: usize) {
+        if let Some(jobs) = self.jobs.filter(|&j| j > threads) {
+            eprintln!(
+                "note: --jobs {jobs} capped to {threads} (at most one run at once per run to run and per core)"
+            );
+        }
+    }
+
+    fn stop(&self) -> bool {
+        crate::signals::received().is_some()
+    }
+
     fn finished(&self, o: &RunOutcome) {
         let done = self.done.fetch_add(1, Ordering::Relaxed) + 1;
         self.bar.inc(1);
-        let status = match &o.error {
-            None => "ok".to_string(),
-            Some(why) => format!("failed: {why}"),
+        let status = match (&o.error, &o.beyond) {
+            (Some(why), _) => format!("failed: {why}"),
+            (None, Some(warning)) => format!("beyond the error tolerance: {warning}"),
+            (None, None) => "ok".to_string(),
         };
         if self.plain {
             let total = self.total.load(Ordering::Relaxed);
@@ -182,7 +235,7 @@ impl Progress for Bar {
                 "run {} {status} ({:.2} s); {done}/{total} done, about {left:.0} s left",
                 o.index, o.wall
             );
-        } else if o.error.is_some() {
+        } else if o.error.is_some() || o.beyond.is_some() {
             self.bar.suspend(|| eprintln!("run {} {status}", o.index));
         }
     }

@@ -231,7 +231,8 @@ fn a_failed_run_is_reported_and_counted_in_the_exit_code() {
         status[0].contains("body 'upper': mass: must be positive, in kg (got -1)"),
         "{status:?}"
     );
-    assert_eq!(status[1], "ok");
+    // Monitored, the same tolerance: the run reaches its end beyond it.
+    assert!(status[1].starts_with("beyond tolerance: "), "{status:?}");
     assert_ne!(status[2], "ok");
     assert!(
         status[2].starts_with("the estimated local error exceeds the tolerance at t = 0.001 s"),
@@ -254,8 +255,11 @@ fn a_rerun_skips_complete_runs_and_completes_the_others() {
     assert_eq!(done.status.code(), Some(0), "{}", text(&done.stderr));
     let before = without_wall_time(&out.join("summary.csv"));
     let run2 = std::fs::read(out.join("runs/2.csv")).expect("run 2");
-    // A marker in run 0's file: a run that is skipped is not rewritten.
-    std::fs::write(out.join("runs/0.csv"), "marker").expect("mark");
+    // Run 0's file is not rewritten when skipped: the same inode (a
+    // rewrite renames a new file into place).
+    let inode =
+        |p: &Path| std::os::unix::fs::MetadataExt::ino(&std::fs::metadata(p).expect("a file"));
+    let run0 = inode(&out.join("runs/0.csv"));
     // Run 1 lost its row, run 2 its CSV file: both incomplete.
     std::fs::remove_file(out.join("runs/1.row")).expect("remove");
     std::fs::remove_file(out.join("runs/2.csv")).expect("remove");
@@ -263,12 +267,7 @@ fn a_rerun_skips_complete_runs_and_completes_the_others() {
     assert_eq!(again.status.code(), Some(0), "{}", text(&again.stderr));
     let said = text(&again.stdout);
     assert!(said.contains("2 run now, 2 complete before"), "{said}");
-    assert_eq!(
-        std::fs::read_to_string(out.join("runs/0.csv"))
-            .ok()
-            .as_deref(),
-        Some("marker")
-    );
+    assert_eq!(inode(&out.join("runs/0.csv")), run0);
     assert_eq!(std::fs::read(out.join("runs/2.csv")).ok(), Some(run2));
     assert_eq!(without_wall_time(&out.join("summary.csv")), before);
     // Other parameters into the same directory: refused, nothing touched.
@@ -332,5 +331,254 @@ fn bad_parameters_are_refused_before_anything_runs() {
         assert!(e.contains(message), "{args:?}: {e}");
         assert!(!out.exists(), "{args:?}: the sweep started");
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `mstar sweep` of `models/pendulum.toml` (10 s) with `args` into `out`.
+fn pendulum_sweep(out: &Path, args: &[&str]) -> std::process::Output {
+    let model = model("pendulum.toml");
+    let out = out.display().to_string();
+    let mut all = vec!["sweep", &model, "--out", &out];
+    all.extend_from_slice(args);
+    mstar(&all)
+}
+
+#[test]
+fn a_run_beyond_the_error_tolerance_is_not_ok_and_exits_3() {
+    let dir = scratch("sweep-beyond");
+    // h = 0.2 is far too large for the pendulum: `mstar run` exits 3.
+    let single = mstar(&["run", &model("pendulum.toml"), "--h", "0.2"]);
+    assert_eq!(single.status.code(), Some(3), "{}", text(&single.stderr));
+    let out = dir.join("s");
+    let done = pendulum_sweep(&out, &["--set", "simulation.h=0.001,0.2"]);
+    assert_eq!(done.status.code(), Some(3), "{}", text(&done.stderr));
+    let (h, rows) = summary(&out.join("summary.csv"));
+    let status = column(&h, &rows, "status");
+    assert_eq!(status[0], "ok");
+    assert!(
+        status[1].starts_with("beyond tolerance: the estimated local error exceeded the tolerance"),
+        "{status:?}"
+    );
+    // It reached its end: its steps and CSV file are there.
+    assert_eq!(column(&h, &rows, "t"), ["10", "10"]);
+    assert!(out.join("runs/1.csv").is_file());
+    assert!(text(&done.stdout).contains("0 failed, 1 beyond the error tolerance"));
+    // A rerun skips both and keeps the verdict.
+    let again = pendulum_sweep(&out, &["--set", "simulation.h=0.001,0.2"]);
+    assert_eq!(again.status.code(), Some(3), "{}", text(&again.stderr));
+    // A failed run outweighs one beyond the tolerance: 10 + 1.
+    let mixed = pendulum_sweep(&dir.join("m"), &["--set", "simulation.h=0.001,0.2,-1"]);
+    assert_eq!(mixed.status.code(), Some(11), "{}", text(&mixed.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_merge_refuses_rows_of_another_sweep_or_without_run_files() {
+    let dir = scratch("sweep-mix");
+    let ours = dir.join("ours");
+    let theirs = dir.join("theirs");
+    for shard in ["0/2", "1/2"] {
+        let done = sweep(&ours, &["--set", "body.upper.mass=1,2", "--shard", shard]);
+        assert_eq!(done.status.code(), Some(0), "{}", text(&done.stderr));
+    }
+    let done = sweep(&theirs, &["--set", "body.upper.mass=3,4", "--shard", "1/2"]);
+    assert_eq!(done.status.code(), Some(0), "{}", text(&done.stderr));
+    let merge = || mstar(&["sweep", "--merge", &ours.display().to_string()]);
+    // Another sweep's shard summary copied in.
+    std::fs::copy(
+        theirs.join("summary.1of2.csv"),
+        ours.join("summary.1of2.csv"),
+    )
+    .expect("copy");
+    let mixed = merge();
+    let e = text(&mixed.stderr);
+    assert_eq!(mixed.status.code(), Some(1), "{e}");
+    assert!(e.contains("summary.1of2.csv: line 2 (run 1) has the values 0.05, 10, 4 where this sweep's plan (sweep.toml) has 0.05, 10, 2"), "{e}");
+    assert!(!ours.join("summary.csv").exists(), "{e}");
+    // The advice: run that shard here, then merge.
+    let redo = sweep(&ours, &["--set", "body.upper.mass=1,2", "--shard", "1/2"]);
+    assert_eq!(redo.status.code(), Some(0), "{}", text(&redo.stderr));
+    assert_eq!(merge().status.code(), Some(0));
+    // A row whose run file is gone, or cut short.
+    std::fs::remove_file(ours.join("runs/1.csv")).expect("remove");
+    let gone = merge();
+    let e = text(&gone.stderr);
+    assert_eq!(gone.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("line 2 (run 1)") && e.contains("runs/1.csv"),
+        "{e}"
+    );
+    let csv0 = ours.join("runs/0.csv");
+    let bytes = std::fs::read(&csv0).expect("run 0");
+    std::fs::write(&csv0, &bytes[..bytes.len() / 2]).expect("cut");
+    let cut = merge();
+    let e = text(&cut.stderr);
+    assert_eq!(cut.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("runs/0.csv has") && e.contains("incomplete"),
+        "{e}"
+    );
+    for shard in ["0/2", "1/2"] {
+        let redo = sweep(&ours, &["--set", "body.upper.mass=1,2", "--shard", shard]);
+        assert_eq!(redo.status.code(), Some(0), "{}", text(&redo.stderr));
+    }
+    let merged = merge();
+    assert_eq!(merged.status.code(), Some(0), "{}", text(&merged.stderr));
+    assert_eq!(std::fs::read(&csv0).ok(), Some(bytes));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn a_truncated_run_file_is_run_again() {
+    let dir = scratch("sweep-truncated");
+    let out = dir.join("s");
+    let params = ["--set", "body.upper.mass=1,2"];
+    let done = sweep(&out, &params);
+    assert_eq!(done.status.code(), Some(0), "{}", text(&done.stderr));
+    let csv0 = out.join("runs/0.csv");
+    let whole = std::fs::read(&csv0).expect("run 0");
+    std::fs::write(&csv0, &whole[..whole.len() - 10]).expect("cut");
+    let again = sweep(&out, &params);
+    assert_eq!(again.status.code(), Some(0), "{}", text(&again.stderr));
+    assert!(text(&again.stdout).contains("1 run now, 1 complete before"));
+    assert_eq!(std::fs::read(&csv0).ok(), Some(whole));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn jobs_beyond_the_runs_and_cores_are_capped() {
+    let dir = scratch("sweep-jobs");
+    let out = dir.join("s");
+    let model = model("pendulum.toml");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_mstar"))
+        .args(["sweep", &model, "--set", "simulation.h=1e-4,2e-4,3e-4"])
+        .args(["--jobs", "1000000", "--out", &out.display().to_string()])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("mstar starts");
+    let tasks = std::path::PathBuf::from(format!("/proc/{}/task", child.id()));
+    let mut most = 0;
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait") {
+            break status;
+        }
+        if let Ok(entries) = std::fs::read_dir(&tasks) {
+            most = most.max(entries.count());
+        }
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    };
+    let output = child.wait_with_output().expect("output");
+    let e = text(&output.stderr);
+    assert_eq!(status.code(), Some(0), "{e}");
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    let threads = cores.min(3);
+    assert!(most >= 1 && most <= threads + 2, "{most} threads: {e}");
+    assert!(
+        e.contains(&format!("note: --jobs 1000000 capped to {threads}")),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn sigint_and_sigterm_stop_a_sweep_with_its_summary_so_far() {
+    use std::os::unix::process::CommandExt as _;
+    let dir = scratch("sweep-signal");
+    let model = model("pendulum.toml");
+    for (signal, code) in [(libc::SIGINT, 130), (libc::SIGTERM, 143)] {
+        let out = dir.join(format!("s{signal}"));
+        let mut command = std::process::Command::new(env!("CARGO_BIN_EXE_mstar"));
+        command
+            .args(["sweep", &model, "--set", "simulation.h=1e-3,1e-5,1e-5,1e-5"])
+            .args(["--jobs", "1", "--out", &out.display().to_string()])
+            .stdout(std::process::Stdio::piped())
+            .stderr(std::process::Stdio::piped());
+        if signal == libc::SIGTERM {
+            // As a shell starts a job in the background: SIGINT ignored.
+            // SAFETY: signal is async-signal-safe.
+            unsafe {
+                command.pre_exec(|| {
+                    libc::signal(libc::SIGINT, libc::SIG_IGN);
+                    Ok(())
+                });
+            }
+        }
+        let child = command.spawn().expect("mstar starts");
+        // Run 0 (10 000 steps) completes; run 1 takes 10⁶ steps.
+        let row0 = out.join("runs/0.row");
+        let clock = std::time::Instant::now();
+        while !row0.exists() && clock.elapsed().as_secs() < 60 {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        let pid = i32::try_from(child.id()).expect("a pid");
+        // SAFETY: kill has no memory effects.
+        assert_eq!(unsafe { libc::kill(pid, signal) }, 0);
+        let output = child.wait_with_output().expect("output");
+        let e = text(&output.stderr);
+        assert_eq!(output.status.code(), Some(code), "{e}");
+        assert!(
+            e.contains("the summary holds the runs complete so far"),
+            "{e}"
+        );
+        let (h, rows) = summary(&out.join("summary.csv"));
+        assert_eq!(column(&h, &rows, "index"), ["0"], "{e}");
+        assert_eq!(column(&h, &rows, "status"), ["ok"]);
+        assert!(!out.join("runs/1.row").exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn ranges_of_large_floats_are_floats_that_run() {
+    let dir = scratch("sweep-large");
+    let out = dir.join("s");
+    // Relative tolerances of 1e19 and 2e19: floats (an integer that large
+    // does not read as a TOML value).
+    let done = pendulum_sweep(&out, &["--set", "simulation.rtol=1e19:2e19:2"]);
+    assert_eq!(done.status.code(), Some(0), "{}", text(&done.stderr));
+    let (h, rows) = summary(&out.join("summary.csv"));
+    assert_eq!(column(&h, &rows, "simulation.rtol"), ["1e19", "2e19"]);
+    assert_eq!(column(&h, &rows, "status"), ["ok", "ok"]);
+    // The middle of ±1e308 is 0 (not NaN), each a float.
+    let wide = pendulum_sweep(&dir.join("w"), &["--set", "body.bob.mass=1e308:-1e308:3"]);
+    let (h, rows) = summary(&dir.join("w/summary.csv"));
+    let masses = column(&h, &rows, "body.bob.mass");
+    assert_eq!(masses, ["1e308", "0.0", "-1e308"], "{}", text(&wide.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn sweeps_of_too_many_runs_are_refused_before_they_start() {
+    let dir = scratch("sweep-huge");
+    let out = dir.join("s");
+    // 10⁵ values each of three keys: 10¹⁵ runs.
+    let done = pendulum_sweep(
+        &out,
+        &[
+            "--set",
+            "simulation.rtol=1:2:100000",
+            "--set",
+            "simulation.atol=1:2:100000",
+            "--set",
+            "simulation.tol=1:2:100000",
+        ],
+    );
+    let e = text(&done.stderr);
+    assert_eq!(done.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("the plan has 1.0e15 runs, more than the 1000000"),
+        "{e}"
+    );
+    assert!(!out.exists(), "{e}");
+    // A range of 10¹⁵ values is refused before a value is made.
+    let done = pendulum_sweep(&out, &["--set", "simulation.rtol=1:2:1000000000000000"]);
+    let e = text(&done.stderr);
+    assert_eq!(done.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("COUNT 1000000000000000 is more than the 1000000 runs"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -149,28 +149,70 @@ impl Dir {
     }
 
     /// Run `index`'s summary row when the run is complete: its row file
-    /// holds the row of this run of this plan, and its CSV file is in place
-    /// when it reached its end.
-    pub(super) fn complete(&self, plan: &Plan, index: usize) -> Option<Row> {
-        let text = std::fs::read_to_string(self.row_path(index)).ok()?;
-        let fields = parse_line(&text)?;
-        let k = plan.params().len();
-        let values = plan.values(index);
-        let row = Row::from_fields(fields, k)?;
-        let ours = row.index == index
-            && row.fields.len() == self.columns
-            && row.fields[1..=k].iter().zip(&values).all(|(a, b)| a == b);
-        let csv_in_place = row.error().is_some() || self.csv(index).is_file();
-        (ours && csv_in_place).then_some(row)
+    /// holds the row of this run of this plan (`values`: the plan's values
+    /// of run `index`), and for a run that reached its end `runs/<index>.csv`
+    /// is in place with the size its row file records. Otherwise what is
+    /// missing or wrong, naming the file.
+    pub(super) fn check(&self, index: usize, values: &[&str]) -> Result<Row, String> {
+        let path = self.row_path(index);
+        let text = std::fs::read_to_string(&path)
+            .map_err(|e| format!("{}: {e} (the run has not finished)", path.display()))?;
+        let k = values.len();
+        let row = Row::parse_file(&text, k)
+            .filter(|r| r.index == index && r.fields.len() == self.columns)
+            .ok_or_else(|| format!("{} is not a row of run {index}", path.display()))?;
+        if !row.fields[1..=k].iter().zip(values).all(|(a, b)| a == b) {
+            return Err(format!(
+                "{} holds the values {} where this sweep's plan (sweep.toml) has {}",
+                path.display(),
+                row.fields[1..=k].join(", "),
+                values.join(", ")
+            ));
+        }
+        if row.error().is_some() {
+            return Ok(row);
+        }
+        let csv = self.csv(index);
+        let size = std::fs::metadata(&csv)
+            .map_err(|e| format!("{}: {e}", csv.display()))?
+            .len();
+        match row.csv_bytes {
+            Some(n) if n == size => Ok(row),
+            Some(n) => Err(format!(
+                "{} has {size} bytes where {} records {n}: it is incomplete or not this run's",
+                csv.display(),
+                path.display()
+            )),
+            None => Err(format!(
+                "{} records no size of {}",
+                path.display(),
+                csv.display()
+            )),
+        }
     }
 
-    /// Writes run `index`'s row file (after its CSV file is in place).
+    /// Writes run `index`'s row file (after its CSV file is in place): the
+    /// summary row, then `csv_bytes,<size of runs/<index>.csv>` when it has
+    /// one.
     pub(super) fn save(&self, row: &Row) -> Result<(), SweepError> {
         let path = self.row_path(row.index);
-        let text = line(&row.fields)?;
+        let mut text = line(&row.fields)?;
+        if let Some(n) = row.csv_bytes {
+            text.push_str(&format!("{CSV_BYTES},{n}\n"));
+        }
         crate::csv::write_atomically(&path, text.as_bytes()).map_err(|e| io(&path, e))
     }
 }
+
+/// The row file's second line: the size of the run's CSV file.
+const CSV_BYTES: &str = "csv_bytes";
+
+/// A run's status when it reached its end within the error tolerance.
+pub(super) const OK: &str = "ok";
+
+/// The start of a run's status when it reached its end with steps beyond
+/// the error tolerance (followed by `mstar run`'s warning).
+pub(super) const BEYOND: &str = "beyond tolerance: ";
 
 /// One row of a summary.
 #[derive(Clone, Debug, PartialEq)]
@@ -179,6 +221,8 @@ pub(super) struct Row {
     /// Where `status` is in `fields`.
     status: usize,
     pub(super) fields: Vec<String>,
+    /// The size of the run's CSV file, bytes (none for a failed run).
+    pub(super) csv_bytes: Option<u64>,
 }
 
 impl Row {
@@ -188,6 +232,7 @@ impl Row {
             index,
             status,
             fields,
+            csv_bytes: None,
         }
     }
 
@@ -198,12 +243,42 @@ impl Row {
             index,
             status: k + 1,
             fields,
+            csv_bytes: None,
         })
+    }
+
+    /// A row file's row and the size of the CSV file it records.
+    fn parse_file(text: &str, k: usize) -> Option<Self> {
+        let mut r = ::csv::ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .from_reader(text.as_bytes());
+        let mut records = r.records();
+        let fields = records.next()?.ok()?.iter().map(str::to_string).collect();
+        let mut row = Self::from_fields(fields, k)?;
+        if let Some(size) = records.next() {
+            let size = size.ok()?;
+            if size.len() != 2 || &size[0] != CSV_BYTES {
+                return None;
+            }
+            row.csv_bytes = Some(size[1].parse().ok()?);
+        }
+        Some(row)
+    }
+
+    fn status(&self) -> &str {
+        &self.fields[self.status]
     }
 
     /// Why the run failed, if it did.
     pub(super) fn error(&self) -> Option<&str> {
-        Some(self.fields[self.status].as_str()).filter(|s| *s != "ok")
+        Some(self.status()).filter(|s| *s != OK && !s.starts_with(BEYOND))
+    }
+
+    /// The accuracy warning of a run that reached its end beyond the error
+    /// tolerance.
+    pub(super) fn beyond(&self) -> Option<&str> {
+        self.status().strip_prefix(BEYOND)
     }
 
     /// The outcome, for progress reports.
@@ -211,6 +286,7 @@ impl Row {
         RunOutcome {
             index: self.index,
             error: self.error().map(str::to_string),
+            beyond: self.beyond().map(str::to_string),
             wall: self
                 .fields
                 .last()
@@ -239,15 +315,6 @@ fn csv_error(e: ::csv::Error) -> SweepError {
     }
 }
 
-/// The fields of one CSV line.
-fn parse_line(text: &str) -> Option<Vec<String>> {
-    let mut r = ::csv::ReaderBuilder::new()
-        .has_headers(false)
-        .from_reader(text.as_bytes());
-    let record = r.records().next()?.ok()?;
-    Some(record.iter().map(str::to_string).collect())
-}
-
 /// Writes a summary: `header`, then `rows` (in index order).
 pub(super) fn write_summary(
     path: &Path,
@@ -270,46 +337,33 @@ pub struct Merged {
     pub runs: usize,
     /// The failed runs: index and why.
     pub failed: Vec<(usize, String)>,
+    /// The runs that reached their end beyond the error tolerance: index
+    /// and `mstar run`'s warning.
+    pub beyond: Vec<(usize, String)>,
 }
 
 /// Joins the summaries of a sharded sweep's shards (`summary.<I>of<N>.csv`
 /// in `dir`) into `dir/summary.csv`, ordered by index: the file the sweep
-/// would have written unsharded (the same bytes but the wall times).
+/// would have written unsharded (the same bytes but the wall times). Every
+/// row is checked against the plan of `dir/sweep.toml` and the run's files
+/// in `dir/runs` (its row file, and its CSV file complete).
 ///
 /// # Errors
 /// [`SweepError::Incomplete`] when a run has no row (a shard that has not
 /// run or finished), [`SweepError::Corrupt`] for summaries of different
-/// splits or columns, [`SweepError::Io`] when a file cannot be read or
-/// written.
+/// splits or columns, or a row that is not of this sweep or whose run's
+/// files are missing or incomplete (naming the row and the file),
+/// [`SweepError::Io`] when a file cannot be read or written.
 pub fn merge(dir: &Path) -> Result<Merged, SweepError> {
     let record = Record::read(dir)?;
     let shards = shard_summaries(dir)?;
+    let files = Dir {
+        path: dir.to_path_buf(),
+        columns: record.columns.len(),
+    };
     let mut rows = BTreeMap::new();
-    let k = record.param.len();
     for path in &shards {
-        let text = std::fs::read_to_string(path).map_err(|e| io(path, e))?;
-        let mut lines = ::csv::ReaderBuilder::new()
-            .has_headers(false)
-            .from_reader(text.as_bytes());
-        let corrupt = |why: String| SweepError::Corrupt {
-            path: path.clone(),
-            why,
-        };
-        for (n, record_) in lines.records().enumerate() {
-            let fields: Vec<String> = record_
-                .map_err(|e| corrupt(e.to_string()))?
-                .iter()
-                .map(str::to_string)
-                .collect();
-            if n == 0 {
-                if fields != record.columns {
-                    return Err(corrupt("its columns are not those of sweep.toml".into()));
-                }
-                continue;
-            }
-            let row = Row::from_fields(fields, k)
-                .filter(|r| r.fields.len() == record.columns.len() && r.index < record.runs)
-                .ok_or_else(|| corrupt(format!("line {} is not a row of this sweep", n + 1)))?;
+        for row in shard_rows(path, &record, &files)? {
             rows.insert(row.index, row);
         }
     }
@@ -326,11 +380,74 @@ pub fn merge(dir: &Path) -> Result<Merged, SweepError> {
     Ok(Merged {
         summary,
         runs: record.runs,
-        failed: rows
-            .iter()
-            .filter_map(|r| r.error().map(|e| (r.index, e.to_string())))
-            .collect(),
+        failed: listed(&rows, Row::error),
+        beyond: listed(&rows, Row::beyond),
     })
+}
+
+/// `(index, text)` of the rows for which `pick` gives a text.
+pub(super) fn listed(rows: &[Row], pick: fn(&Row) -> Option<&str>) -> Vec<(usize, String)> {
+    rows.iter()
+        .filter_map(|r| pick(r).map(|e| (r.index, e.to_string())))
+        .collect()
+}
+
+/// The rows of the shard summary `path`, each checked against the plan
+/// `record` and the run's files in `files`.
+fn shard_rows(path: &Path, record: &Record, files: &Dir) -> Result<Vec<Row>, SweepError> {
+    let text = std::fs::read_to_string(path).map_err(|e| io(path, e))?;
+    let mut lines = ::csv::ReaderBuilder::new()
+        .has_headers(false)
+        .from_reader(text.as_bytes());
+    let corrupt = |why: String| SweepError::Corrupt {
+        path: path.to_path_buf(),
+        why,
+    };
+    let k = record.param.len();
+    let mut rows = Vec::new();
+    for (n, line) in lines.records().enumerate() {
+        let fields: Vec<String> = line
+            .map_err(|e| corrupt(e.to_string()))?
+            .iter()
+            .map(str::to_string)
+            .collect();
+        if n == 0 {
+            if fields != record.columns {
+                return Err(corrupt("its columns are not those of sweep.toml".into()));
+            }
+            continue;
+        }
+        let row = Row::from_fields(fields, k)
+            .filter(|r| r.fields.len() == record.columns.len() && r.index < record.runs)
+            .ok_or_else(|| corrupt(format!("line {} is not a row of this sweep", n + 1)))?;
+        let values = super::values_of(&record.param, record.combine, row.index);
+        if row.fields[1..=k].iter().zip(&values).any(|(a, b)| a != b) {
+            return Err(corrupt(format!(
+                "line {} (run {}) has the values {} where this sweep's plan (sweep.toml) has {}: it is another sweep's summary; run that shard here (the same mstar sweep command with its --shard), which rewrites it, then merge again",
+                n + 1,
+                row.index,
+                row.fields[1..=k].join(", "),
+                values.join(", ")
+            )));
+        }
+        let checked = files.check(row.index, &values).and_then(|ours| {
+            (ours.fields == row.fields).then_some(()).ok_or_else(|| {
+                format!(
+                    "it is not the row {} holds",
+                    files.row_path(row.index).display()
+                )
+            })
+        });
+        if let Err(why) = checked {
+            return Err(corrupt(format!(
+                "line {} (run {}): {why}; rerun that shard here (the same mstar sweep command with its --shard), which completes its runs and rewrites its summary, then merge again",
+                n + 1,
+                row.index
+            )));
+        }
+        rows.push(row);
+    }
+    Ok(rows)
 }
 
 /// The shards' summaries in `dir`, all of one split `…of<N>`.

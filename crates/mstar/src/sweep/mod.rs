@@ -270,29 +270,7 @@ impl Plan {
     /// The value of each key in run `index` (< [`len`](Self::len)).
     #[must_use]
     pub fn values(&self, index: usize) -> Vec<&str> {
-        match self.combine {
-            Combine::Grid => {
-                // Row-major: the last key varies fastest.
-                let mut rest = index;
-                let mut values: Vec<&str> = self
-                    .params
-                    .iter()
-                    .rev()
-                    .map(|p| {
-                        let v = &p.values[rest % p.values.len()];
-                        rest /= p.values.len();
-                        v.as_str()
-                    })
-                    .collect();
-                values.reverse();
-                values
-            }
-            Combine::Zip => self
-                .params
-                .iter()
-                .map(|p| p.values[index.min(p.values.len() - 1)].as_str())
-                .collect(),
-        }
+        values_of(&self.params, self.combine, index)
     }
 
     /// The overrides of run `index`, `KEY=VALUE` as `mstar run --set` takes them.
@@ -306,7 +284,73 @@ impl Plan {
     }
 }
 
-/// No keys, a key twice, zipped lists of different lengths.
+/// The value of each key of `params` in run `index` of a plan combining
+/// them by `combine`.
+pub(crate) fn values_of(params: &[Param], combine: Combine, index: usize) -> Vec<&str> {
+    match combine {
+        Combine::Grid => {
+            // Row-major: the last key varies fastest.
+            let mut rest = index;
+            let mut values: Vec<&str> = params
+                .iter()
+                .rev()
+                .map(|p| {
+                    let v = &p.values[rest % p.values.len()];
+                    rest /= p.values.len();
+                    v.as_str()
+                })
+                .collect();
+            values.reverse();
+            values
+        }
+        Combine::Zip => params
+            .iter()
+            .map(|p| p.values[index.min(p.values.len() - 1)].as_str())
+            .collect(),
+    }
+}
+
+/// The most runs a plan may have: each run writes two files into one
+/// directory (`runs/`) and its summary row is kept in memory, and 10⁶ runs
+/// of even a millisecond are a quarter of an hour of computing; a larger
+/// count is a mistake in a range far more often than it is meant.
+pub const MAX_RUNS: usize = 1_000_000;
+
+/// Refuses a plan of more than [`MAX_RUNS`] runs (counted without
+/// overflow), with the number of values of its longest list that fits.
+fn check_runs(params: &[Param], combine: Combine) -> Result<(), SweepError> {
+    let mut counts = params.iter().map(|p| p.values.len());
+    let runs = match combine {
+        Combine::Grid => counts.try_fold(1usize, usize::checked_mul),
+        Combine::Zip => counts.max(),
+    };
+    if runs.is_some_and(|r| r <= MAX_RUNS) {
+        return Ok(());
+    }
+    let Some(longest) = params.iter().max_by_key(|p| p.values.len()) else {
+        return Ok(());
+    };
+    // The runs of the other keys together (at most MAX_RUNS + 1 counted).
+    let others = match combine {
+        Combine::Grid => params
+            .iter()
+            .filter(|p| p.key != longest.key)
+            .fold(1usize, |r, p| r.saturating_mul(p.values.len())),
+        Combine::Zip => 1,
+    };
+    let runs = runs.map_or_else(|| "more than 1.8e19".to_string(), |r| format!("{r:.1e}"));
+    let fits = MAX_RUNS / others.max(1);
+    let advice = if fits >= 1 {
+        format!("give {} at most {fits} values", longest.key)
+    } else {
+        "give fewer keys or values".to_string()
+    };
+    Err(SweepError::Plan(format!(
+        "the plan has {runs} runs, more than the {MAX_RUNS} a sweep takes: {advice}"
+    )))
+}
+
+/// No keys, a key twice, zipped lists of different lengths, too many runs.
 fn check_params(params: &[Param], combine: Combine) -> Result<(), SweepError> {
     if params.is_empty() {
         return Err(SweepError::Plan(
@@ -335,7 +379,7 @@ fn check_params(params: &[Param], combine: Combine) -> Result<(), SweepError> {
             lists[0].values.len()
         )));
     }
-    Ok(())
+    check_runs(params, combine)
 }
 
 /// Where and how [`run_plan`] runs.
@@ -368,6 +412,10 @@ pub struct RunOutcome {
     pub index: usize,
     /// `None` when it reached its end; else why not (the summary's status).
     pub error: Option<String>,
+    /// When it reached its end with steps beyond the error tolerance:
+    /// `mstar run`'s warning (the summary's status after
+    /// `beyond tolerance: `).
+    pub beyond: Option<String>,
     /// Wall time, s.
     pub wall: f64,
 }
@@ -381,9 +429,21 @@ pub trait Progress: Sync {
         let _ = (to_run, skipped);
     }
 
+    /// Before the first run: the runs at once (the pool's threads).
+    fn started(&self, threads: usize) {
+        let _ = threads;
+    }
+
     /// After each run.
     fn finished(&self, outcome: &RunOutcome) {
         let _ = outcome;
+    }
+
+    /// Whether to stop (asked before every step of every run): the run in
+    /// progress ends without a row (a rerun runs it again), no other run
+    /// starts, and the summary of the runs complete so far is written.
+    fn stop(&self) -> bool {
+        false
     }
 }
 
@@ -398,6 +458,15 @@ pub struct Report {
     pub skipped: usize,
     /// The failed runs of the shard (now or before): index and why.
     pub failed: Vec<(usize, String)>,
+    /// The runs of the shard (now or before) that reached their end with
+    /// steps beyond the error tolerance: index and `mstar run`'s warning.
+    pub beyond: Vec<(usize, String)>,
+    /// Runs at once: `Options::jobs` (default one per core), at most the
+    /// number of runs to run and the number of cores.
+    pub threads: usize,
+    /// Runs not run because [`Progress::stop`] said so (a signal): the
+    /// summary holds the runs complete so far.
+    pub stopped: usize,
     /// The summary written.
     pub summary: PathBuf,
 }
@@ -417,62 +486,123 @@ pub fn run_plan(
 ) -> Result<Report, SweepError> {
     use rayon::prelude::*;
     let dir = files::Dir::prepare(&options.out, plan)?;
-    let mine: Vec<usize> = (0..plan.len())
-        .filter(|&i| options.shard.contains(i))
-        .collect();
-    let mut rows = Vec::with_capacity(mine.len());
+    let mut rows = Vec::new();
     let mut todo = Vec::new();
-    for &i in &mine {
-        match dir.complete(plan, i) {
-            Some(row) => rows.push(row),
-            None => todo.push(i),
+    for i in (0..plan.len()).filter(|&i| options.shard.contains(i)) {
+        match dir.check(i, &plan.values(i)) {
+            Ok(row) => rows.push(row),
+            Err(_) => todo.push(i),
         }
     }
     let skipped = rows.len();
     progress.planned(todo.len(), skipped);
-    let jobs = options
-        .jobs
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, usize::from));
+    let threads = threads(options.jobs, todo.len());
+    progress.started(threads);
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(jobs.max(1))
+        .num_threads(threads)
         .build()
-        .map_err(|e| SweepError::Plan(format!("--jobs {jobs}: {e}")))?;
-    let done: Vec<Result<files::Row, SweepError>> = pool.install(|| {
+        .map_err(|e| SweepError::Plan(format!("--jobs {threads}: {e}")))?;
+    let done: Vec<Result<Option<files::Row>, SweepError>> = pool.install(|| {
         todo.par_iter()
             .with_max_len(1)
             .map(|&i| {
-                let row = one::run(plan, &dir, i)?;
-                progress.finished(&row.outcome());
+                if progress.stop() {
+                    return Ok(None);
+                }
+                let row = one::run(plan, &dir, i, &|| progress.stop())?;
+                if let Some(row) = &row {
+                    progress.finished(&row.outcome());
+                }
                 Ok(row)
             })
             .collect()
     });
+    let mut ran = 0;
     for row in done {
-        rows.push(row?);
+        if let Some(row) = row? {
+            rows.push(row);
+            ran += 1;
+        }
     }
     rows.sort_by_key(|r| r.index);
     let summary = dir.path().join(options.shard.summary_name());
     files::write_summary(&summary, &summary_header(plan), &rows)?;
     Ok(Report {
-        ran: todo.len(),
+        ran,
         skipped,
-        failed: rows
-            .iter()
-            .filter_map(|r| r.error().map(|e| (r.index, e.to_string())))
-            .collect(),
+        failed: files::listed(&rows, files::Row::error),
+        beyond: files::listed(&rows, files::Row::beyond),
+        threads,
+        stopped: todo.len() - ran,
         summary,
     })
 }
 
-/// The exit code of `mstar sweep` for `failed` failed runs: 0 when none
-/// failed, else 10 + the number (at most 110: 100 or more). Distinct from 1
-/// (a file that cannot be written) and 2 (a bad model file or command line,
+/// The threads of a sweep's pool: `jobs` (default one per core), at most
+/// one per run to run and one per core (more only wait for a core, each
+/// with its stack).
+fn threads(jobs: Option<usize>, runs: usize) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, usize::from);
+    jobs.unwrap_or(cores).min(cores).min(runs).max(1)
+}
+
+/// The exit code of `mstar sweep` for `failed` failed runs and `beyond`
+/// runs that reached their end beyond the error tolerance: 0 when every run
+/// reached its end within it; 10 + the number of failed runs (at most 110:
+/// 100 or more) when some failed; else 3 ([`crate::accuracy::EXIT_INACCURATE`],
+/// as `mstar run`) when some ended beyond the tolerance. Distinct from 1 (a
+/// file that cannot be written) and 2 (a bad model file or command line,
 /// before anything ran), and below 126.
 #[must_use]
-pub fn exit_code(failed: usize) -> u8 {
-    if failed == 0 {
-        0
-    } else {
+pub fn exit_code(failed: usize, beyond: usize) -> u8 {
+    if failed > 0 {
         10 + u8::try_from(failed.min(100)).unwrap_or(100)
+    } else if beyond > 0 {
+        crate::accuracy::EXIT_INACCURATE
+    } else {
+        0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A plan of `MAX_RUNS` runs and more is refused, and the advised count
+    /// of values passes.
+    #[test]
+    fn too_many_runs_are_refused_with_a_count_that_passes() {
+        let keys = |n: usize| -> Vec<Param> {
+            ["a", "b", "c"]
+                .iter()
+                .map(|k| Param::parse(&format!("{k}=1:2:{n}")).expect("a range"))
+                .collect()
+        };
+        let params = keys(200);
+        let e = check_params(&params, Combine::Grid)
+            .expect_err("8e6 runs")
+            .to_string();
+        assert!(e.contains("the plan has 8.0e6 runs"), "{e}");
+        let fits: usize = e
+            .rsplit("at most ")
+            .next()
+            .and_then(|t| t.split(' ').next())
+            .and_then(|t| t.parse().ok())
+            .unwrap_or_else(|| panic!("no count in: {e}"));
+        let mut advised = params.clone();
+        advised[0] = Param::parse(&format!("a=1:2:{fits}")).expect("a range");
+        assert!(check_params(&advised, Combine::Grid).is_ok(), "{e}");
+        advised[0] = Param::parse(&format!("a=1:2:{}", fits + 1)).expect("a range");
+        assert!(check_params(&advised, Combine::Grid).is_err(), "{e}");
+        assert!(check_params(&keys(100), Combine::Grid).is_ok());
+        assert!(check_params(&keys(1000), Combine::Zip).is_ok());
+        // Counts that overflow: refused, not wrapped.
+        let many: Vec<Param> = (0..8)
+            .map(|k| Param::parse(&format!("k{k}=1:2:300000")).expect("a range"))
+            .collect();
+        let e = check_params(&many, Combine::Grid)
+            .expect_err("overflow")
+            .to_string();
+        assert!(e.contains("more than 1.8e19 runs"), "{e}");
     }
 }

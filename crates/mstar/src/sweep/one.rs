@@ -16,6 +16,9 @@ use crate::run::ReactionColumns;
 struct Figures {
     /// `None` when it reached its end, else why not.
     error: Option<String>,
+    /// The accuracy warning of a run that reached its end with steps beyond
+    /// the error tolerance (`mstar run`'s exit 3: [`crate::accuracy`]).
+    beyond: Option<String>,
     /// The time reached and the last coordinates (none before the start).
     last: Option<(f64, Vec<f64>)>,
     max_constraint: Option<f64>,
@@ -27,6 +30,7 @@ impl Figures {
     fn failed(why: impl ToString) -> Self {
         Self {
             error: Some(why.to_string()),
+            beyond: None,
             last: None,
             max_constraint: None,
             drift: None,
@@ -36,88 +40,118 @@ impl Figures {
 }
 
 /// Runs run `index` of `plan` into `dir` and saves its row: a failed run is
-/// a row too (a panic of the run included).
+/// a row too (a panic of the run included). `None` when `stop` said so
+/// before a step: the run has no row (a rerun runs it again) and keeps its
+/// samples so far in `<index>.partial.csv`.
 ///
 /// # Errors
 /// Only when the row file cannot be written.
-pub(super) fn run(plan: &Plan, dir: &Dir, index: usize) -> Result<Row, SweepError> {
+pub(super) fn run(
+    plan: &Plan,
+    dir: &Dir,
+    index: usize,
+    stop: &dyn Fn() -> bool,
+) -> Result<Option<Row>, SweepError> {
     let clock = Instant::now();
-    let figures =
-        std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| integrate(plan, dir, index)))
-            .unwrap_or_else(|panic| {
-                let why = panic
-                    .downcast_ref::<&str>()
-                    .map(|s| (*s).to_string())
-                    .or_else(|| panic.downcast_ref::<String>().cloned())
-                    .unwrap_or_default();
-                Figures::failed(format!("the run panicked: {why}"))
-            });
-    let row = row(plan, index, &figures, clock.elapsed().as_secs_f64());
+    let figures = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        integrate(plan, dir, index, stop)
+    }))
+    .unwrap_or_else(|panic| {
+        let why = panic
+            .downcast_ref::<&str>()
+            .map(|s| (*s).to_string())
+            .or_else(|| panic.downcast_ref::<String>().cloned())
+            .unwrap_or_default();
+        Some(Figures::failed(format!("the run panicked: {why}")))
+    });
+    let Some(figures) = figures else {
+        return Ok(None);
+    };
+    let mut row = row(plan, index, &figures, clock.elapsed().as_secs_f64());
+    if row.error().is_none() {
+        // What a rerun and a merge check the CSV file against.
+        row.csv_bytes = std::fs::metadata(dir.csv(index)).ok().map(|m| m.len());
+    }
     dir.save(&row)?;
-    Ok(row)
+    Ok(Some(row))
 }
 
 /// Integrates run `index`, writing its CSV file (or, when it fails, the
-/// samples so far as `<index>.partial.csv`).
-fn integrate(plan: &Plan, dir: &Dir, index: usize) -> Figures {
+/// samples so far as `<index>.partial.csv`); `None` when `stop` stopped it.
+fn integrate(plan: &Plan, dir: &Dir, index: usize, stop: &dyn Fn() -> bool) -> Option<Figures> {
     let origin = plan.model().display().to_string();
     let overrides = plan.overrides(index);
     let file = match MechanismFile::parse_with(&plan.text, &origin, plan.format, &overrides) {
         Ok(file) => file,
-        Err(e) => return Figures::failed(e),
+        Err(e) => return Some(Figures::failed(e)),
     };
     let sys = crate::run::lookup(&file.mechanism);
-    let t_end = match crate::run::config(&file.simulation) {
-        Ok((_, t_end)) => t_end,
-        Err(e) => return Figures::failed(e),
+    let (config, t_end) = match crate::run::config(&file.simulation) {
+        Ok(c) => c,
+        Err(e) => return Some(Figures::failed(e)),
     };
     let columns = ReactionColumns::new(sys);
     let stream = match CsvStream::create_with(&dir.csv(index), sys, &columns.names()) {
         Ok(stream) => stream,
-        Err(e) => return Figures::failed(e),
+        Err(e) => return Some(Figures::failed(e)),
     };
     let grid = match Grid::new(file.output.every_time) {
         Ok(grid) => grid,
-        Err(e) => return Figures::failed(e),
+        Err(e) => return Some(Figures::failed(e)),
     };
     let rows = Rows {
         every: file.output.every,
         grid,
     };
     let mut recorder = Recorder::new(Some(stream), Some(&columns), rows, t_end);
-    let result = crate::run::simulate(sys, &file.simulation, &mut recorder);
+    let result = crate::run::simulate_until(sys, &file.simulation, &mut recorder, &mut || stop());
     recorder.finish_rows();
     let mut figures = Figures {
         error: None,
+        beyond: None,
         last: recorder.last().map(|(t, u)| (t, u.to_vec())),
         max_constraint: Some(recorder.max_constraint()),
         drift: Some(recorder.energy_drift()),
         steps: None,
     };
     let Some(stream) = recorder.into_stream() else {
-        return Figures::failed("no CSV stream");
+        return Some(Figures::failed("no CSV stream"));
     };
     match result {
         Ok(stats) => match stream.finish() {
-            Ok(_) => figures.steps = Some(stats.steps),
+            Ok(_) => {
+                figures.steps = Some(stats.steps);
+                // The verdict of `mstar run` (its exit 3), from the same
+                // statistics and configuration.
+                figures.beyond =
+                    crate::accuracy::warning(&stats, &config, &|i| sys.coord_name(i), true);
+            }
             Err(e) => figures.error = Some(e.to_string()),
         },
         Err(e) => {
             let _ = stream.keep_partial(&dir.partial(index));
+            if matches!(e, crate::run::RunError::Stopped { .. }) {
+                return None;
+            }
             figures.error = Some(e.to_string());
         }
     }
-    figures
+    Some(figures)
 }
 
 /// The summary row (see [`super::summary_header`]).
 fn row(plan: &Plan, index: usize, f: &Figures, wall: f64) -> Row {
     let mut fields = vec![index.to_string()];
     fields.extend(plan.values(index).into_iter().map(str::to_string));
-    let status = match &f.error {
-        None => "ok".to_string(),
-        // One line, whatever the message.
-        Some(why) => why.split_whitespace().collect::<Vec<_>>().join(" "),
+    // One line, whatever the message.
+    let one_line = |why: &str| why.split_whitespace().collect::<Vec<_>>().join(" ");
+    let status = match (&f.error, &f.beyond) {
+        (Some(why), _) => one_line(why),
+        (None, Some(warning)) => {
+            let what = warning.strip_prefix("warning: ").unwrap_or(warning);
+            format!("{}{}", super::files::BEYOND, one_line(what))
+        }
+        (None, None) => super::files::OK.to_string(),
     };
     fields.push(status);
     let number = |x: Option<f64>| x.map(format_number).unwrap_or_default();

@@ -129,14 +129,28 @@ fn range(item: &str) -> Result<Vec<String>, String> {
         .ok()
         .filter(|&n| n >= 2)
         .ok_or_else(|| malformed("COUNT must be a whole number ≥ 2"))?;
+    if n > super::MAX_RUNS {
+        // Before a value is made: 10¹⁵ values do not fit in memory.
+        return Err(malformed(&format!(
+            "COUNT {n} is more than the {} runs a sweep takes (give COUNT {} or less)",
+            super::MAX_RUNS,
+            super::MAX_RUNS
+        )));
+    }
+    // Integers stay integers (`output.every=10:100:10`) when both ends are
+    // written as integers and the value is one, exactly (|x| ≤ 2⁵³).
+    let integers = start.parse::<i64>().is_ok() && stop.parse::<i64>().is_ok();
     Ok((0..n)
         .map(|k| {
-            let x = if k + 1 == n {
-                b
+            // a (1 − s) + b s: no overflow between finite ends.
+            let s = k as f64 / (n - 1) as f64;
+            let x = if k + 1 == n { b } else { a * (1.0 - s) + b * s };
+            if integers && x.fract() == 0.0 && x.abs() <= 9_007_199_254_740_992.0 {
+                format!("{x}")
             } else {
-                a + (b - a) * k as f64 / (n - 1) as f64
-            };
-            format!("{x}")
+                // A TOML float: `1.5`, `1.0`, `1e19`.
+                format!("{x:?}")
+            }
         })
         .collect())
 }
@@ -156,6 +170,14 @@ mod tests {
         assert_eq!(p.values, ["[[0, 1], [2, 3]]", "[[1, 1], [2, 2]]"]);
         let p = Param::parse("x=0,1:2:3").expect("mixed");
         assert_eq!(p.values, ["0", "1", "1.5", "2"]);
+        let p = Param::parse("x=0.5:1.5:3").expect("floats");
+        assert_eq!(p.values, ["0.5", "1.0", "1.5"]);
+        let p = Param::parse("x=1e19:2e19:3").expect("large");
+        assert_eq!(p.values, ["1e19", "1.5e19", "2e19"]);
+        let p = Param::parse("x=1e308:-1e308:3").expect("extreme");
+        assert_eq!(p.values, ["1e308", "0.0", "-1e308"]);
+        let p = Param::parse("x=10:30:3").expect("integers");
+        assert_eq!(p.values, ["10", "20", "30"]);
         let p = Param::parse("simulation.integrator=\"hht\",newmark").expect("strings");
         assert_eq!(p.values, ["\"hht\"", "newmark"]);
     }
