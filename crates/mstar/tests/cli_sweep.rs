@@ -475,7 +475,10 @@ fn jobs_beyond_the_runs_and_cores_are_capped() {
     let threads = cores.min(3);
     // The main thread, the program's own pool (one thread per core: it runs
     // on one of them) and the sweep's pool of `threads`.
-    assert!(most >= 1 && most <= threads + cores + 1, "{most} threads: {e}");
+    assert!(
+        most >= 1 && most <= threads + cores + 1,
+        "{most} threads: {e}"
+    );
     assert!(
         e.contains(&format!("note: --jobs 1000000 capped to {threads}")),
         "{e}"
@@ -581,6 +584,35 @@ fn sweeps_of_too_many_runs_are_refused_before_they_start() {
     assert!(
         e.contains("COUNT 1000000000000000 is more than the 1000000 runs"),
         "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Issue 21 (24): sweeping the integrator of a file that sets `rho`
+/// (models/double-pendulum.toml) failed every HHT run; the override takes
+/// the file's `rho` out, and both runs are ok.
+#[test]
+fn sweeping_the_integrator_of_a_file_with_rho_runs() {
+    let dir = scratch("sweep-integrator");
+    let out = dir.join("s");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_mstar"))
+        .args(["sweep", &model("double-pendulum.toml")])
+        .args(["--set", "simulation.integrator=hht,generalized-alpha"])
+        .args([
+            "--set",
+            "simulation.t_end=0.05",
+            "--out",
+            &out.display().to_string(),
+        ])
+        .output()
+        .expect("mstar runs");
+    let e = text(&run.stderr);
+    assert_eq!(run.status.code(), Some(0), "{e}{}", text(&run.stdout));
+    let summary = std::fs::read_to_string(out.join("summary.csv")).expect("summary");
+    assert_eq!(
+        summary.lines().filter(|l| l.contains(",ok")).count(),
+        2,
+        "{summary}"
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -335,6 +335,11 @@ pub(crate) fn apply_override(root: &mut Node, assignment: &str) -> Result<(), St
     let Value::Table(entries) = &mut node.value else {
         return Err(not_a_table(node, through));
     };
+    if keys == ["simulation", "integrator"]
+        && let Value::Str(scheme) = &value.value
+    {
+        drop_other_schemes(entries, scheme);
+    }
     match entries.iter().position(|e| e.key == *last) {
         Some(at) => entries[at].node = value,
         None => entries.push(Entry {
@@ -345,6 +350,32 @@ pub(crate) fn apply_override(root: &mut Node, assignment: &str) -> Result<(), St
         }),
     }
     Ok(())
+}
+
+/// The scheme parameters that belong to each integrator.
+const SCHEME_PARAMETERS: [(&str, &[&str]); 3] = [
+    ("generalized-alpha", &["rho"]),
+    ("hht", &["alpha"]),
+    ("newmark", &["beta", "gamma"]),
+];
+
+/// An override of `integrator` takes out the parameters of the other schemes
+/// that the file (or an earlier override) set (`rho` of a file's
+/// generalized-α under `--set simulation.integrator=hht`), which would
+/// otherwise contradict it: the new scheme runs with its own defaults, or
+/// with its parameters set by later overrides.
+fn drop_other_schemes(entries: &mut Vec<Entry>, scheme: &str) {
+    let own: &[&str] = SCHEME_PARAMETERS
+        .iter()
+        .find(|(name, _)| *name == scheme)
+        .map_or(&[], |(_, keys)| *keys);
+    let foreign = |key: &str| {
+        SCHEME_PARAMETERS
+            .iter()
+            .any(|(_, keys)| keys.contains(&key))
+            && !own.contains(&key)
+    };
+    entries.retain(|e| !foreign(&e.key));
 }
 
 /// The node `key` names inside `node` (at the path `before`): a key of a
@@ -476,6 +507,32 @@ mod tests {
         assert_eq!(o.every, 5);
         assert!(apply_override(&mut root, "simulation.h").is_err());
         assert!(apply_override(&mut root, "simulation.h.x=1").is_err());
+    }
+
+    /// Issue 21 (24): `--set simulation.integrator=hht` on a file that sets
+    /// `rho` always failed, with no way to unset `rho`.
+    #[test]
+    fn an_integrator_override_takes_the_file_s_other_scheme_parameters_out() {
+        let doc = Doc {
+            origin: "m",
+            text: "",
+        };
+        let file = "[simulation]\nintegrator = \"generalized-alpha\"\nrho = 0.9\n";
+        let mut root = super::super::node::parse_toml(file, "m").expect("valid");
+        apply_override(&mut root, "simulation.integrator=hht").expect("set");
+        let (s, _) = read(doc, &root, false).expect("rho is taken out");
+        assert_eq!((s.integrator, s.rho), (Some(IntegratorChoice::Hht), None));
+        // A parameter of another scheme set after it contradicts it, as before.
+        let mut root = super::super::node::parse_toml(file, "m").expect("valid");
+        apply_override(&mut root, "simulation.integrator=hht").expect("set");
+        apply_override(&mut root, "simulation.rho=0.5").expect("set");
+        assert!(read(doc, &root, false).is_err());
+        // The new scheme's own parameter, set after it, is kept.
+        let mut root = super::super::node::parse_toml(file, "m").expect("valid");
+        apply_override(&mut root, "simulation.integrator=hht").expect("set");
+        apply_override(&mut root, "simulation.alpha=-0.2").expect("set");
+        let (s, _) = read(doc, &root, false).expect("valid");
+        assert_eq!(s.alpha, Some(-0.2));
     }
 
     #[test]
