@@ -17,7 +17,10 @@ use mstar_model::{RowSubset, SampleRef, System};
 use mstar_newmark::Observer;
 use nalgebra::{DMatrix, DVector};
 
-/// Largest dense `m × n` the rank computation takes.
+mod sparse;
+
+/// Largest `m × n` whose rows are sorted out densely (modified Gram–Schmidt,
+/// [`dense_rows`]); above it, by a sparse elimination ([`sparse_rows`]).
 pub const DENSE_LIMIT: usize = 4_000_000;
 
 /// The rows of `B` at a state: which are independent, which depend on the
@@ -32,18 +35,76 @@ pub struct Rows {
     pub dependent: Vec<usize>,
 }
 
-/// The rows of `B(t, u)`; `None` when `m · n` is above [`DENSE_LIMIT`].
-#[must_use]
-pub fn rows<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Option<Rows> {
-    if sys.n_coords() * sys.n_constraints() > DENSE_LIMIT {
-        return None;
+impl Rows {
+    fn of((kept, dependent): (Vec<usize>, Vec<usize>)) -> Self {
+        Self {
+            rank: kept.len(),
+            kept,
+            dependent,
+        }
     }
-    let (kept, dependent) = dependent_rows(&dense_b(sys, t, u));
-    Some(Rows {
-        rank: kept.len(),
-        kept,
-        dependent,
-    })
+}
+
+/// Why the rows of `B` were not sorted out: the sparse elimination filled
+/// in beyond its budget (a model whose joints couple many bodies at once).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "the elimination of the rows of B fills in beyond {budget} entries (the model couples many bodies through its joints)"
+)]
+pub struct NotComputed {
+    /// The budget, entries of the eliminated rows.
+    pub budget: usize,
+}
+
+/// The rows of `B(t, u)`: densely up to `n · m` = [`DENSE_LIMIT`], sparsely
+/// above.
+///
+/// # Errors
+/// [`NotComputed`] when the sparse elimination exceeds its budget of
+/// [`fill_budget`] entries.
+pub fn rows<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Result<Rows, NotComputed> {
+    if sys.n_coords() * sys.n_constraints() > DENSE_LIMIT {
+        let budget = fill_budget(sys.b_pattern().len());
+        sparse_rows(sys, t, u, budget)
+    } else {
+        Ok(dense_rows(sys, t, u))
+    }
+}
+
+/// The entries the sparse elimination may keep for `B` with `nnz` entries:
+/// 20 times its own, at least [`DENSE_LIMIT`] (the memory of the dense
+/// computation it replaces).
+#[must_use]
+pub fn fill_budget(nnz: usize) -> usize {
+    DENSE_LIMIT.max(20 * nnz)
+}
+
+/// The rows of `B(t, u)` by modified Gram–Schmidt on the dense rows (for
+/// small models: `O(m n rank)`).
+#[must_use]
+pub fn dense_rows<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Rows {
+    Rows::of(dependent_rows(&dense_b(sys, t, u)))
+}
+
+/// The rows of `B(t, u)` by sparse Gaussian elimination of its rows in order,
+/// the same rows as [`dense_rows`] (up to rounding: both call a row
+/// dependent when what the rows before it leave of it is at most `1e-10` of
+/// its norm), with at most `budget` entries in the eliminated rows.
+///
+/// # Errors
+/// [`NotComputed`] past the budget.
+pub fn sparse_rows<S: System + ?Sized>(
+    sys: &S,
+    t: f64,
+    u: &[f64],
+    budget: usize,
+) -> Result<Rows, NotComputed> {
+    let p = sys.b_pattern();
+    let mut values = vec![0.0; p.len()];
+    sys.b_into(t, u, &mut values);
+    sparse::dependent_rows(&p, &values, budget)
+        .map(Rows::of)
+        .map_err(|e| NotComputed { budget: e.budget })
 }
 
 /// `B(t, u)`, dense, row by row.
@@ -156,7 +217,9 @@ impl<'a, 'o, S: System + ?Sized> Expanded<'a, 'o, S> {
     pub fn new(subset: &RowSubset<'a, S>, inner: &'o mut dyn Observer) -> Self {
         let sys = subset.inner();
         let m = sys.n_constraints();
-        let left_out = (0..m).filter(|r| !subset.rows().contains(r)).collect();
+        let mut kept = vec![false; m];
+        subset.rows().iter().for_each(|&r| kept[r] = true);
+        let left_out = (0..m).filter(|&r| !kept[r]).collect();
         Self {
             minimum_norm: MinimumNorm::new(sys, subset.rows().to_vec()),
             inner,
