@@ -274,6 +274,84 @@ impl<S: System + ?Sized> Observer for Expanded<'_, '_, S> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mstar_model::planar::{At, PlanarBuilder, RigidBody};
+    use proptest::prelude::*;
+
+    /// A mechanism of `poses.len()` bars joined by revolute joints
+    /// `(a, b, sa, sb)` (side 0 is the ground, points along the bars), the
+    /// joints of `twice` added a second time.
+    fn mechanism(
+        poses: &[[f64; 3]],
+        joints: &[(usize, usize, f64, f64)],
+        twice: &[usize],
+    ) -> mstar_model::planar::PlanarSystem {
+        let mut b = PlanarBuilder::new();
+        let ids: Vec<_> = poses
+            .iter()
+            .enumerate()
+            .map(|(i, &pose)| {
+                let body = RigidBody {
+                    mass: 1.0,
+                    inertia: 0.1,
+                    pose,
+                    velocity: [0.0; 3],
+                };
+                b.rigid_body(&format!("b{i}"), body)
+            })
+            .collect();
+        let at = |side: usize, s: f64| match side {
+            0 => At::Ground([s, -s]),
+            k => At::Body(ids[k - 1], [s, 0.0]),
+        };
+        let all = joints
+            .iter()
+            .chain(twice.iter().filter_map(|&k| joints.get(k)));
+        for (k, &(a, c, sa, sc)) in all.enumerate() {
+            let c = if a == c {
+                (c + 1) % (poses.len() + 1)
+            } else {
+                c
+            };
+            if a == 0 && c == 0 {
+                continue;
+            }
+            b.revolute(&format!("j{k}"), at(a, sa), at(c, sc));
+        }
+        b.build().expect("a valid mechanism")
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        #[test]
+        fn sparse_rows_are_the_dense_rows(
+            poses in prop::collection::vec(prop::array::uniform3(-2.0..2.0f64), 1..6),
+            joints in prop::collection::vec((0usize..6, 0usize..6, -1.0..1.0f64, -1.0..1.0f64), 1..9),
+            twice in prop::collection::vec(0usize..9, 0..3),
+        ) {
+            let n = poses.len();
+            let joints: Vec<_> = joints.into_iter().map(|(a, c, sa, sc)| (a % (n + 1), c % (n + 1), sa, sc)).collect();
+            let sys = mechanism(&poses, &joints, &twice);
+            let u = sys.initial_position();
+            let dense = dense_rows(&sys, 0.0, &u);
+            let sparse = sparse_rows(&sys, 0.0, &u, 1000).expect("within the budget");
+            prop_assert_eq!(sparse, dense);
+        }
+    }
+
+    #[test]
+    fn a_repeated_joint_is_dependent_and_the_fill_budget_is_kept() {
+        let poses = [[0.5, 0.0, 0.0], [1.5, 0.0, 0.0], [2.5, 0.0, 0.0]];
+        let joints = [(0, 1, 0.0, -0.5), (1, 2, 0.5, -0.5), (2, 3, 0.5, -0.5)];
+        let sys = mechanism(&poses, &joints, &[1]);
+        let u = sys.initial_position();
+        let rows = sparse_rows(&sys, 0.0, &u, 1000).expect("within the budget");
+        // Rows 6, 7: the second copy of joint 1.
+        assert_eq!((rows.rank, rows.dependent), (6, vec![6, 7]));
+        assert_eq!(
+            sparse_rows(&sys, 0.0, &u, 3),
+            Err(NotComputed { budget: 3 })
+        );
+    }
 
     #[test]
     fn dependent_rows_are_found_in_order() {

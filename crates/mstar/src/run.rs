@@ -407,11 +407,12 @@ pub fn check<S: ModelLookup + ?Sized>(
 /// The joints and drivers that own `rows`, each once, in order.
 #[must_use]
 pub fn owners<S: ModelLookup + ?Sized>(sys: &S, rows: &[usize]) -> Vec<String> {
+    let mut seen = std::collections::HashSet::new();
     let mut names: Vec<String> = Vec::new();
     for &row in rows {
-        let owner = sys.constraint_owner(row).unwrap_or("?").to_string();
-        if !names.contains(&owner) {
-            names.push(owner);
+        let owner = sys.constraint_owner(row).unwrap_or("?");
+        if seen.insert(owner) {
+            names.push(owner.to_string());
         }
     }
     names
