@@ -90,7 +90,7 @@ class Model:
         """What ``mstar check`` reports, as a dict.
 
         Keys: ``coordinates``, ``constraints``, ``rank`` and
-        ``degrees_of_freedom`` (None for models too large for the dense rank),
+        ``degrees_of_freedom`` (None when the rank was not computed: the sparse elimination past its fill budget),
         ``redundant_constraints`` (joint names), ``minimum_norm``,
         ``position_violation`` and ``velocity_violation`` (``(owner, row,
         value)`` or None), ``projection`` (``{"position": (coordinate, by),

@@ -15,6 +15,9 @@
 //!   references; writes docs/validation.md ([`validate`]).
 //! - `cargo xtask work-precision`: error against CPU time, fixed and
 //!   adaptive steps; writes docs/work-precision.md ([`work_precision`]).
+//! - `cargo xtask setup`: the time from the command line to the first step
+//!   on the N-four-bar at 10³, 10⁴, 10⁵ bodies; `cargo xtask n-four-bar-file`
+//!   writes one such file ([`setup`]).
 //! - `cargo xtask animate-check`: `mstar animate`'s page in headless Chromium,
 //!   a screenshot and a check that its script plays ([`animate_check`]).
 
@@ -25,6 +28,7 @@ mod convergence;
 mod energy;
 mod paper;
 mod plot;
+mod setup;
 mod stability;
 mod validate;
 mod work_precision;
@@ -83,6 +87,27 @@ enum Command {
     /// mechanism, fixed steps against error-controlled ones; writes
     /// docs/work-precision.md and docs/figures/work-precision.png.
     WorkPrecision,
+    /// Set-up time (read, check, start) of `mstar check` and `mstar run` on
+    /// the N-four-bar at 10³, 10⁴ and 10⁵ bodies (release build); writes
+    /// the files and setup.csv to target/studies/setup/.
+    Setup {
+        /// Largest model, in bodies.
+        #[arg(long, default_value_t = 100_001)]
+        max_bodies: usize,
+    },
+    /// Writes the IFToMM N-four-bar (models/n-four-bar.toml) for any N:
+    /// 2N + 1 bodies.
+    NFourBarFile {
+        /// N, the number of couplers.
+        #[arg(long)]
+        bars: usize,
+        /// The file to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Add a second copy of one coupler joint (a redundant joint).
+        #[arg(long)]
+        duplicate: bool,
+    },
 }
 
 fn main() -> Result<()> {
@@ -99,6 +124,12 @@ fn main() -> Result<()> {
         Command::Bench { max_n, report_only } => bench::run(max_n, report_only),
         Command::AnimateCheck => animate_check::run(),
         Command::WorkPrecision => work_precision::run(),
+        Command::Setup { max_bodies } => setup::run(max_bodies),
+        Command::NFourBarFile {
+            bars,
+            out,
+            duplicate,
+        } => setup::write_file(bars, duplicate, &out),
     }
 }
 

@@ -641,7 +641,7 @@ fn print_summary(st: mstar::RunStats, t: f64, out: &RunOutput<'_>, wall: f64) {
 }
 
 /// `mstar check`: exit 0 when the model can run as written, 1 when it
-/// cannot, 2 when the file cannot be read or holds a value out of range.
+/// cannot (or its redundant constraints could not be computed), 2 when the file cannot be read or holds a value out of range.
 pub fn check(args: &CheckArgs) -> ExitCode {
     let file = match MechanismFile::load_with(&args.model, &args.set) {
         Ok(file) => file,
@@ -667,6 +667,9 @@ pub fn check(args: &CheckArgs) -> ExitCode {
     if report.can_run() {
         ExitCode::SUCCESS
     } else {
+        if let Some(why) = &report.not_computed {
+            eprintln!("error: the redundant constraints were not computed: {why}");
+        }
         if !report.redundant.is_empty() && !report.minimum_norm {
             let e = mstar::run::RunError::Redundant(report.redundant.clone());
             eprintln!("error: {e}");

@@ -17,7 +17,10 @@ use mstar_model::{RowSubset, SampleRef, System};
 use mstar_newmark::Observer;
 use nalgebra::{DMatrix, DVector};
 
-/// Largest dense `m × n` the rank computation takes.
+mod sparse;
+
+/// Largest `m × n` whose rows are sorted out densely (modified Gram–Schmidt,
+/// [`dense_rows`]); above it, by a sparse elimination ([`sparse_rows`]).
 pub const DENSE_LIMIT: usize = 4_000_000;
 
 /// The rows of `B` at a state: which are independent, which depend on the
@@ -32,18 +35,76 @@ pub struct Rows {
     pub dependent: Vec<usize>,
 }
 
-/// The rows of `B(t, u)`; `None` when `m · n` is above [`DENSE_LIMIT`].
-#[must_use]
-pub fn rows<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Option<Rows> {
-    if sys.n_coords() * sys.n_constraints() > DENSE_LIMIT {
-        return None;
+impl Rows {
+    fn of((kept, dependent): (Vec<usize>, Vec<usize>)) -> Self {
+        Self {
+            rank: kept.len(),
+            kept,
+            dependent,
+        }
     }
-    let (kept, dependent) = dependent_rows(&dense_b(sys, t, u));
-    Some(Rows {
-        rank: kept.len(),
-        kept,
-        dependent,
-    })
+}
+
+/// Why the rows of `B` were not sorted out: the sparse elimination filled
+/// in beyond its budget (a model whose joints couple many bodies at once).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "the elimination of the rows of B fills in beyond {budget} entries (the model couples many bodies through its joints)"
+)]
+pub struct NotComputed {
+    /// The budget, entries of the eliminated rows.
+    pub budget: usize,
+}
+
+/// The rows of `B(t, u)`: densely up to `n · m` = [`DENSE_LIMIT`], sparsely
+/// above.
+///
+/// # Errors
+/// [`NotComputed`] when the sparse elimination exceeds its budget of
+/// [`fill_budget`] entries.
+pub fn rows<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Result<Rows, NotComputed> {
+    if sys.n_coords() * sys.n_constraints() > DENSE_LIMIT {
+        let budget = fill_budget(sys.b_pattern().len());
+        sparse_rows(sys, t, u, budget)
+    } else {
+        Ok(dense_rows(sys, t, u))
+    }
+}
+
+/// The entries the sparse elimination may keep for `B` with `nnz` entries:
+/// 20 times its own, at least [`DENSE_LIMIT`] (the memory of the dense
+/// computation it replaces).
+#[must_use]
+pub fn fill_budget(nnz: usize) -> usize {
+    DENSE_LIMIT.max(20 * nnz)
+}
+
+/// The rows of `B(t, u)` by modified Gram–Schmidt on the dense rows (for
+/// small models: `O(m n rank)`).
+#[must_use]
+pub fn dense_rows<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Rows {
+    Rows::of(dependent_rows(&dense_b(sys, t, u)))
+}
+
+/// The rows of `B(t, u)` by sparse Gaussian elimination of its rows in order,
+/// the same rows as [`dense_rows`] (up to rounding: both call a row
+/// dependent when what the rows before it leave of it is at most `1e-10` of
+/// its norm), with at most `budget` entries in the eliminated rows.
+///
+/// # Errors
+/// [`NotComputed`] past the budget.
+pub fn sparse_rows<S: System + ?Sized>(
+    sys: &S,
+    t: f64,
+    u: &[f64],
+    budget: usize,
+) -> Result<Rows, NotComputed> {
+    let p = sys.b_pattern();
+    let mut values = vec![0.0; p.len()];
+    sys.b_into(t, u, &mut values);
+    sparse::dependent_rows(&p, &values, budget)
+        .map(Rows::of)
+        .map_err(|e| NotComputed { budget: e.budget })
 }
 
 /// `B(t, u)`, dense, row by row.
@@ -156,7 +217,9 @@ impl<'a, 'o, S: System + ?Sized> Expanded<'a, 'o, S> {
     pub fn new(subset: &RowSubset<'a, S>, inner: &'o mut dyn Observer) -> Self {
         let sys = subset.inner();
         let m = sys.n_constraints();
-        let left_out = (0..m).filter(|r| !subset.rows().contains(r)).collect();
+        let mut kept = vec![false; m];
+        subset.rows().iter().for_each(|&r| kept[r] = true);
+        let left_out = (0..m).filter(|&r| !kept[r]).collect();
         Self {
             minimum_norm: MinimumNorm::new(sys, subset.rows().to_vec()),
             inner,
@@ -211,6 +274,84 @@ impl<S: System + ?Sized> Observer for Expanded<'_, '_, S> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use mstar_model::planar::{At, PlanarBuilder, RigidBody};
+    use proptest::prelude::*;
+
+    /// A mechanism of `poses.len()` bars joined by revolute joints
+    /// `(a, b, sa, sb)` (side 0 is the ground, points along the bars), the
+    /// joints of `twice` added a second time.
+    fn mechanism(
+        poses: &[[f64; 3]],
+        joints: &[(usize, usize, f64, f64)],
+        twice: &[usize],
+    ) -> mstar_model::planar::PlanarSystem {
+        let mut b = PlanarBuilder::new();
+        let ids: Vec<_> = poses
+            .iter()
+            .enumerate()
+            .map(|(i, &pose)| {
+                let body = RigidBody {
+                    mass: 1.0,
+                    inertia: 0.1,
+                    pose,
+                    velocity: [0.0; 3],
+                };
+                b.rigid_body(&format!("b{i}"), body)
+            })
+            .collect();
+        let at = |side: usize, s: f64| match side {
+            0 => At::Ground([s, -s]),
+            k => At::Body(ids[k - 1], [s, 0.0]),
+        };
+        let all = joints
+            .iter()
+            .chain(twice.iter().filter_map(|&k| joints.get(k)));
+        for (k, &(a, c, sa, sc)) in all.enumerate() {
+            let c = if a == c {
+                (c + 1) % (poses.len() + 1)
+            } else {
+                c
+            };
+            if a == 0 && c == 0 {
+                continue;
+            }
+            b.revolute(&format!("j{k}"), at(a, sa), at(c, sc));
+        }
+        b.build().expect("a valid mechanism")
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(64))]
+        #[test]
+        fn sparse_rows_are_the_dense_rows(
+            poses in prop::collection::vec(prop::array::uniform3(-2.0..2.0f64), 1..6),
+            joints in prop::collection::vec((0usize..6, 0usize..6, -1.0..1.0f64, -1.0..1.0f64), 1..9),
+            twice in prop::collection::vec(0usize..9, 0..3),
+        ) {
+            let n = poses.len();
+            let joints: Vec<_> = joints.into_iter().map(|(a, c, sa, sc)| (a % (n + 1), c % (n + 1), sa, sc)).collect();
+            let sys = mechanism(&poses, &joints, &twice);
+            let u = sys.initial_position();
+            let dense = dense_rows(&sys, 0.0, &u);
+            let sparse = sparse_rows(&sys, 0.0, &u, 1000).expect("within the budget");
+            prop_assert_eq!(sparse, dense);
+        }
+    }
+
+    #[test]
+    fn a_repeated_joint_is_dependent_and_the_fill_budget_is_kept() {
+        let poses = [[0.5, 0.0, 0.0], [1.5, 0.0, 0.0], [2.5, 0.0, 0.0]];
+        let joints = [(0, 1, 0.0, -0.5), (1, 2, 0.5, -0.5), (2, 3, 0.5, -0.5)];
+        let sys = mechanism(&poses, &joints, &[1]);
+        let u = sys.initial_position();
+        let rows = sparse_rows(&sys, 0.0, &u, 1000).expect("within the budget");
+        // Rows 6, 7: the second copy of joint 1.
+        assert_eq!((rows.rank, rows.dependent), (6, vec![6, 7]));
+        assert_eq!(
+            sparse_rows(&sys, 0.0, &u, 3),
+            Err(NotComputed { budget: 3 })
+        );
+    }
 
     #[test]
     fn dependent_rows_are_found_in_order() {

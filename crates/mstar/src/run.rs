@@ -163,14 +163,38 @@ pub fn solve_rows<S: ModelLookup + ?Sized>(
     u0: &[f64],
     choice: RedundantChoice,
 ) -> Result<Option<Rows>, RunError> {
-    let Some(rows) = crate::redundant::rows(sys, 0.0, u0) else {
+    // Not sorted out (past the sparse elimination's budget): all rows, as
+    // the KKT factorization then finds out whether they are independent.
+    let Ok(rows) = crate::redundant::rows(sys, 0.0, u0) else {
         return Ok(None);
     };
     match (rows.dependent.is_empty(), choice) {
         (true, _) => Ok(None),
-        (false, RedundantChoice::MinimumNorm) => Ok(Some(rows)),
+        (false, RedundantChoice::MinimumNorm) => {
+            minimum_norm_fits(sys, &rows)?;
+            Ok(Some(rows))
+        }
         (false, RedundantChoice::Refuse) => Err(RunError::Redundant(owners(sys, &rows.dependent))),
     }
+}
+
+/// Minimum-norm multipliers take a dense pseudo-inverse of `Bᵀ`
+/// ([`crate::redundant::MinimumNorm`]): up to `n · m` =
+/// [`crate::redundant::DENSE_LIMIT`].
+///
+/// # Errors
+/// [`RunError::Settings`] for a larger model, naming its redundant joints.
+fn minimum_norm_fits<S: ModelLookup + ?Sized>(sys: &S, rows: &Rows) -> Result<(), RunError> {
+    let (n, m) = (sys.n_coords(), sys.n_constraints());
+    if n * m <= crate::redundant::DENSE_LIMIT {
+        return Ok(());
+    }
+    Err(RunError::Settings(format!(
+        "[simulation] redundant = \"minimum-norm\" computes the multipliers densely, for n·m up to {}, and this model has n·m = {}: remove its redundant constraints ({}) and the setting",
+        crate::redundant::DENSE_LIMIT,
+        n * m,
+        owners(sys, &rows.dependent).join(", ")
+    )))
 }
 
 /// Checks that the rows left out of a minimum-norm solve hold at the start
@@ -313,11 +337,15 @@ pub struct CheckReport {
     pub coordinates: usize,
     /// Constraint equations `m`.
     pub constraints: usize,
-    /// `rank B` at the initial pose (`None` when the model is too large for
-    /// the dense rank computation).
+    /// `rank B` at the initial pose (`None` when it was not computed: see
+    /// [`not_computed`](Self::not_computed)).
     pub rank: Option<usize>,
+    /// Why the rank and the redundant constraints were not computed, if
+    /// they were not (the sparse elimination's fill-in past its budget,
+    /// [`crate::redundant::NotComputed`]).
+    pub not_computed: Option<String>,
     /// The joints and drivers with a constraint row that depends on the rows
-    /// before it, by name, in file order.
+    /// before it, by name, in file order (empty also when not computed).
     pub redundant: Vec<String>,
     /// Whether the model runs with minimum-norm multipliers (it has redundant
     /// constraints and asks for them).
@@ -349,13 +377,14 @@ pub fn check<S: ModelLookup + ?Sized>(
     let minimum_norm = redundant == RedundantChoice::MinimumNorm && !dependent.is_empty();
     let (phi, w) = initial_violations(sys, &u0, &v0);
     let start = match &rows {
-        Some(rows) if minimum_norm => {
-            let subset = RowSubset::new(sys, rows.kept.clone());
-            start_report(&subset, config, &u0, &v0).and_then(|(moved, u)| {
+        Ok(rows) if minimum_norm => minimum_norm_fits(sys, rows)
+            .map_err(|e| e.to_string())
+            .and_then(|()| {
+                let subset = RowSubset::new(sys, rows.kept.clone());
+                let (moved, u) = start_report(&subset, config, &u0, &v0)?;
                 left_out_rows_hold(sys, rows, &u).map_err(|e| e.to_string())?;
                 Ok((moved, u))
-            })
-        }
+            }),
         _ => start_report(sys, config, &u0, &v0),
     };
     let (projection, start_error) = match start {
@@ -365,7 +394,8 @@ pub fn check<S: ModelLookup + ?Sized>(
     CheckReport {
         coordinates: n,
         constraints: m,
-        rank: rows.as_ref().map(|r| r.rank),
+        rank: rows.as_ref().ok().map(|r| r.rank),
+        not_computed: rows.as_ref().err().map(ToString::to_string),
         redundant: owners(sys, dependent),
         minimum_norm,
         position_violation: violation(sys, &phi),
@@ -378,11 +408,12 @@ pub fn check<S: ModelLookup + ?Sized>(
 /// The joints and drivers that own `rows`, each once, in order.
 #[must_use]
 pub fn owners<S: ModelLookup + ?Sized>(sys: &S, rows: &[usize]) -> Vec<String> {
+    let mut seen = std::collections::HashSet::new();
     let mut names: Vec<String> = Vec::new();
     for &row in rows {
-        let owner = sys.constraint_owner(row).unwrap_or("?").to_string();
-        if !names.contains(&owner) {
-            names.push(owner);
+        let owner = sys.constraint_owner(row).unwrap_or("?");
+        if seen.insert(owner) {
+            names.push(owner.to_string());
         }
     }
     names
@@ -440,10 +471,13 @@ fn start_report<S: System + ?Sized>(
 
 impl CheckReport {
     /// Whether the model can run as written: no redundant constraint (or
-    /// minimum-norm multipliers asked for), and a start.
+    /// minimum-norm multipliers asked for), and a start; `false` when the
+    /// redundant constraints were not computed (unknown is not "none").
     #[must_use]
     pub fn can_run(&self) -> bool {
-        (self.redundant.is_empty() || self.minimum_norm) && self.start_error.is_none()
+        self.not_computed.is_none()
+            && (self.redundant.is_empty() || self.minimum_norm)
+            && self.start_error.is_none()
     }
 
     /// The degrees of freedom `n − rank B`, when the rank is known.
@@ -457,15 +491,19 @@ impl std::fmt::Display for CheckReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         writeln!(f, "coordinates: {}", self.coordinates)?;
         writeln!(f, "constraints: {}", self.constraints)?;
-        match self.degrees_of_freedom() {
-            Some(dof) => writeln!(f, "degrees of freedom: {dof}")?,
-            None => writeln!(
+        let not_computed = |why: &str| format!("not computed ({why})");
+        match (self.degrees_of_freedom(), &self.not_computed) {
+            (Some(dof), _) => writeln!(f, "degrees of freedom: {dof}")?,
+            (None, why) => writeln!(
                 f,
-                "degrees of freedom: not computed (n·m above {})",
-                crate::redundant::DENSE_LIMIT
+                "degrees of freedom: {}",
+                not_computed(why.as_deref().unwrap_or("unknown"))
             )?,
         }
         let redundant = match (self.redundant.is_empty(), self.minimum_norm) {
+            (true, _) if self.rank.is_none() => {
+                not_computed(self.not_computed.as_deref().unwrap_or("unknown"))
+            }
             (true, _) => "none".to_string(),
             (false, false) => self.redundant.join(", "),
             (false, true) => format!(

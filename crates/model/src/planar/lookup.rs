@@ -41,14 +41,14 @@ impl PlanarSystem {
     /// The coordinates of the body called `name`.
     #[must_use]
     pub fn body(&self, name: &str) -> Option<BodyCoords> {
-        self.bodies
-            .iter()
-            .find(|b| b.name == name)
-            .map(|b| BodyCoords {
-                x: b.x,
-                y: b.x + 1,
-                theta: b.inertia.map(|_| b.x + 2),
-            })
+        let Some(&super::Named::Body(i)) = self.by_name.get(name) else {
+            return None;
+        };
+        Some(&self.bodies[i]).map(|b| BodyCoords {
+            x: b.x,
+            y: b.x + 1,
+            theta: b.inertia.map(|_| b.x + 2),
+        })
     }
 
     /// The names of the joints and drivers, in the order of their rows.
@@ -76,10 +76,10 @@ impl PlanarSystem {
     /// (`None` past the last row).
     #[must_use]
     pub fn constraint_owner(&self, row: usize) -> Option<&str> {
-        self.constraints
-            .iter()
-            .find(|c| (c.row0..c.row0 + c.rows).contains(&row))
-            .map(|c| c.name.as_str())
+        // The constraints are in the order of their rows.
+        let k = self.constraints.partition_point(|c| c.row0 <= row);
+        let c = self.constraints.get(k.checked_sub(1)?)?;
+        (row < c.row0 + c.rows).then_some(c.name.as_str())
     }
 
     /// The reaction of the joint or driver called `name` at `(t, u)` with the
@@ -128,7 +128,10 @@ impl PlanarSystem {
     }
 
     fn constraint(&self, name: &str) -> Option<usize> {
-        self.constraints.iter().position(|c| c.name == name)
+        match self.by_name.get(name) {
+            Some(&super::Named::Constraint(i)) => Some(i),
+            _ => None,
+        }
     }
 
     /// The body that owns global coordinate `i`.

@@ -77,6 +77,13 @@ pub enum ModelError {
     },
 }
 
+/// What a name of [`PlanarSystem`] stands for.
+#[derive(Clone, Copy, Debug)]
+enum Named {
+    Body(usize),
+    Constraint(usize),
+}
+
 #[derive(Clone, Debug)]
 struct Body {
     name: String,
@@ -121,6 +128,9 @@ pub struct PlanarSystem {
     others: Vec<usize>,
     /// Global indices of the rigid bodies' angles.
     angles: Vec<usize>,
+    /// Each body's and each constraint's index by name (names are unique
+    /// across both: `PlanarBuilder::build` checks it).
+    by_name: std::collections::HashMap<String, Named>,
     g_u_offsets: Vec<usize>,
     g_v_offsets: Vec<usize>,
 }
@@ -215,7 +225,19 @@ impl PlanarSystem {
                 None => others.push(i),
             }
         }
+        let by_name = bodies
+            .iter()
+            .enumerate()
+            .map(|(i, b)| (b.name.clone(), Named::Body(i)))
+            .chain(
+                constraints
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| (c.name.clone(), Named::Constraint(i))),
+            )
+            .collect();
         Self {
+            by_name,
             revolutes,
             others,
             angles,

@@ -162,6 +162,10 @@ pub struct SpatialSystem {
     spherical: Vec<SphericalKernel>,
     /// Indices of the other joints (the generic path).
     others: Vec<usize>,
+    /// Each body's index by name.
+    body_by_name: std::collections::HashMap<String, usize>,
+    /// Each joint's (and driver's) index by name.
+    joint_by_name: std::collections::HashMap<String, usize>,
 }
 
 #[derive(Clone, Debug)]
@@ -221,7 +225,19 @@ impl SpatialSystem {
             }
         }
         let m = names.len();
+        let body_by_name = bodies
+            .iter()
+            .enumerate()
+            .map(|(i, b)| (b.name.clone(), i))
+            .collect();
+        let joint_by_name = joints
+            .iter()
+            .enumerate()
+            .map(|(i, j)| (j.name.clone(), i))
+            .collect();
         let mut sys = Self {
+            body_by_name,
+            joint_by_name,
             gravity,
             bodies,
             joints,
@@ -465,7 +481,7 @@ impl SpatialSystem {
     /// The first coordinate of the body `name` and whether it is rigid.
     #[must_use]
     pub fn body(&self, name: &str) -> Option<(usize, bool)> {
-        let b = self.bodies.iter().find(|b| b.name == name)?;
+        let b = &self.bodies[*self.body_by_name.get(name)?];
         Some((b.x, b.is_rigid()))
     }
 
@@ -482,7 +498,7 @@ impl SpatialSystem {
     /// The type of the joint `name` (`"revolute"`, `"angle driver"`, …).
     #[must_use]
     pub fn joint_kind(&self, name: &str) -> Option<&'static str> {
-        let j = self.joints.iter().find(|j| j.name == name)?;
+        let j = &self.joints[*self.joint_by_name.get(name)?];
         Some(j.element.kind())
     }
 
@@ -496,29 +512,30 @@ impl SpatialSystem {
     /// Whether the joint `name` is a driver (`None`: no such joint).
     #[must_use]
     pub fn is_driver(&self, name: &str) -> Option<bool> {
-        let j = self.joints.iter().find(|j| j.name == name)?;
+        let j = &self.joints[*self.joint_by_name.get(name)?];
         Some(j.element.is_driver())
     }
 
     /// The constraint rows of the joint `name`.
     #[must_use]
     pub fn joint_rows(&self, name: &str) -> Option<std::ops::Range<usize>> {
-        let j = self.joints.iter().find(|j| j.name == name)?;
+        let j = &self.joints[*self.joint_by_name.get(name)?];
         Some(j.row0..j.row0 + j.rows())
     }
 
     /// The joint or body whose constraint row `row` is.
     #[must_use]
     pub fn constraint_owner(&self, row: usize) -> Option<&str> {
-        if let Some(j) = self
-            .joints
-            .iter()
-            .find(|j| (j.row0..j.row0 + j.rows()).contains(&row))
+        // Joints and normalization rows are each in the order of their rows.
+        let k = self.joints.partition_point(|j| j.row0 <= row);
+        if let Some(j) = k.checked_sub(1).map(|k| &self.joints[k])
+            && row < j.row0 + j.rows()
         {
             return Some(&j.name);
         }
-        let &(_, b) = self.norms.iter().find(|&&(r, _)| r == row)?;
-        Some(&self.bodies[b].name)
+        let k = self.norms.partition_point(|&(r, _)| r < row);
+        let &(r, b) = self.norms.get(k)?;
+        (r == row).then(|| self.bodies[b].name.as_str())
     }
 
     /// The reaction of the joint `name` (see [`SpatialReaction`]).
@@ -530,7 +547,7 @@ impl SpatialSystem {
         u: &[f64],
         lambda: &[f64],
     ) -> Option<SpatialReaction<'_>> {
-        let j = self.joints.iter().find(|j| j.name == name)?;
+        let j = &self.joints[*self.joint_by_name.get(name)?];
         let side = usize::from(j.sides[1].is_some());
         let body = &self.bodies[j.sides[side]?];
         let f = frames(&self.bodies, j.sides, u, None, d15);

@@ -1,0 +1,201 @@
+//! `cargo xtask n-four-bar-file` and `cargo xtask setup`: the IFToMM
+//! N-four-bar (`models/n-four-bar.toml`) written for any N, and the time
+//! from the command line to the first step of `mstar check` and `mstar run`
+//! on it at 10³, 10⁴ and 10⁵ bodies (release build).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+use anyhow::{Context as _, Result, bail};
+
+use crate::common::Table;
+use crate::study_dir;
+
+/// The N-four-bar with `bars` couplers (`2 bars + 1` bodies, as
+/// `models/n-four-bar.toml` for 40), released as there; with `duplicate`,
+/// a second copy of the joint `B{k}-C{k+1}` (`k = bars / 2`) named
+/// `B{k}-C{k+1}-again` after the others: one redundant joint.
+#[must_use]
+pub fn n_four_bar(bars: usize, duplicate: bool) -> String {
+    let mut s = String::with_capacity(600 * (2 * bars + 1));
+    s.push_str("# IFToMM benchmark A02, the N-four-bar (cargo xtask n-four-bar-file).\n");
+    let _ = writeln!(s, "# N = {bars}: {} bodies.", 2 * bars + 1);
+    s.push_str("format = \"mstar.planar/1\"\ngravity = [0.0, -9.81]\n\n");
+    let body = |s: &mut String, name: String, pose: [f64; 3], velocity: [f64; 3]| {
+        let _ = writeln!(
+            s,
+            "[[body]]\nname = \"{name}\"\nmass = 1.0\ninertia = 0.08333333333333333\npose = [{:?}, {:?}, {:?}]\nvelocity = [{:?}, {:?}, {:?}]\n",
+            pose[0], pose[1], pose[2], velocity[0], velocity[1], velocity[2]
+        );
+    };
+    let half_pi = std::f64::consts::FRAC_PI_2;
+    for i in 0..=bars {
+        body(
+            &mut s,
+            format!("V{i}"),
+            [i as f64, 0.5, half_pi],
+            [0.5, 0.0, -1.0],
+        );
+    }
+    for i in 1..=bars {
+        body(
+            &mut s,
+            format!("C{i}"),
+            [i as f64 - 0.5, 1.0, 0.0],
+            [1.0, 0.0, 0.0],
+        );
+    }
+    let joint = |s: &mut String, name: String, a: String, b: String, points: [f64; 4]| {
+        let _ = writeln!(
+            s,
+            "[[joint]]\nname = \"{name}\"\ntype = \"revolute\"\nbodies = [\"{a}\", \"{b}\"]\npoints = [[{:?}, {:?}], [{:?}, {:?}]]\n",
+            points[0], points[1], points[2], points[3]
+        );
+    };
+    for i in 0..=bars {
+        let points = [i as f64, 0.0, -0.5, 0.0];
+        joint(
+            &mut s,
+            format!("A{i}"),
+            "ground".into(),
+            format!("V{i}"),
+            points,
+        );
+    }
+    for i in 0..bars {
+        let c = format!("C{}", i + 1);
+        let left = [0.5, 0.0, -0.5, 0.0];
+        joint(
+            &mut s,
+            format!("B{i}-{c}"),
+            format!("V{i}"),
+            c.clone(),
+            left,
+        );
+        let right = [0.5, 0.0, 0.5, 0.0];
+        joint(
+            &mut s,
+            format!("B{}-{c}", i + 1),
+            format!("V{}", i + 1),
+            c,
+            right,
+        );
+    }
+    if duplicate && bars > 0 {
+        let k = bars / 2;
+        let (v, c) = (format!("V{k}"), format!("C{}", k + 1));
+        let name = format!("B{k}-{c}-again");
+        joint(&mut s, name, v, c, [0.5, 0.0, -0.5, 0.0]);
+    }
+    s.push_str("[simulation]\nt_end = 1e-3\nh = 1e-3\n");
+    s
+}
+
+/// Writes [`n_four_bar`] to `out`.
+///
+/// # Errors
+/// If the file cannot be written.
+pub fn write_file(bars: usize, duplicate: bool, out: &Path) -> Result<()> {
+    std::fs::write(out, n_four_bar(bars, duplicate))
+        .with_context(|| format!("could not write {}", out.display()))?;
+    println!(
+        "{}: the N-four-bar, N = {bars} ({} bodies{})",
+        out.display(),
+        2 * bars + 1,
+        if duplicate { ", one joint twice" } else { "" }
+    );
+    Ok(())
+}
+
+/// The couplers of the studied sizes: about 10³, 10⁴, 10⁵ bodies.
+const SIZES: [usize; 3] = [500, 5_000, 50_000];
+
+/// Builds the release binary, writes the files and times `mstar check` on
+/// the clean and the duplicated model and `mstar run` to its first step
+/// (`t_end = h`) on the clean one, up to `max_bodies` bodies.
+///
+/// # Errors
+/// If the build fails, a file cannot be written or a command cannot start.
+pub fn run(max_bodies: usize) -> Result<()> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let status = Command::new(cargo)
+        .args(["build", "--release", "-p", "mstar", "--bin", "mstar"])
+        .status()
+        .context("could not run cargo build")?;
+    if !status.success() {
+        bail!("cargo build --release failed ({status})");
+    }
+    let exe = Path::new("target/release/mstar");
+    let dir = study_dir("setup")?;
+    let mut table = Table::new(
+        "Set-up of the N-four-bar (release build; wall time of the whole command)",
+        &["bodies", "command", "wall time, s", "exit", "result"],
+    );
+    for bars in SIZES.into_iter().filter(|&b| 2 * b < max_bodies) {
+        let clean = dir.join(format!("n-four-bar-{bars}.toml"));
+        let twice = dir.join(format!("n-four-bar-{bars}-twice.toml"));
+        write_file(bars, false, &clean)?;
+        write_file(bars, true, &twice)?;
+        for (args, grep) in [
+            (vec!["check".into(), clean.clone()], "degrees of freedom"),
+            (vec!["check".into(), twice.clone()], "redundant constraints"),
+            (vec!["run".into(), clean.clone()], "steps:"),
+        ] {
+            table.row(timed(exe, &args, grep, 2 * bars + 1)?);
+        }
+    }
+    table.print();
+    table.write_csv(&dir.join("setup.csv"))?;
+    Ok(())
+}
+
+/// Runs `exe args`, its wall time, exit code and the line of its standard
+/// output that starts with `grep`.
+fn timed(exe: &Path, args: &[PathBuf], grep: &str, bodies: usize) -> Result<Vec<String>> {
+    let clock = Instant::now();
+    let out = Command::new(exe)
+        .args(args)
+        .output()
+        .with_context(|| format!("could not run {}", exe.display()))?;
+    let wall = clock.elapsed().as_secs_f64();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with(grep))
+        .unwrap_or("(no such line)");
+    let command = std::iter::once(exe.display().to_string())
+        .chain(args.iter().map(|a| a.display().to_string()))
+        .collect::<Vec<_>>()
+        .join(" ");
+    Ok(vec![
+        bodies.to_string(),
+        command,
+        format!("{wall:.2}"),
+        out.status.code().map_or("signal".into(), |c| c.to_string()),
+        line.chars().take(90).collect(),
+    ])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn forty_bars_are_the_model_file() {
+        // models/n-four-bar.toml without its comments and settings.
+        let strip = |s: &str| -> String {
+            s.lines()
+                .filter(|l| !l.starts_with('#'))
+                .take_while(|l| !l.starts_with("[simulation]"))
+                .collect::<Vec<_>>()
+                .join("\n")
+        };
+        let file = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../models/n-four-bar.toml"),
+        )
+        .expect("models/n-four-bar.toml");
+        assert_eq!(strip(&n_four_bar(40, false)), strip(&file));
+    }
+}
