@@ -108,6 +108,17 @@ enum Command {
         #[arg(long)]
         duplicate: bool,
     },
+    /// Writes the spatial bar chain of `mstar chain --kind spatial-bars` as
+    /// a model file (docs/performance.md, "Model files at the chain
+    /// command's speed").
+    SpatialChainFile {
+        /// The number of bars.
+        #[arg(long)]
+        links: usize,
+        /// The file to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 fn main() -> Result<()> {
@@ -130,10 +141,10 @@ fn main() -> Result<()> {
             out,
             duplicate,
         } => setup::write_file(bars, duplicate, &out),
+        Command::SpatialChainFile { links, out } => setup::write_spatial_chain(links, &out),
     }
 }
 
-/// The workspace root (the parent of `xtask/`).
 /// The checkout the studies run in and write to: the nearest directory at or
 /// above the current one that holds this workspace (`Cargo.toml` and
 /// `xtask/Cargo.toml`), else the one `cargo run` names at run time

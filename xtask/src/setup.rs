@@ -109,6 +109,57 @@ pub fn write_file(bars: usize, duplicate: bool, out: &Path) -> Result<()> {
     Ok(())
 }
 
+/// The spatial bar chain of `mstar chain --kind spatial-bars`
+/// (`mstar::model::spatial::spatial_bar_chain`) as a model file: `links`
+/// solid cylinders (1 kg, 1 m, radius 0.02 m) on spherical joints, along +x
+/// at rest, gravity −z, h = 1e-3 s; every other setting at its default.
+#[must_use]
+pub fn spatial_chain(links: usize) -> String {
+    let (axial, transverse) = (0.5 * 0.02 * 0.02, (3.0 * 0.02 * 0.02 + 1.0) / 12.0);
+    let mut s = String::with_capacity(300 * links + 200);
+    s.push_str(
+        "# The spatial bar chain (cargo xtask spatial-chain-file).
+",
+    );
+    s.push_str("format = \"mstar.spatial/1\"\ngravity = [0.0, 0.0, -9.81]\n\n");
+    for k in 0..links {
+        let _ = writeln!(
+            s,
+            "[[body]]\nname = \"bar{}\"\nmass = 1.0\ninertia = [{axial:?}, {transverse:?}, {transverse:?}]\n\
+             position = [{:?}, 0.0, 0.0]\norientation = [1.0, 0.0, 0.0, 0.0]\n",
+            k + 1,
+            k as f64 + 0.5
+        );
+    }
+    for k in 0..links {
+        let (a, at) = if k == 0 {
+            ("ground".to_string(), "[0.0, 0.0, 0.0]")
+        } else {
+            (format!("bar{k}"), "[0.5, 0.0, 0.0]")
+        };
+        let _ = writeln!(
+            s,
+            "[[joint]]\nname = \"joint{}\"\ntype = \"spherical\"\nbodies = [\"{a}\", \"bar{}\"]\n\
+             points = [{at}, [-0.5, 0.0, 0.0]]\n",
+            k + 1,
+            k + 1
+        );
+    }
+    s.push_str("[simulation]\nh = 1e-3\n");
+    s
+}
+
+/// Writes [`spatial_chain`] to `out`.
+///
+/// # Errors
+/// If the file cannot be written.
+pub fn write_spatial_chain(links: usize, out: &Path) -> Result<()> {
+    std::fs::write(out, spatial_chain(links))
+        .with_context(|| format!("could not write {}", out.display()))?;
+    println!("{}: the spatial bar chain, {links} bars", out.display());
+    Ok(())
+}
+
 /// The couplers of the studied sizes: about 10³, 10⁴, 10⁵ bodies.
 const SIZES: [usize; 3] = [500, 5_000, 50_000];
 
@@ -181,6 +232,37 @@ fn timed(exe: &Path, args: &[PathBuf], grep: &str, bodies: usize) -> Result<Vec<
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_spatial_chain_file_is_the_chain_command_s_model() {
+        use mstar::System as _;
+        use mstar::model::file::{Format, Mechanism, MechanismFile};
+        use mstar::model::spatial::{RotationalMass, spatial_bar_chain};
+        let file = MechanismFile::parse(&spatial_chain(3), "c.toml", Format::Toml)
+            .unwrap_or_else(|e| panic!("{e}"));
+        let Mechanism::Spatial(sys) = &file.mechanism else {
+            panic!("not spatial");
+        };
+        let chain = spatial_bar_chain(3, RotationalMass::Regularized);
+        assert_eq!(
+            (sys.n_coords(), sys.n_constraints()),
+            (chain.n_coords(), chain.n_constraints())
+        );
+        let (u, v) = (chain.initial_position(), chain.initial_velocity());
+        assert_eq!(
+            (sys.initial_position(), sys.initial_velocity()),
+            (u.clone(), v.clone())
+        );
+        let (mut a, mut b) = (vec![0.0; 21], vec![0.0; 21]);
+        sys.forces_into(0.0, &u, &v, &mut a);
+        chain.forces_into(0.0, &u, &v, &mut b);
+        assert_eq!(a, b);
+        let n = sys.mass_pattern().len();
+        let (mut ma, mut mb) = (vec![0.0; n], vec![0.0; n]);
+        sys.mass_into(0.0, &u, &mut ma);
+        chain.mass_into(0.0, &u, &mut mb);
+        assert_eq!(ma, mb);
+    }
 
     #[test]
     fn forty_bars_are_the_model_file() {
