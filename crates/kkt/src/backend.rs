@@ -158,13 +158,6 @@ impl Backend {
             .map(|r| r.backend)
     }
 
-    /// Whether it is one of the Schur backends (`schur`, `schur-lu`), which
-    /// factor the iteration matrix body by body.
-    #[must_use]
-    pub fn is_schur(self) -> bool {
-        self == Self::SCHUR || self == Self::SCHUR_LU
-    }
-
     /// Its name.
     #[must_use]
     pub fn name(self) -> &'static str {
