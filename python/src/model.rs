@@ -257,8 +257,9 @@ fn check_dict<'py>(py: Python<'py>, r: &CheckReport) -> PyResult<Bound<'py, PyDi
     d.set_item("projection", projection.transpose()?)?;
     d.set_item("start_error", r.start_error.clone())?;
     d.set_item("can_run", r.can_run())?;
-    let refused = (!r.redundant.is_empty() && !r.minimum_norm)
-        .then(|| RunError::Redundant(r.redundant.clone()).to_string());
+    let refused = (!r.redundant.is_empty() && !r.minimum_norm).then(|| {
+        RunError::redundant(r.redundant.clone(), r.coordinates, r.constraints).to_string()
+    });
     d.set_item("error", refused)?;
     d.set_item("report", r.to_string())?;
     Ok(d)

@@ -671,7 +671,11 @@ pub fn check(args: &CheckArgs) -> ExitCode {
             eprintln!("error: the redundant constraints were not computed: {why}");
         }
         if !report.redundant.is_empty() && !report.minimum_norm {
-            let e = mstar::run::RunError::Redundant(report.redundant.clone());
+            let e = mstar::run::RunError::redundant(
+                report.redundant.clone(),
+                report.coordinates,
+                report.constraints,
+            );
             eprintln!("error: {e}");
         }
         ExitCode::from(1)

@@ -114,6 +114,14 @@ pub enum RunError {
         .0.join(", ")
     )]
     Redundant(Vec<String>),
+    /// Redundant constraints in a model too large for minimum-norm
+    /// multipliers (n·m above [`crate::redundant::DENSE_LIMIT`]): the joints,
+    /// by name, and no advice that would be refused.
+    #[error(
+        "the constraints of {} are redundant (their equations are linearly dependent at the start): if they repeat what the other joints impose in every position, remove or loosen one (a model this large, n·m above 4e6, cannot run with minimum-norm multipliers); if the start is a singular position of the mechanism, start it away from there",
+        .0.join(", ")
+    )]
+    RedundantLarge(Vec<String>),
     /// Rows left out of a minimum-norm solve that the others do not imply:
     /// the joints contradict each other.
     #[error(
@@ -174,7 +182,26 @@ pub fn solve_rows<S: ModelLookup + ?Sized>(
             minimum_norm_fits(sys, &rows)?;
             Ok(Some(rows))
         }
-        (false, RedundantChoice::Refuse) => Err(RunError::Redundant(owners(sys, &rows.dependent))),
+        (false, RedundantChoice::Refuse) => Err(RunError::redundant(
+            owners(sys, &rows.dependent),
+            sys.n_coords(),
+            sys.n_constraints(),
+        )),
+    }
+}
+
+impl RunError {
+    /// The error of redundant constraints (`joints`) in a model of `n`
+    /// coordinates and `m` constraints: [`RunError::Redundant`], or above
+    /// the size minimum-norm multipliers take, [`RunError::RedundantLarge`]
+    /// (whose advice does not offer them).
+    #[must_use]
+    pub fn redundant(joints: Vec<String>, n: usize, m: usize) -> Self {
+        if n * m > crate::redundant::DENSE_LIMIT {
+            Self::RedundantLarge(joints)
+        } else {
+            Self::Redundant(joints)
+        }
     }
 }
 

@@ -103,3 +103,32 @@ fn check_finds_the_repeated_joint_of_a_2001_body_n_four_bar() {
     );
     assert_eq!(code, Some(1), "{out}");
 }
+
+/// Above the dense limit minimum-norm multipliers are refused, so the
+/// redundant-joint error of `mstar run` does not offer them: it names the
+/// joint and advises removing it, which runs.
+#[test]
+fn a_large_model_s_redundant_joint_error_gives_advice_that_runs() {
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("check_large");
+    std::fs::create_dir_all(&dir).expect("a temporary directory");
+    let run = |text: &str, name: &str| {
+        let path = dir.join(name);
+        std::fs::write(&path, text).expect("the model file");
+        Command::new(env!("CARGO_BIN_EXE_mstar"))
+            .arg("run")
+            .arg(&path)
+            .args(["--t-end", "0.002"])
+            .output()
+            .expect("mstar runs")
+    };
+    let out = run(&n_four_bar(1000, true), "run-twice.toml");
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{e}");
+    assert!(e.contains("B500-C501-again are redundant"), "{e}");
+    assert!(e.contains("remove or loosen one"), "{e}");
+    assert!(!e.contains("minimum-norm\" (on"), "{e}");
+    // The advice: without the repeated joint the model runs.
+    let out = run(&n_four_bar(1000, false), "run-clean.toml");
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(0), "{e}");
+}
