@@ -31,12 +31,12 @@ pub struct SweepArgs {
     #[arg(long)]
     zip: bool,
     /// Runs at once (default: one per core).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
     jobs: Option<usize>,
     /// Run only the runs whose index is I mod N (0 ≤ I < N), e.g.
     /// --shard $SLURM_ARRAY_TASK_ID/$SLURM_ARRAY_TASK_COUNT; the shard's
     /// summary is DIR/summary.<I>of<N>.csv (join them with --merge DIR).
-    #[arg(long, value_name = "I/N")]
+    #[arg(long, value_name = "I/N", allow_hyphen_values = true)]
     shard: Option<String>,
     /// The output directory: runs/<index>.csv, summary.csv, sweep.toml.
     /// Rerunning the same command into it skips the runs already complete.

@@ -616,3 +616,36 @@ fn sweeping_the_integrator_of_a_file_with_rho_runs() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Issue 21 (16): `--shard -1/2` was refused by the argument parser as an
+/// unexpected argument; it reaches the range check, which names the option.
+#[test]
+fn negative_sweep_options_get_a_range_error() {
+    let dir = scratch("sweep-negative");
+    let out = dir.join("s").display().to_string();
+    let pendulum = model("pendulum.toml");
+    for (option, value, says) in [
+        (
+            "--shard",
+            "-1/2",
+            "--shard -1/2: I and N must be whole numbers",
+        ),
+        ("--jobs", "-1", "'-1' for '--jobs <N>'"),
+    ] {
+        let run = mstar(&[
+            "sweep",
+            &pendulum,
+            "--set",
+            "simulation.h=0.01",
+            option,
+            value,
+            "--out",
+            &out,
+        ]);
+        let e = text(&run.stderr);
+        assert_eq!(run.status.code(), Some(2), "{e}");
+        assert!(e.contains(says), "{e}");
+        assert!(!e.contains("unexpected argument"), "{e}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
