@@ -64,7 +64,7 @@ def test_the_four_bar_built_in_python_is_the_file():
 
 
 def test_a_builder_model_checks_settings_as_a_file_does(run_cli):
-    cli = run_cli(MODELS / "pendulum.toml", "--h", "-1")
+    cli = run_cli(MODELS / "pendulum.toml", "--set", "simulation.h=-1")
     with pytest.raises(mstar.ModelError) as e:
         pendulum().run(h=-1.0)
     # The file's message names the file and the place of [simulation].
