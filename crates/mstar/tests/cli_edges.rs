@@ -11,7 +11,7 @@ use std::io::{BufRead as _, BufReader};
 use std::path::Path;
 use std::process::{Command, Output, Stdio};
 
-use common::{model, scratch, text};
+use common::{model, scratch, sh, text};
 
 const BIN: &str = env!("CARGO_BIN_EXE_mstar");
 
@@ -26,17 +26,6 @@ fn mstar_in(dir: &Path, args: &[&str]) -> Output {
         .current_dir(dir)
         .output()
         .expect("runs")
-}
-
-/// Runs `script` with `sh -c` in `dir`, the program's path in `$M`.
-fn sh(script: &str, dir: &Path) -> Output {
-    Command::new("sh")
-        .arg("-c")
-        .arg(script)
-        .env("M", BIN)
-        .current_dir(dir)
-        .output()
-        .expect("sh runs")
 }
 
 /// The longest run of digits in `s`.

@@ -11,25 +11,14 @@ use std::io::{BufRead as _, BufReader, Read as _};
 use std::os::unix::fs::FileTypeExt as _;
 use std::os::unix::process::ExitStatusExt as _;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Output, Stdio};
+use std::process::{Child, Command, Stdio};
 
-use common::{mstar, scratch, text};
+use common::{mstar, scratch, sh, text};
 
 const BIN: &str = env!("CARGO_BIN_EXE_mstar");
 
 fn path(p: &Path) -> String {
     p.display().to_string()
-}
-
-/// Runs `script` with `sh -c`, the program's path in `$M`.
-fn sh(script: &str, dir: &Path) -> Output {
-    Command::new("sh")
-        .arg("-c")
-        .arg(script)
-        .env("M", BIN)
-        .current_dir(dir)
-        .output()
-        .expect("sh runs")
 }
 
 /// The hidden temporary files in `dir`.

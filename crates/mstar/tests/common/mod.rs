@@ -4,6 +4,19 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// Runs `script` with `sh -c` in `dir`, the `mstar` program's path in `$M`
+/// (for limits set with `ulimit` and redirections the test needs).
+#[allow(dead_code)] // (used by the tests that need a shell)
+pub fn sh(script: &str, dir: &Path) -> Output {
+    Command::new("sh")
+        .arg("-c")
+        .arg(script)
+        .env("M", env!("CARGO_BIN_EXE_mstar"))
+        .current_dir(dir)
+        .output()
+        .expect("sh runs")
+}
+
 /// Runs the `mstar` program with `args`.
 pub fn mstar(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_mstar"))
