@@ -85,7 +85,12 @@ pub fn round2(x: f64, up: bool) -> String {
     };
     // (A digit more or less at most: the text parses to the nearest double.)
     for _ in 0..4 {
-        let text = format!("{}e{}", digits / 10.0, e);
+        // (99 rounded up is 10e-1: written 1e0.)
+        let text = if digits >= 100.0 {
+            format!("{}e{}", digits / 100.0, e + 1.0)
+        } else {
+            format!("{}e{}", digits / 10.0, e)
+        };
         match text.parse::<f64>() {
             Ok(v) if (up && v >= x) || (!up && v <= x) => return text,
             _ => digits += if up { 1.0 } else { -1.0 },
@@ -188,22 +193,23 @@ pub struct Output<'a> {
     pub rows: f64,
     /// Fields a row.
     pub fields: usize,
-    /// The run's end time and step (for the advice).
+    /// The run's end time, s (for the advice).
     pub t_end: f64,
-    /// Step size, s.
-    pub h: f64,
-    /// `mstar run`: fewer rows by `--set output.every=N` (the current N).
-    pub every: Option<usize>,
     /// Rows every Δt seconds (`--output-every`, `[output] every_time`)
-    /// instead of every step: then the advice is a larger Δt.
+    /// instead of every step.
     pub every_time: Option<f64>,
 }
 
 /// Refuses an output file larger than the free space of its file system.
 ///
+/// The advice is a time grid of rows (`--output-every`), never a larger
+/// step or fewer steps a row: a run halves its step where Newton fails, so
+/// rows counted in steps are not known before the run, while a grid's rows
+/// are (`t_end / Δt` and the last state). With a grid already given, a
+/// shorter run is advised too.
+///
 /// # Errors
-/// With the estimate, the free space, and values of `--h`, `--t-end` (and
-/// `output.every`) that fit.
+/// With the estimate, the free space, and the values that fit.
 pub fn check_output(o: &Output<'_>, free: Option<f64>) -> Result<()> {
     let size = o.rows * o.fields as f64 * BYTES_PER_FIELD;
     let Some(free) = free else {
@@ -212,40 +218,33 @@ pub fn check_output(o: &Output<'_>, free: Option<f64>) -> Result<()> {
     if size <= free {
         return Ok(());
     }
-    // What the advice must shrink the output by: from the largest size.
-    let ratio = size * MAX_BYTES_PER_FIELD / BYTES_PER_FIELD / free;
-    if let Some(dt) = o.every_time {
-        bail!(
-            "{} would take about {} ({:.1e} rows of about {}), more than the {} free on its file \
-             system: write fewer rows (--output-every {} or more), a shorter run (--t-end {} or \
-             less), or no --out",
-            o.path.display(),
-            bytes(size),
-            o.rows,
-            bytes(o.fields as f64 * BYTES_PER_FIELD),
-            bytes(free),
-            round2(dt * ratio, true),
-            round2(o.t_end / ratio, false)
-        );
-    }
-    let every = o.every.map_or(String::new(), |n| {
-        format!(
-            ", fewer rows (--set output.every={})",
-            (n as f64 * ratio).ceil()
-        )
-    });
-    bail!(
+    let head = format!(
         "{} would take about {} ({:.1e} rows of about {}), more than the {} free on its file \
-         system: use a larger step (--h {} or more), a shorter run (--t-end {} or less){every}, \
-         or no --out",
+         system",
         o.path.display(),
         bytes(size),
         o.rows,
         bytes(o.fields as f64 * BYTES_PER_FIELD),
-        bytes(free),
-        round2(o.h * ratio, true),
-        round2(o.t_end / ratio, false)
-    )
+        bytes(free)
+    );
+    // Rows that fit at the largest size a row can take, less one row's
+    // room for the header and two for a grid's first and last states.
+    let grid_rows = (free / (o.fields as f64 * MAX_BYTES_PER_FIELD)).floor() - 3.0;
+    if grid_rows < 1.0 {
+        bail!("{head}: not even a few rows fit; write to another file system, or no --out");
+    }
+    let dt = round2(o.t_end / grid_rows, true);
+    match o.every_time {
+        Some(every) => bail!(
+            "{head}: write fewer rows (--output-every {dt} or more), a shorter run (--t-end {} \
+             or less), or no --out",
+            round2(every * grid_rows, false)
+        ),
+        None => bail!(
+            "{head}: write a row every Δt seconds instead of every step (--output-every {dt} or \
+             more: the rows then do not depend on the steps), or no --out"
+        ),
+    }
 }
 
 /// The memory a new allocation can count on, bytes: `MemAvailable` of
@@ -383,44 +382,35 @@ mod tests {
             rows: 1e8,
             fields: 16,
             t_end: 1e6,
-            h: 0.01,
-            every: Some(1),
             every_time: None,
         };
         let free = Some(1e9);
+        // A file that follows the advice fits even at the largest field
+        // size, with a header row.
+        let fits = |rows: f64| (rows + 1.0) * 16.0 * MAX_BYTES_PER_FIELD <= 1e9;
         let e = check_output(&o, free).expect_err("refused").to_string();
         assert!(e.contains("22.4 GB") && e.contains("1.0 GB free"), "{e}");
-        let h = option(&e, "--h");
-        let t_end = option(&e, "--t-end");
-        let every = option(&e, "--set output.every");
-        let rows = |t_end: f64, h: f64, every: f64| t_end / h / every;
-        for (t, h, n) in [(1e6, h, 1.0), (t_end, 0.01, 1.0), (1e6, 0.01, every)] {
-            let fewer = Output {
-                rows: rows(t, h, n),
-                ..o
-            };
-            assert!(check_output(&fewer, free).is_ok(), "{t} {h} {n}: {e}");
-        }
+        // Rows every step: a grid is advised, never a larger step (a run
+        // halves steps where Newton fails, and its rows are not known).
+        assert!(!e.contains("--h ") && !e.contains("output.every"), "{e}");
+        let dt = option(&e, "--output-every");
+        assert!(fits(1e6 / dt + 2.0), "{e}");
         assert!(check_output(&o, None).is_ok());
-        // Rows every Δt: the advice is a larger Δt (or a shorter run).
+        // Rows every Δt: a larger Δt or a shorter run.
         let grid = Output {
             rows: 1e6 / 1e-2 + 2.0,
-            every: None,
             every_time: Some(1e-2),
             ..o
         };
         let e = check_output(&grid, free).expect_err("refused").to_string();
-        assert!(!e.contains("--h ") && !e.contains("output.every"), "{e}");
         let dt = option(&e, "--output-every");
         let t_end = option(&e, "--t-end");
         for (t, dt) in [(1e6, dt), (t_end, 1e-2)] {
-            let fewer = Output {
-                rows: t / dt + 2.0,
-                every_time: Some(dt),
-                ..grid
-            };
-            assert!(check_output(&fewer, free).is_ok(), "{t} {dt}: {e}");
+            assert!(fits(t / dt + 2.0), "{t} {dt}: {e}");
         }
+        // Where not even a few rows fit, no option is advised.
+        let e = check_output(&o, Some(1e3)).expect_err("refused").to_string();
+        assert!(e.contains("another file system") && !e.contains("--output-every"), "{e}");
     }
 
     #[test]
@@ -465,6 +455,8 @@ mod tests {
         assert_eq!(round2(1.234e7, false), "1.2e7");
         assert_eq!(round2(1.234e7, true), "1.3e7");
         assert_eq!(round2(1e299, true), "1e299");
+        assert_eq!(round2(0.0995, true), "1e-1");
+        assert_eq!(round2(9.96, true), "1e1");
         assert_eq!(num(1e308), "1e308");
         assert_eq!(num(0.01), "0.01");
     }

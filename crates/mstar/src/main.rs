@@ -599,8 +599,8 @@ fn describe(run: &PendulumRun) -> String {
     )
 }
 
-/// Refuses an output that would not fit on its file system (`every`: the
-/// `--set output.every` of `mstar run`, for the advice).
+/// Refuses an output that would not fit on its file system (`every`: rows
+/// every so many steps, `every_time`: rows every Δt seconds).
 fn check_output(
     out: Option<&Path>,
     fields: usize,
@@ -633,8 +633,6 @@ fn check_output(
         rows,
         fields,
         t_end,
-        h,
-        every: every.filter(|_| every_time.is_none()),
         every_time,
     };
     limits::check_output(&o, limits::free_space(path))
