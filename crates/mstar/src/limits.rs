@@ -409,8 +409,13 @@ mod tests {
             assert!(fits(t / dt + 2.0), "{t} {dt}: {e}");
         }
         // Where not even a few rows fit, no option is advised.
-        let e = check_output(&o, Some(1e3)).expect_err("refused").to_string();
-        assert!(e.contains("another file system") && !e.contains("--output-every"), "{e}");
+        let e = check_output(&o, Some(1e3))
+            .expect_err("refused")
+            .to_string();
+        assert!(
+            e.contains("another file system") && !e.contains("--output-every"),
+            "{e}"
+        );
     }
 
     #[test]

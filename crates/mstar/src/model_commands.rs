@@ -8,7 +8,7 @@ use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mstar::csv::Columns;
 use mstar::model::RowSubset;
-use mstar::model::file::{Mechanism, MechanismFile, Simulation};
+use mstar::model::file::{MAX_MAGNITUDE, Mechanism, MechanismFile, Simulation};
 use mstar::newmark::Short;
 use mstar::pendulum::PendulumRun;
 use mstar::redundant::Expanded;
@@ -447,6 +447,20 @@ fn check_options(args: &RunArgs) -> Result<()> {
         {
             return Err(crate::output::usage(format!(
                 "{option} must be a finite number ≥ 0 (got {})",
+                Short(v)
+            )));
+        }
+    }
+    let all = positive
+        .into_iter()
+        .chain([("--rtol", args.rtol), ("--atol", args.atol)]);
+    for (option, value) in all {
+        if let Some(v) = value
+            && v > MAX_MAGNITUDE
+        {
+            return Err(crate::output::usage(format!(
+                "{option} {} is out of range: at most 1e100, as every number of a model file \
+                 (products of larger values overflow double precision)",
                 Short(v)
             )));
         }

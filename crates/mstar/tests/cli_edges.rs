@@ -250,10 +250,18 @@ fn rows_at_a_tiny_interval_are_refused_also_for_devices() {
         ],
     );
     assert!(run.status.success(), "{}", text(&run.stderr));
+    // Beyond the range of model files' numbers: the option is named.
     let run = mstar_in(&dir, &["run", "fb.toml", "--t-end", "1e308"]);
     let err = text(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{err}");
     assert!(
-        err.contains("more than 1e308 steps") && !err.contains("inf"),
+        err.contains("--t-end 1e308 is out of range: at most 1e100") && !err.contains("fb.toml"),
+        "{err}"
+    );
+    let run = mstar_in(&dir, &["run", "fb.toml", "--t-end", "1e99"]);
+    let err = text(&run.stderr);
+    assert!(
+        err.contains("about 1e102 steps, more than the 1e9") && !err.contains("inf"),
         "{err}"
     );
 }

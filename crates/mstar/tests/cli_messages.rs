@@ -189,3 +189,66 @@ fn the_non_finite_option_is_named_alone() {
         }
     }
 }
+
+/// Values whose products overflow double precision are refused where they
+/// are written (FILE:LINE:COLUMN, the key, the range), not diagnosed later
+/// as a singular matrix or a redundant constraint; Euler parameters of any
+/// magnitude within range are normalized, however small.
+#[test]
+fn absurd_values_are_named_where_they_are_written() {
+    let dir = scratch("msg-absurd");
+    let top = "orientation = [0.998750260394966, 0.0499791692706783, 0.0, 0.0]";
+    let cases = [
+        ("pendulum.toml", "mass = 1.0", "mass = 1e308", "mass"),
+        ("pendulum.toml", "[0.0, -10.0]", "[0.0, -1e308]", "gravity"),
+        (
+            "spatial/top.toml",
+            top,
+            "orientation = [1e300, 1e300, 0.0, 0.0]",
+            "orientation",
+        ),
+    ];
+    for (name, from, to, key) in cases {
+        let original = std::fs::read_to_string(model(name)).expect("the model file");
+        assert_eq!(original.matches(from).count(), 1, "{from} in {name}");
+        let path = dir.join(name.replace('/', "-"));
+        std::fs::write(&path, original.replacen(from, to, 1)).expect("written");
+        let file = path.display().to_string();
+        for command in ["check", "run"] {
+            let run = mstar(&[command, &file]);
+            let err = text(&run.stderr);
+            assert_eq!(run.status.code(), Some(2), "{command} {to}: {err}");
+            let line = original[..original.find(from).expect("found")]
+                .matches('\n')
+                .count()
+                + 1;
+            assert!(
+                err.contains(&format!("{file}:{line}:")) && err.contains(key),
+                "{command} {to}: {err}"
+            );
+            assert!(
+                err.contains("out of range") && err.contains("at most 1e100"),
+                "{command} {to}: {err}"
+            );
+            assert!(
+                !err.contains("singular") && !err.contains("redundant"),
+                "{err}"
+            );
+        }
+    }
+    // A step size out of range is the option's, named as such.
+    let run = mstar(&["run", &model("pendulum.toml"), "--h", "1e308"]);
+    let err = text(&run.stderr);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--h 1e308 is out of range: at most 1e100"),
+        "{err}"
+    );
+    // A tiny orientation is a rotation like any other: normalized.
+    let original = std::fs::read_to_string(model("spatial/top.toml")).expect("the model file");
+    let path = dir.join("tiny.toml");
+    let tiny = "orientation = [0.998750260394966e-200, 0.0499791692706783e-200, 0.0, 0.0]";
+    std::fs::write(&path, original.replacen(top, tiny, 1)).expect("written");
+    let run = mstar(&["run", &path.display().to_string(), "--t-end", "0.01"]);
+    assert_eq!(run.status.code(), Some(0), "{}", text(&run.stderr));
+}

@@ -325,7 +325,10 @@ impl Tmpfs {
             .arg(&at)
             .status()
             .is_ok_and(|s| s.success());
-        assert!(ok, "cannot mount a tmpfs here (not root, or no CAP_SYS_ADMIN)");
+        assert!(
+            ok,
+            "cannot mount a tmpfs here (not root, or no CAP_SYS_ADMIN)"
+        );
         Self(at)
     }
 }
@@ -374,7 +377,11 @@ fn a_full_disk_is_an_error_and_an_oversized_run_is_refused() {
         "--out",
         &path(&out),
     ]);
-    assert!(ok.status.success(), "--output-every {every}: {}", text(&ok.stderr));
+    assert!(
+        ok.status.success(),
+        "--output-every {every}: {}",
+        text(&ok.stderr)
+    );
 }
 
 /// The value a message advises for `option`.
@@ -395,24 +402,45 @@ fn advice_for_a_full_disk_works_where_steps_are_halved() {
     // 359.
     let dir = scratch("faults-tmpfs-halved");
     let fs = Tmpfs::mount(&dir, "300k");
-    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/double-pendulum.toml");
+    let model = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../models/double-pendulum.toml"
+    );
     let out = path(&fs.0.join("full.csv"));
     let refused = mstar(&["run", model, "--t-end", "10", "--out", &out]);
     let err = text(&refused.stderr);
     assert_eq!(refused.status.code(), Some(1), "{err}");
-    assert!(err.contains("free on its file system") && !err.contains("--h "), "{err}");
+    assert!(
+        err.contains("free on its file system") && !err.contains("--h "),
+        "{err}"
+    );
     let every = advised(&err, "--output-every ");
     for h in ["0.001", "0.028"] {
         let run = mstar(&[
-            "run", model, "--t-end", "10", "--h", h, "--output-every", every, "--out", &out,
+            "run",
+            model,
+            "--t-end",
+            "10",
+            "--h",
+            h,
+            "--output-every",
+            every,
+            "--out",
+            &out,
         ]);
         // (Exit 3 at the large step: beyond the error tolerance, the file
         // complete.)
         let err = text(&run.stderr);
         assert!(matches!(run.status.code(), Some(0 | 3)), "--h {h}: {err}");
-        assert!(!err.contains("No space") && !err.contains("partial"), "--h {h}: {err}");
+        assert!(
+            !err.contains("No space") && !err.contains("partial"),
+            "--h {h}: {err}"
+        );
         let (n, last) = rows(&std::fs::read_to_string(fs.0.join("full.csv")).expect("written"));
-        assert!(n > 300 && (last - 10.0).abs() < 1e-9, "--h {h}: {n} rows to {last}");
+        assert!(
+            n > 300 && (last - 10.0).abs() < 1e-9,
+            "--h {h}: {n} rows to {last}"
+        );
         assert!(temporaries(&fs.0).is_empty(), "{:?}", temporaries(&fs.0));
         std::fs::remove_file(fs.0.join("full.csv")).expect("removed");
     }

@@ -180,10 +180,24 @@ pub(crate) fn short(x: f64) -> String {
     }
 }
 
-/// A finite number.
+/// The largest magnitude a number of a model file may have. The equations
+/// of motion multiply given values with each other (`m g l`, `½ m v²`, the
+/// KKT matrix's `m / (β h²)`): from 1e100 on, such products overflow double
+/// precision (about 1.8e308) and a run would fail with a misleading
+/// diagnosis (a singular matrix, NaN), so such values are refused where
+/// they are written.
+pub const MAX_MAGNITUDE: f64 = 1e100;
+
+/// A finite number of magnitude at most [`MAX_MAGNITUDE`].
 pub(crate) fn number(node: &Node) -> Result<f64, String> {
     match node.value {
-        Value::Num { value, .. } if value.is_finite() => Ok(value),
+        Value::Num { value, .. } if value.abs() <= MAX_MAGNITUDE => Ok(value),
+        Value::Num { value, .. } if value.is_finite() => Err(format!(
+            "{} is out of range: numbers of a model file must be at most 1e100 in magnitude \
+             (products of larger values overflow double precision); choose units that bring \
+             it nearer 1",
+            short(value)
+        )),
         Value::Num { value, .. } => Err(format!("must be a finite number, not {value}")),
         ref v => Err(format!("expected a number, found {}", v.kind())),
     }

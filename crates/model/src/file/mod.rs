@@ -43,6 +43,7 @@ mod spatial;
 
 use std::path::Path;
 
+pub use fields::MAX_MAGNITUDE;
 pub use planar::FORMAT;
 pub use settings::{
     ErrorControlChoice, IntegratorChoice, NewtonChoice, Output, RedundantChoice, Simulation,

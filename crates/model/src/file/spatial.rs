@@ -158,8 +158,15 @@ impl<'a> Model<'a> {
             "angular_velocity",
         ])?;
         let e = f.entry("orientation").expect("read above");
-        let norm = given.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if !(norm > 1e-150 && norm.is_finite()) {
+        // (Scaled by the largest, so that tiny parameters do not underflow.)
+        let largest = given.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        let norm = largest
+            * given
+                .iter()
+                .map(|x| (x / largest).powi(2))
+                .sum::<f64>()
+                .sqrt();
+        if !(norm > 0.0 && norm.is_finite()) {
             return Err(f.bad(
                 e,
                 "must not be zero: Euler parameters [e0, e1, e2, e3] of a rotation ([1, 0, 0, 0]: body axes = global axes)",
