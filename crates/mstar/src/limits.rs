@@ -173,6 +173,23 @@ pub fn free_space(path: &Path) -> Option<f64> {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => std::path::PathBuf::from("."),
     };
+    free_space_of(&dir)
+}
+
+/// The free space of the file system of directory `dir`, or of its nearest
+/// ancestor that exists (where a directory yet to be made would be).
+pub fn free_space_of(dir: &Path) -> Option<f64> {
+    // (A relative path's last ancestor is "": the current directory.)
+    let dir = dir
+        .ancestors()
+        .map(|d| {
+            if d.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                d
+            }
+        })
+        .find(|d| d.exists())?;
     let c = std::ffi::CString::new(dir.as_os_str().as_encoded_bytes()).ok()?;
     let mut stat = std::mem::MaybeUninit::<libc::statvfs>::zeroed();
     // SAFETY: `c` is a NUL-terminated path, `stat` a buffer of the right type.
@@ -245,6 +262,74 @@ pub fn check_output(o: &Output<'_>, free: Option<f64>) -> Result<()> {
              more: the rows then do not depend on the steps), or no --out"
         ),
     }
+}
+
+/// Bytes a field of a sweep's summary row takes in memory until the sweep
+/// ends (its text, the string's header and the allocator's overhead).
+pub const BYTES_PER_SUMMARY_FIELD: f64 = 48.0;
+
+/// Refuses a sweep whose runs' CSV files would not fit on the output
+/// directory's file system (`free`), or whose summary would not fit in
+/// memory (`available`).
+///
+/// # Errors
+/// [`SweepError::TooLarge`] with the estimate and what fits: rows on a time
+/// grid (`--set output.every_time=Δt`, whose rows the steps cannot
+/// outgrow) or fewer runs.
+pub fn check_sweep(
+    e: &mstar::sweep::Estimate,
+    grid_swept: bool,
+    free: Option<f64>,
+    available: Option<f64>,
+) -> std::result::Result<(), mstar::sweep::SweepError> {
+    use mstar::sweep::SweepError;
+    let runs = e.runs as f64;
+    let memory = runs * e.summary_fields as f64 * BYTES_PER_SUMMARY_FIELD;
+    if let Some(available) = available
+        && memory > available
+    {
+        return Err(SweepError::TooLarge(format!(
+            "the summary of {} runs would take about {} of memory until the sweep ends, more \
+             than the {} available: give fewer runs (at most {} in one process, or --shard I/N \
+             over several)",
+            e.runs,
+            bytes(memory),
+            bytes(available),
+            Short((available / memory * runs).floor())
+        )));
+    }
+    let size = (e.rows * e.fields as f64 + runs * e.summary_fields as f64) * BYTES_PER_FIELD;
+    let Some(free) = free else {
+        return Ok(());
+    };
+    if size <= free {
+        return Ok(());
+    }
+    let head = format!(
+        "the {} runs would write about {} ({:.1e} rows of about {}), more than the {} free on \
+         the file system of --out",
+        e.runs,
+        bytes(size),
+        e.rows,
+        bytes(e.fields as f64 * BYTES_PER_FIELD),
+        bytes(free)
+    );
+    // Each run's share of the free space at the largest field size, less
+    // its summary row, a header row and a grid's first and last states.
+    let share = free / runs / (e.fields as f64 * MAX_BYTES_PER_FIELD);
+    let grid_rows = (share - e.summary_fields as f64 / e.fields as f64).floor() - 3.0;
+    if grid_rows < 1.0 || grid_swept {
+        return Err(SweepError::TooLarge(format!(
+            "{head}: give fewer runs or larger output.every_time values, or an --out on a \
+             larger file system"
+        )));
+    }
+    Err(SweepError::TooLarge(format!(
+        "{head}: write each run's rows on a time grid (add --set output.every_time={} or \
+         more: the rows then do not depend on the steps), give fewer runs, or an --out on a \
+         larger file system",
+        round2(e.t_end / grid_rows, true)
+    )))
 }
 
 /// The memory a new allocation can count on, bytes: `MemAvailable` of
@@ -416,6 +501,39 @@ mod tests {
             e.contains("another file system") && !e.contains("--output-every"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn sweep_advice_passes() {
+        let e = mstar::sweep::Estimate {
+            runs: 1000,
+            rows: 1000.0 * 1e6,
+            fields: 15,
+            summary_fields: 12,
+            t_end: 100.0,
+            every_step: true,
+        };
+        let free = 1e9;
+        let m = check_sweep(&e, false, Some(free), None)
+            .expect_err("refused")
+            .to_string();
+        let dt = option(&m, "output.every_time");
+        // Every run on the advised grid, at the largest field size, with
+        // a header and its summary row, fits.
+        let per_run = (100.0 / dt + 3.0) * 15.0 + 12.0;
+        assert!(1000.0 * per_run * MAX_BYTES_PER_FIELD <= free, "{m}");
+        assert!(check_sweep(&e, false, None, None).is_ok());
+        // The summary in memory: the advised number of runs fits.
+        let m = check_sweep(&e, false, None, Some(1e5))
+            .expect_err("refused")
+            .to_string();
+        let runs = option(&m, "at most");
+        assert!(runs >= 1.0, "{m}");
+        let fewer = mstar::sweep::Estimate {
+            runs: runs as usize,
+            ..e
+        };
+        assert!(check_sweep(&fewer, false, None, Some(1e5)).is_ok(), "{m}");
     }
 
     #[test]

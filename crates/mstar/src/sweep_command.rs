@@ -51,7 +51,8 @@ pub struct SweepArgs {
 /// `mstar sweep`: exit 0 when every run reached its end within the error
 /// tolerance, 10 + n when n runs failed (110 for 100 or more), 3 when none
 /// failed and some ended beyond the tolerance, 2 when nothing ran for a bad
-/// model file or command line, 1 when a file could not be read or written,
+/// model file or command line, 1 when a file could not be read or written
+/// or the runs would not fit (their files on disk, the summary in memory),
 /// 130/143 after SIGINT/SIGTERM (the summary of the runs complete so far
 /// written).
 pub fn sweep(args: &SweepArgs) -> ExitCode {
@@ -105,6 +106,17 @@ fn run(args: &SweepArgs) -> Result<Ended, SweepError> {
         Combine::Grid
     };
     let plan = Plan::new(model, params, combine)?;
+    // (Runs complete from an earlier call are skipped: not counted.)
+    let runs = out.join("runs");
+    let grid_swept = plan.params().iter().any(|p| p.key == "output.every_time");
+    crate::limits::check_sweep(
+        &plan.estimate(shard, &|i| {
+            runs.is_dir() && runs.join(format!("{i}.row")).exists()
+        }),
+        grid_swept,
+        crate::limits::free_space_of(out),
+        crate::limits::available_memory(),
+    )?;
     let options = Options {
         out: out.clone(),
         jobs: args.jobs,

@@ -12,7 +12,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{model, mstar, scratch, text};
+use common::{model, mstar, scratch, sh, text};
 
 /// `mstar sweep` of the double pendulum over 0.05 s with `args` into `out`.
 fn sweep(out: &Path, args: &[&str]) -> std::process::Output {
@@ -647,5 +647,48 @@ fn negative_sweep_options_get_a_range_error() {
         assert!(e.contains(says), "{e}");
         assert!(!e.contains("unexpected argument"), "{e}");
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A sweep whose files would not fit on the disk (12 TB of rows) or whose
+/// summary would not fit in memory (10⁶ runs under a 400 MB address-space
+/// limit) is refused before anything runs, exit 1, with the estimate and
+/// what fits. (The disk advice is run on a small tmpfs in
+/// output_faults.rs: `a_sweep_larger_than_the_disk_is_refused_and_the_advice_fits`.)
+#[test]
+fn sweeps_larger_than_the_disk_or_the_memory_are_refused_up_front() {
+    let dir = scratch("sweep-too-large");
+    let out = dir.join("disk");
+    let done = pendulum_sweep(
+        &out,
+        &[
+            "--set",
+            "simulation.t_end=1e3:1e4:1000",
+            "--set",
+            "simulation.h=1e-4",
+        ],
+    );
+    let e = text(&done.stderr);
+    assert_eq!(done.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("the 1000 runs would write about 12.3 TB (5.5e10 rows")
+            && e.contains("--set output.every_time="),
+        "{e}"
+    );
+    assert!(!out.exists(), "the sweep started");
+    let model = model("pendulum.toml");
+    let script = format!(
+        "ulimit -v 400000 && exec \"$M\" sweep '{model}' --set body.bob.mass=1:2:1000 \
+         --set simulation.t_end=0.01:0.02:1000 --set output.every_time=0.01 --out memory"
+    );
+    let done = sh(&script, &dir);
+    let e = text(&done.stderr);
+    assert_eq!(done.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("the summary of 1000000 runs would take about 624.0 MB of memory")
+            && e.contains("give fewer runs (at most"),
+        "{e}"
+    );
+    assert!(!dir.join("memory").exists(), "the sweep started");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -570,3 +570,37 @@ fn the_pendulum_streams_its_samples() {
     let long = peak_memory(&["pendulum", "--t-end", "2000"]);
     assert!(long - short < 10_000_000, "{short} B, then {long} B");
 }
+
+#[test]
+#[ignore = "needs root (mknod, mount): cargo test -p mstar --test output_faults -- --ignored"]
+fn a_sweep_larger_than_the_disk_is_refused_and_the_advice_fits() {
+    let dir = scratch("faults-tmpfs-sweep");
+    let fs = Tmpfs::mount(&dir, "300k");
+    let model = concat!(env!("CARGO_MANIFEST_DIR"), "/../../models/pendulum.toml");
+    let out = path(&fs.0.join("s"));
+    let sweep = |extra: &[&str]| {
+        let mut args = vec![
+            "sweep",
+            model,
+            "--set",
+            "simulation.t_end=10,20",
+            "--out",
+            &out,
+        ];
+        args.extend_from_slice(extra);
+        mstar(&args)
+    };
+    let refused = sweep(&[]);
+    let err = text(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{err}");
+    assert!(err.contains("free on the file system of --out"), "{err}");
+    assert!(!fs.0.join("s").exists(), "the sweep started");
+    let every = advised(&err, "--set output.every_time=");
+    let set = format!("output.every_time={every}");
+    let ok = sweep(&["--set", &set]);
+    assert!(ok.status.success(), "{set}: {}", text(&ok.stderr));
+    for run in ["0", "1"] {
+        let csv = std::fs::read_to_string(fs.0.join(format!("s/runs/{run}.csv"))).expect("a run");
+        assert!(rows(&csv).0 > 100, "{set}: run {run}");
+    }
+}

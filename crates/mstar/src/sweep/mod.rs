@@ -62,6 +62,10 @@ pub enum SweepError {
     /// it (an unknown element or key: [`FileError::in_override`]).
     #[error(transparent)]
     Model(#[from] FileError),
+    /// The runs would not fit: their files on the output directory's file
+    /// system, or the summary in memory (the estimate and what to change).
+    #[error("{0}")]
+    TooLarge(String),
     /// The output directory holds another sweep's files.
     #[error(
         "{} holds another sweep (its sweep.toml records another model file or other parameters): give another --out, or remove the directory to start afresh",
@@ -186,6 +190,68 @@ pub struct Plan {
     combine: Combine,
     /// The coordinates' names (the summary's `u:` columns).
     coords: Vec<String>,
+    /// The model file's own output settings, for [`Plan::estimate`].
+    base: OutputSettings,
+}
+
+/// What decides the size of a run's CSV file: `t_end`, `h`, rows every
+/// `every` steps or every `every_time` seconds, and the fields of a row.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct OutputSettings {
+    t_end: f64,
+    h: f64,
+    every: f64,
+    every_time: Option<f64>,
+    fields: usize,
+}
+
+impl OutputSettings {
+    /// With the swept value `value` of `key`, if it is one of these and
+    /// reads as a number (else the run fails on it: no file).
+    fn with(mut self, key: &str, value: &str) -> Self {
+        let Ok(x) = value.trim().parse::<f64>() else {
+            return self;
+        };
+        match key {
+            "simulation.t_end" => self.t_end = x,
+            "simulation.h" => self.h = x,
+            "output.every" => self.every = x,
+            "output.every_time" => self.every_time = Some(x),
+            _ => {}
+        }
+        self
+    }
+
+    /// Rows of the CSV file: the steps (as `mstar run` estimates them; a
+    /// step halved where Newton fails adds rows), or the grid's.
+    fn rows(&self) -> f64 {
+        match self.every_time {
+            Some(dt) => self.t_end / dt + 2.0,
+            None => self.t_end / self.h / self.every.max(1.0) + 1.0,
+        }
+    }
+}
+
+/// The size of what a sweep's runs would write, from each run's `t_end`,
+/// `h`, `output.every` and `output.every_time` (swept or the file's): what
+/// `mstar sweep` compares with the free space and the memory before it
+/// starts (`docs/sweeps.md`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    /// Runs of the shard.
+    pub runs: usize,
+    /// Rows of all their CSV files together.
+    pub rows: f64,
+    /// Fields of a row of a run's CSV file (without reaction columns: a
+    /// low estimate).
+    pub fields: usize,
+    /// Fields of a row of the summary, which is kept in memory until the
+    /// sweep ends.
+    pub summary_fields: usize,
+    /// The largest `t_end` of the runs, s (for the advice of a time grid).
+    pub t_end: f64,
+    /// Whether some run writes rows every step (not on a time grid).
+    pub every_step: bool,
 }
 
 impl Plan {
@@ -219,6 +285,14 @@ impl Plan {
         }
         let sys = base.mechanism.system();
         let coords = mstar_model::coord_names(sys);
+        let base = OutputSettings {
+            t_end: base.simulation.t_end.unwrap_or(crate::run::defaults::T_END),
+            h: base.simulation.h.unwrap_or(crate::run::defaults::H),
+            every: base.output.every as f64,
+            every_time: base.output.every_time,
+            // t, u, v, a, λ, energy, iterations, residual, constraint.
+            fields: 1 + 3 * sys.n_coords() + sys.n_constraints() + 4,
+        };
         Ok(Self {
             model: model.to_path_buf(),
             text,
@@ -226,6 +300,7 @@ impl Plan {
             params,
             combine,
             coords,
+            base,
         })
     }
 
@@ -271,6 +346,32 @@ impl Plan {
     #[must_use]
     pub fn values(&self, index: usize) -> Vec<&str> {
         values_of(&self.params, self.combine, index)
+    }
+
+    /// The size of what the runs of `shard` would write, leaving out those
+    /// for which `done` says they are complete (a rerun skips them).
+    #[must_use]
+    pub fn estimate(&self, shard: Shard, done: &dyn Fn(usize) -> bool) -> Estimate {
+        let mut e = Estimate {
+            runs: 0,
+            rows: 0.0,
+            fields: self.base.fields,
+            summary_fields: summary_header(self).len(),
+            t_end: 0.0,
+            every_step: false,
+        };
+        for i in (0..self.len()).filter(|&i| shard.contains(i) && !done(i)) {
+            let run = self
+                .params
+                .iter()
+                .zip(self.values(i))
+                .fold(self.base, |s, (p, v)| s.with(&p.key, v));
+            e.runs += 1;
+            e.rows += run.rows();
+            e.t_end = e.t_end.max(run.t_end);
+            e.every_step |= run.every_time.is_none();
+        }
+        e
     }
 
     /// The overrides of run `index`, `KEY=VALUE` as `mstar run --set` takes them.
