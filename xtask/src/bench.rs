@@ -1,5 +1,6 @@
 //! `cargo xtask bench`: the chain benchmark (criterion, release build) as a
-//! table and a log-log plot.
+//! table and a log-log plot, then the same models as files through `mstar
+//! run` ([`crate::bench_files`]).
 //!
 //! Runs `cargo bench -p mstar-benches --bench chain`, then reads criterion's
 //! median estimates (`target/criterion/chain_step/<N>/new/estimates.json`, and
@@ -48,12 +49,18 @@ fn machine() -> String {
 ///
 /// # Errors
 /// If `cargo bench` fails or produces no estimates.
-pub fn run(max_n: usize, report_only: bool) -> Result<()> {
+pub fn run(max_n: usize, report_only: bool, files_only: bool) -> Result<()> {
     let out = study_dir("bench")?;
-    if !report_only {
-        run_criterion(max_n)?;
+    if !files_only {
+        if !report_only {
+            run_criterion(max_n)?;
+        }
+        report(&out)?;
     }
-    report(&out)
+    if !report_only {
+        crate::bench_files::run(&out, max_n)?;
+    }
+    Ok(())
 }
 
 /// `cargo bench -p mstar-benches --bench chain` up to `max_n` bodies.

@@ -23,6 +23,7 @@
 
 mod animate_check;
 mod bench;
+mod bench_files;
 mod common;
 mod convergence;
 mod energy;
@@ -77,6 +78,11 @@ enum Command {
         /// Only print and plot the results of the last run (no benchmark).
         #[arg(long)]
         report_only: bool,
+        /// Only the model files through `mstar run` (set-up and step cost
+        /// of the spatial chain and N-four-bar files at 10³ … max-n bodies,
+        /// Exudyn beside them): target/studies/bench/files.csv.
+        #[arg(long, conflicts_with = "report_only")]
+        files_only: bool,
     },
     /// `mstar animate` in a real browser: the four-bar's HTML page in
     /// headless Chromium (`apt-get install -y chromium`), a screenshot to
@@ -132,7 +138,11 @@ fn main() -> Result<()> {
         Command::Convergence => convergence::run(),
         Command::Energy => energy::run(),
         Command::Validate => validate::run(),
-        Command::Bench { max_n, report_only } => bench::run(max_n, report_only),
+        Command::Bench {
+            max_n,
+            report_only,
+            files_only,
+        } => bench::run(max_n, report_only, files_only),
         Command::AnimateCheck => animate_check::run(),
         Command::WorkPrecision => work_precision::run(),
         Command::Setup { max_bodies } => setup::run(max_bodies),
