@@ -1,6 +1,6 @@
 //! Spatial multibody systems: rigid bodies in Euler parameters
 //! `(x, y, z, e0, e1, e2, e3)`, point masses in `(x, y, z)`, joints, drivers
-//! and forces, assembled into a [`System`] (`docs/theory.md`, "Spatial
+//! and forces, assembled into a [`System`](crate::System) (`docs/theory.md`, "Spatial
 //! bodies").
 //!
 //! A rigid body's mass matrix `diag(m I₃, 4 Gᵀ J' G)` is singular (rank 3 in
@@ -12,8 +12,8 @@
 //! regular, as backends that invert `M` block by block need.
 //!
 //! Joints and loads are written once over numbers that carry their
-//! derivatives ([`real`]), so their Jacobians and Hessians are exact; the
-//! bodies' inertia terms ([`body`]) and the spherical joints of chains are
+//! derivatives (module `real`), so their Jacobians and Hessians are exact; the
+//! bodies' inertia terms (module `body`) and the spherical joints of chains are
 //! written out by hand for speed.
 
 mod body;

@@ -292,7 +292,7 @@ impl SpatialSystem {
     }
 
     /// The same system with every joint evaluated by the generic element
-    /// path (no [`SphericalKernel`]): the reference the fast path is tested
+    /// path (no spherical-joint kernel): the reference the fast path is tested
     /// against. The values agree to the bit.
     #[must_use]
     pub fn with_generic_joints(mut self) -> Self {
