@@ -280,7 +280,9 @@ pub struct Config {
     pub h_min: Option<f64>,
     /// Newton tolerance, relative (default: 1e-10): converged when
     /// `‖r‖∞ ≤ tol · max(‖g‖∞, ‖Bᵀλ‖∞, ‖Mü‖∞, ‖λ‖∞)` and `‖Φ‖∞ ≤ tol · max(1, ‖u‖∞)`
-    /// after at least one correction. Without
+    /// after at least one correction, with `Φ` settled: `β' max|M| ‖Φ‖∞`
+    /// within the residual's tolerance, or `‖Φ‖∞` at round-off (docs/theory.md,
+    /// "Round-off in the multipliers"). Without
     /// [`exact_multiplier_update`](Config::exact_multiplier_update) the residual
     /// cannot go below the round-off floor `4 c_bb ε ‖u‖∞ ‖B‖∞` (`c_bb = β'`,
     /// about `4ε‖u‖/h²`), which then replaces a smaller tolerance.

@@ -34,11 +34,32 @@ struct Norms {
     residual_tol: f64,
     constraint: f64,
     constraint_tol: f64,
+    /// The violation whose force `β' M Φ` is within the residual's
+    /// tolerance, or the positions' round-off `ε max(1, ‖u‖∞)`.
+    constraint_settled: f64,
 }
 
 impl Norms {
-    fn converged(&self) -> bool {
-        self.residual <= self.residual_tol && self.constraint <= self.constraint_tol
+    /// Within the tolerances, and `‖Φ‖∞` within `constraint_settled` unless
+    /// `anyway`. A violation `δ` left in one step is removed by the next
+    /// one's positions, and its accelerations and multipliers take it as a
+    /// kick `β' M δ` (15) that the scheme's double root `−ρ∞` rings for tens
+    /// of steps: `1e-14` m left at `h = 2.5e-4` swung a reaction by `1e-6` N
+    /// (docs/theory.md, "Round-off in the multipliers").
+    fn converged(&self, anyway: bool) -> bool {
+        self.residual <= self.residual_tol
+            && self.constraint <= self.constraint_tol
+            && (anyway || self.constraint <= self.constraint_settled)
+    }
+
+    /// The residual within its tolerance, and `‖Φ‖∞` above
+    /// `constraint_settled` and no longer halving from the last iterate's
+    /// `previous`: round-off after a fresh Jacobian, a Jacobian to refresh
+    /// after a reused one.
+    fn stalled(&self, previous: f64) -> bool {
+        self.residual <= self.residual_tol
+            && self.constraint > self.constraint_settled
+            && self.constraint > 0.5 * previous
     }
 
     fn not_converged(&self, iterations: usize) -> Failure {
@@ -59,26 +80,27 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         let k = self.corrector(h);
         let mut force_refactor = false;
         let mut previous_step = f64::INFINITY;
+        // The last iterate's ‖Φ‖∞, and whether its correction was made with
+        // a Jacobian evaluated at it.
+        let (mut previous_constraint, mut fresh) = (f64::INFINITY, false);
         // ‖u‖∞ of the iterate, kept up to date by the corrector.
         let mut u_max = max_abs(&self.trial.u);
         for it in 0..=self.config.max_iterations {
             let norms = self.residual(&k, u_max)?;
             self.stats.iterations += usize::from(it > 0);
+            let last = it == self.config.max_iterations;
+            let stalled = norms.stalled(previous_constraint);
             // At least one correction: a predictor that happens to meet the
             // tolerances (small h, near rest) still needs its λ and ü updated.
-            if it > 0 && norms.converged() {
+            if it > 0 && norms.converged(last || (fresh && stalled)) {
                 return Ok(it);
             }
-            if it == self.config.max_iterations {
+            if last {
                 return Err(norms.not_converged(it));
             }
-            let refactor = match self.config.newton {
-                Newton::Full => true,
-                // (Automatic is resolved when the integrator is made.)
-                Newton::Modified { .. } | Newton::Automatic => {
-                    force_refactor || self.factored_h != Some(h)
-                }
-            };
+            previous_constraint = norms.constraint;
+            let refactor = self.refactors(h, force_refactor || stalled);
+            fresh = refactor;
             if refactor {
                 self.refactor(&k, h)?;
                 force_refactor = false;
@@ -98,6 +120,16 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             previous_step = step;
         }
         unreachable!("the loop returns at max_iterations")
+    }
+
+    /// Whether this iteration refactors: always with full Newton, else for a
+    /// new step size or when `asked`.
+    fn refactors(&self, h: f64, asked: bool) -> bool {
+        match self.config.newton {
+            Newton::Full => true,
+            // (Automatic is resolved when the integrator is made.)
+            Newton::Modified { .. } | Newton::Automatic => asked || self.factored_h != Some(h),
+        }
     }
 
     /// The corrector's coefficients for a step of size `h`.
@@ -160,12 +192,15 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         } else {
             4.0 * k.coefficients.c_bb * f64::EPSILON * u_max.max(1.0) * max_abs(self.lin.b())
         };
+        let residual_tol = (self.config.tol * self.lin.force_scale()).max(floor);
+        let kick = k.coefficients.c_a * max_abs(self.lin.mass());
         Ok(Norms {
             rhs,
             residual,
-            residual_tol: (self.config.tol * self.lin.force_scale()).max(floor),
+            residual_tol,
             constraint,
             constraint_tol: self.config.tol * u_max.max(1.0),
+            constraint_settled: (residual_tol / kick).max(f64::EPSILON * u_max.max(1.0)),
         })
     }
 
