@@ -6,7 +6,7 @@ follow from the scheme's relations (Arnold & Bruls 2007). Prints the largest
 period-2h part, max |D^4 udd| / 16 over t >= 0.1 s, for positions rounded to
 doubles (in double and in 40-digit arithmetic) and for exact positions.
 
-    python3 docs/experiments/round-off-recurrence.py
+    python3 benches/round-off/recurrence.py
 """
 from decimal import Decimal, getcontext
 import math
