@@ -365,3 +365,31 @@ fn minimum_norm_refuses_a_redundancy_that_changes_along_the_motion() {
     assert!(out.status.success(), "{}", text(&out.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Every model shipped in `models/` runs as shipped — its own settings, no
+/// option — to its end within the error tolerance (exit 0) and without a
+/// warning: a start whose given velocities the joints allow, a step that
+/// keeps the energy within tolerance.
+#[test]
+fn every_shipped_model_runs_cleanly_as_shipped() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
+    let mut names = Vec::new();
+    for dir in [root.clone(), root.join("spatial")] {
+        for entry in std::fs::read_dir(&dir).expect("models/") {
+            let path = entry.expect("an entry").path();
+            if matches!(
+                path.extension().and_then(|e| e.to_str()),
+                Some("toml" | "json")
+            ) {
+                names.push(path.display().to_string());
+            }
+        }
+    }
+    assert!(names.len() >= 17, "{names:?}");
+    for name in names {
+        let run = mstar(&["run", &name]);
+        let err = text(&run.stderr);
+        assert_eq!(run.status.code(), Some(0), "{name}: {err}");
+        assert!(!err.contains("warning"), "{name}: {err}");
+    }
+}
