@@ -65,15 +65,7 @@ fn cases(dir: &Path, max_bodies: usize) -> Result<Vec<Case>> {
 /// # Errors
 /// If the build fails, a file cannot be written or a run fails.
 pub fn run(dir: &Path, max_bodies: usize) -> Result<()> {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let status = Command::new(cargo)
-        .args(["build", "--release", "-p", "mstar", "--bin", "mstar"])
-        .status()
-        .context("could not run cargo build")?;
-    if !status.success() {
-        bail!("cargo build --release failed ({status})");
-    }
-    let exe = Path::new("target/release/mstar");
+    let exe = setup::release_binary()?;
     let mut table = Table::new(
         "Model files through `mstar run` (release build, one thread, h = 1e-3 s): set-up is the \
          whole command's wall time of `mstar check` and of `mstar run --t-end 1e-3` (read, check, \

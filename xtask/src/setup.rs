@@ -163,13 +163,11 @@ pub fn write_spatial_chain(links: usize, out: &Path) -> Result<()> {
 /// The couplers of the studied sizes: about 10³, 10⁴, 10⁵ bodies.
 const SIZES: [usize; 3] = [500, 5_000, 50_000];
 
-/// Builds the release binary, writes the files and times `mstar check` on
-/// the clean and the duplicated model and `mstar run` to its first step
-/// (`t_end = h`) on the clean one, up to `max_bodies` bodies.
+/// Builds the release binary of `mstar` and returns its path.
 ///
 /// # Errors
-/// If the build fails, a file cannot be written or a command cannot start.
-pub fn run(max_bodies: usize) -> Result<()> {
+/// If the build fails.
+pub fn release_binary() -> Result<&'static Path> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let status = Command::new(cargo)
         .args(["build", "--release", "-p", "mstar", "--bin", "mstar"])
@@ -178,7 +176,17 @@ pub fn run(max_bodies: usize) -> Result<()> {
     if !status.success() {
         bail!("cargo build --release failed ({status})");
     }
-    let exe = Path::new("target/release/mstar");
+    Ok(Path::new("target/release/mstar"))
+}
+
+/// Builds the release binary, writes the files and times `mstar check` on
+/// the clean and the duplicated model and `mstar run` to its first step
+/// (`t_end = h`) on the clean one, up to `max_bodies` bodies.
+///
+/// # Errors
+/// If the build fails, a file cannot be written or a command cannot start.
+pub fn run(max_bodies: usize) -> Result<()> {
+    let exe = release_binary()?;
     let dir = study_dir("setup")?;
     let mut table = Table::new(
         "Set-up of the N-four-bar (release build; wall time of the whole command)",
