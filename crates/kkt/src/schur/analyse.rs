@@ -445,20 +445,8 @@ impl BColumns {
 /// The `n × n` CSC pattern of the `(column, row)` pairs (sorted and
 /// deduplicated in place), values zero.
 pub(super) fn csc_of(n: usize, pairs: &mut Vec<(usize, usize)>) -> Csc {
-    pairs.sort_unstable();
-    pairs.dedup();
-    let mut c = Csc {
-        n,
-        col_ptr: vec![0; n + 1],
-        row_idx: Vec::with_capacity(pairs.len()),
-        values: vec![0.0; pairs.len()],
-    };
-    for &(col, row) in pairs.iter() {
-        c.col_ptr[col + 1] += 1;
-        c.row_idx.push(row);
-    }
-    for j in 0..n {
-        c.col_ptr[j + 1] += c.col_ptr[j];
-    }
+    let c = Csc::from_pairs(n, pairs);
+    pairs.clear();
+    pairs.extend((0..n).flat_map(|j| c.column(j).iter().map(move |&i| (j, i))));
     c
 }
