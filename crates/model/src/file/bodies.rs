@@ -28,10 +28,10 @@ pub(crate) struct Bodies<P> {
 }
 
 impl<P: Copy> Bodies<P> {
-    /// None yet.
-    pub(crate) fn new() -> Self {
+    /// None yet, with room for `bodies` without growing.
+    pub(crate) fn with_capacity(bodies: usize) -> Self {
         Self {
-            by_name: HashMap::new(),
+            by_name: HashMap::with_capacity(bodies),
         }
     }
 
@@ -101,6 +101,13 @@ pub(crate) struct Names {
 }
 
 impl Names {
+    /// None yet, with room for `names` without growing.
+    pub(crate) fn with_capacity(names: usize) -> Self {
+        Self {
+            by_name: HashMap::with_capacity(names),
+        }
+    }
+
     /// The fields of the element table `node` (described as `what` until its
     /// name is known, then as `<kind> '<name>'`) and its name: non-empty,
     /// without control characters, new, and not `ground` for a body.
@@ -160,6 +167,21 @@ impl Names {
 
 /// Reads one element of the arrays of tables into a model `M`.
 pub(crate) type Adder<'a, M> = fn(&mut M, &'a Node, String) -> Result<(), FileError>;
+
+/// How many elements the arrays of [`read_elements`] hold, and how many of
+/// them are bodies and point masses (to size the maps by name at once).
+pub(crate) fn element_counts(top: &Fields<'_>) -> (usize, usize) {
+    let count = |kind: &str| {
+        top.peek(kind)
+            .and_then(|n| list(n).ok())
+            .map_or(0, <[Node]>::len)
+    };
+    let bodies = count("body") + count("point_mass");
+    (
+        bodies + count("joint") + count("driver") + count("force"),
+        bodies,
+    )
+}
 
 /// Reads the element arrays `body`, `point_mass`, `joint`, `driver` and
 /// `force` of the document `top`, in that order (a joint names the bodies
