@@ -10,10 +10,9 @@ pub(crate) fn from_terms(
     n: usize,
     terms: &[&[(usize, usize)]],
 ) -> Result<(Csc, Vec<Vec<Slot>>), usize> {
-    let all: Vec<(usize, usize)> = terms
-        .iter()
-        .flat_map(|t| t.iter().map(|&(i, j)| (j, i)))
-        .collect();
+    // Sized at once (collected from a flat_map, it grew by copies).
+    let mut all: Vec<(usize, usize)> = Vec::with_capacity(terms.iter().map(|t| t.len()).sum());
+    all.extend(terms.iter().flat_map(|t| t.iter().map(|&(i, j)| (j, i))));
     let c = Csc::from_pairs(n, &all);
     drop(all);
     if Slot::try_from(c.nnz()).is_err() {

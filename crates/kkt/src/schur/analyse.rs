@@ -317,7 +317,10 @@ impl COrder {
         m: usize,
         symmetry: Symmetry,
     ) -> Result<Self, KktError> {
-        let mut pattern: Vec<(usize, usize)> = Vec::new();
+        // Sized at once: grown pair by pair, its copies took a tenth of
+        // the analysis at 10⁵ bodies.
+        let pairs: usize = parts.blocks.iter().map(|b| b.rows.len().pow(2)).sum();
+        let mut pattern: Vec<(usize, usize)> = Vec::with_capacity(pairs + d_all.len() + m);
         for b in &parts.blocks {
             let rows = &parts.rows[b.rows.clone()];
             for &r in rows {
@@ -375,10 +378,13 @@ impl COrder {
 fn sparse_c_factor(c_amd: Csc, amd: SparseLdlt) -> Result<CFactor, KktError> {
     let m = c_amd.n;
     let upper = amd.reads_upper();
-    let mut triangle: Vec<(usize, usize)> = (0..m)
-        .flat_map(|s| c_amd.column(s).iter().map(move |&r| (s, r)))
-        .filter(|&(s, r)| if upper { r <= s } else { r >= s })
-        .collect();
+    // Sized for a symmetric pattern's triangle at once.
+    let mut triangle: Vec<(usize, usize)> = Vec::with_capacity(c_amd.nnz().div_ceil(2) + m);
+    triangle.extend(
+        (0..m)
+            .flat_map(|s| c_amd.column(s).iter().map(move |&r| (s, r)))
+            .filter(|&(s, r)| if upper { r <= s } else { r >= s }),
+    );
     let c_tri = csc_of(m, &mut triangle);
     Ok(match SparseLdlt::preordered_triangle(&c_tri, upper)? {
         Some(ldlt) => CFactor::Sparse {
