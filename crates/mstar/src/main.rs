@@ -285,7 +285,6 @@ struct PendulumArgs {
 }
 
 fn main() -> ExitCode {
-    one_malloc_arena();
     let cli = Cli::parse();
     match thread_pool() {
         Ok(pool) => pool.install(|| dispatch(cli)),
@@ -325,23 +324,6 @@ fn dispatch(cli: Cli) -> ExitCode {
         Command::Chain(args) => chain(&args),
     };
     ExitCode::from(output::exit_code(result, false, 1))
-}
-
-/// glibc's allocator in one arena, the main thread's, for every thread.
-/// The program runs on a pool thread, whose own arena grows by `mprotect`
-/// in pieces of at most 64 MB and puts every larger block in its own
-/// `mmap`: reading a 10⁵-body model file (1.1 GB at its peak) spent a third
-/// of its time in the kernel that way (MALLOC_ARENA_MAX=1 took 0.5–1.5 s
-/// of it away, `/usr/bin/time` of `mstar run` on the 10⁵-body N-four-bar,
-/// 2026-11-26). The threads that compute in parallel allocate little.
-fn one_malloc_arena() {
-    #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    // SAFETY: mallopt only sets a parameter of the allocator; no other
-    // thread runs yet. (It fails only for a value out of range, and then the
-    // allocator works as before.)
-    unsafe {
-        libc::mallopt(libc::M_ARENA_MAX, 1);
-    }
 }
 
 /// The thread pool the program runs in: one thread a core, or as many as

@@ -315,11 +315,7 @@ impl MechanismFile {
             })?;
         }
         let doc = Doc { origin, text };
-        let mechanism = read(doc, &root);
-        // Freeing the tree of a large file takes a while (0.4 s at 10⁵
-        // bodies): a thread of the pool frees it while the caller goes on.
-        rayon::spawn(move || drop(root));
-        mechanism
+        read(doc, &root)
     }
 }
 
