@@ -17,6 +17,55 @@ pub struct Csc {
 }
 
 impl Csc {
+    /// The `n × n` pattern of the `(column, row)` pairs, given in any order
+    /// and with repeats, values zero: the columns bucketed by a counting
+    /// sort, then each sorted and deduplicated on its own (linear in the
+    /// pairs but for the short per-column sorts, where sorting all the
+    /// pairs at once took 8 % of reading a 10⁵-body model file).
+    ///
+    /// # Panics
+    /// If a column is not below `n`.
+    #[must_use]
+    pub fn from_pairs(n: usize, pairs: &[(usize, usize)]) -> Self {
+        let mut start = vec![0usize; n + 1];
+        for &(j, _) in pairs {
+            start[j + 1] += 1;
+        }
+        for j in 0..n {
+            start[j + 1] += start[j];
+        }
+        let mut rows = vec![0usize; pairs.len()];
+        let mut next = start.clone();
+        for &(j, i) in pairs {
+            rows[next[j]] = i;
+            next[j] += 1;
+        }
+        let mut col_ptr = next;
+        col_ptr[0] = 0;
+        let mut len = 0;
+        for j in 0..n {
+            let column = &mut rows[start[j]..start[j + 1]];
+            column.sort_unstable();
+            for k in start[j]..start[j + 1] {
+                // Compacted in place: `len <= k`, and the rows before it
+                // are this column's distinct rows so far.
+                if len == col_ptr[j] || rows[len - 1] != rows[k] {
+                    rows[len] = rows[k];
+                    len += 1;
+                }
+            }
+            col_ptr[j + 1] = len;
+        }
+        rows.truncate(len);
+        rows.shrink_to_fit();
+        Self {
+            n,
+            col_ptr,
+            row_idx: rows,
+            values: vec![0.0; len],
+        }
+    }
+
     /// Number of stored values.
     #[must_use]
     pub fn nnz(&self) -> usize {
@@ -110,5 +159,32 @@ pub fn condition_number(a: &Csc) -> f64 {
         f64::INFINITY
     } else {
         max / min
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Csc;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The pattern is that of all the pairs sorted and deduplicated.
+        #[test]
+        fn from_pairs_is_the_sorted_unique_pairs(
+            n in 1usize..12,
+            raw in proptest::collection::vec((0usize..100, 0usize..100), 0..80),
+        ) {
+            let pairs: Vec<(usize, usize)> = raw.iter().map(|&(j, i)| (j % n, i % n)).collect();
+            let c = Csc::from_pairs(n, &pairs);
+            c.validate().map_err(|e| TestCaseError::fail(e.to_string()))?;
+            let mut want = pairs.clone();
+            want.sort_unstable();
+            want.dedup();
+            let got: Vec<(usize, usize)> = (0..n)
+                .flat_map(|j| c.column(j).iter().map(move |&i| (j, i)))
+                .collect();
+            prop_assert_eq!(got, want);
+            prop_assert_eq!(c.values.len(), c.row_idx.len());
+        }
     }
 }

@@ -10,22 +10,13 @@ pub(crate) fn from_terms(
     n: usize,
     terms: &[&[(usize, usize)]],
 ) -> Result<(Csc, Vec<Vec<Slot>>), usize> {
-    let mut all: Vec<(usize, usize)> = terms
-        .iter()
-        .flat_map(|t| t.iter().map(|&(i, j)| (j, i)))
-        .collect();
-    all.sort_unstable();
-    all.dedup();
-    let mut col_ptr = vec![0usize; n + 1];
-    for &(j, _) in &all {
-        col_ptr[j + 1] += 1;
-    }
-    for j in 0..n {
-        col_ptr[j + 1] += col_ptr[j];
-    }
-    let row_idx: Vec<usize> = all.iter().map(|&(_, i)| i).collect();
-    if Slot::try_from(row_idx.len()).is_err() {
-        return Err(row_idx.len());
+    // Sized at once (collected from a flat_map, it grew by copies).
+    let mut all: Vec<(usize, usize)> = Vec::with_capacity(terms.iter().map(|t| t.len()).sum());
+    all.extend(terms.iter().flat_map(|t| t.iter().map(|&(i, j)| (j, i))));
+    let c = Csc::from_pairs(n, &all);
+    drop(all);
+    if Slot::try_from(c.nnz()).is_err() {
+        return Err(c.nnz());
     }
     let slots = terms
         .iter()
@@ -33,23 +24,14 @@ pub(crate) fn from_terms(
             t.iter()
                 .map(|&(i, j)| {
                     // The entry is in the union by construction.
-                    let col = &row_idx[col_ptr[j]..col_ptr[j + 1]];
+                    let col = c.column(j);
                     // Below nnz, which fits (checked above).
-                    (col_ptr[j] + col.partition_point(|&r| r < i)) as Slot
+                    (c.col_ptr[j] + col.partition_point(|&r| r < i)) as Slot
                 })
                 .collect()
         })
         .collect();
-    let nnz = row_idx.len();
-    Ok((
-        Csc {
-            n,
-            col_ptr,
-            row_idx,
-            values: vec![0.0; nnz],
-        },
-        slots,
-    ))
+    Ok((c, slots))
 }
 
 /// A position in a value array: 32 bits halve the memory the scatters read.

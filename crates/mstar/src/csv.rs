@@ -22,11 +22,22 @@ pub fn header<S: System + ?Sized>(sys: &S) -> Vec<String> {
     h
 }
 
+/// How many fields [`header`] names, without naming them.
+#[must_use]
+pub fn header_len<S: System + ?Sized>(sys: &S) -> usize {
+    1 + 3 * sys.n_coords() + sys.n_constraints() + 4
+}
+
 /// Columns a model adds after the standard ones (e.g. reactions by joint,
 /// see [`crate::run::ReactionColumns`]).
 pub trait Columns {
     /// Their header names.
     fn names(&self) -> Vec<String>;
+
+    /// How many there are (as many as `names`, without naming them).
+    fn count(&self) -> usize {
+        self.names().len()
+    }
 
     /// Their values at a sample, appended to `out` (as many as `names`).
     fn values(&self, s: &SampleRef<'_>, out: &mut Vec<f64>);
@@ -684,6 +695,22 @@ mod tests {
         let text = to_csv(&sys, &[s]);
         let row = text.lines().nth(1).expect("one row");
         assert_eq!(row, "0.5,1,2,3,0,0,0,0,0,0,-10,0.25,3,3,1e-12,0");
+        assert_eq!(header_len(&sys), header(&sys).len());
+    }
+
+    /// The counts without names are the numbers of names (a model with a
+    /// driver: joints' reactions and the driver's effort).
+    #[test]
+    fn counts_are_those_of_the_names() {
+        use mstar_model::file::{Format, MechanismFile};
+        let text = include_str!("../../../models/slider-crank.toml");
+        let file = MechanismFile::parse(text, "slider-crank.toml", Format::Toml).expect("valid");
+        let sys = crate::run::lookup(&file.mechanism);
+        assert_eq!(header_len(sys), header(sys).len());
+        let columns = crate::run::ReactionColumns::new(sys);
+        let names = columns.names();
+        assert!(names.iter().any(|n| n.starts_with("effort:")), "{names:?}");
+        assert_eq!(columns.count(), names.len());
     }
 
     #[test]

@@ -694,6 +694,8 @@ pub fn lookup(m: &Mechanism) -> &(dyn ModelLookup + 'static) {
 /// (or joint motion) it drives, positive in that coordinate's direction.
 pub struct ReactionColumns<'a> {
     sys: &'a dyn ModelLookup,
+    /// How many joints (drivers included) it has.
+    joints: usize,
     /// `(joint index, first row)` of each driver.
     drivers: Vec<(usize, usize)>,
 }
@@ -710,14 +712,19 @@ impl<'a> ReactionColumns<'a> {
     /// The columns of `sys`.
     #[must_use]
     pub fn new(sys: &'a dyn ModelLookup) -> Self {
-        let drivers = sys
-            .joint_names()
+        let names = sys.joint_names();
+        let joints = names.len();
+        let drivers = names
             .into_iter()
             .enumerate()
             .filter(|(_, name)| sys.is_driver(name) == Some(true))
             .filter_map(|(i, name)| Some((i, sys.joint_rows(name)?.start)))
             .collect();
-        Self { sys, drivers }
+        Self {
+            sys,
+            joints,
+            drivers,
+        }
     }
 }
 
@@ -737,8 +744,12 @@ impl crate::csv::Columns for ReactionColumns<'_> {
         names
     }
 
+    fn count(&self) -> usize {
+        self.joints * self.sys.reaction_components().len() + self.drivers.len()
+    }
+
     fn values(&self, s: &mstar_model::SampleRef<'_>, out: &mut Vec<f64>) {
-        for i in 0..self.sys.joint_names().len() {
+        for i in 0..self.joints {
             self.sys.reaction_into(i, s.t, s.u, s.lambda, out);
         }
         out.extend(

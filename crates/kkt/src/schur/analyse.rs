@@ -317,7 +317,10 @@ impl COrder {
         m: usize,
         symmetry: Symmetry,
     ) -> Result<Self, KktError> {
-        let mut pattern: Vec<(usize, usize)> = Vec::new();
+        // Sized at once: grown pair by pair, its copies took a tenth of
+        // the analysis at 10⁵ bodies.
+        let pairs: usize = parts.blocks.iter().map(|b| b.rows.len().pow(2)).sum();
+        let mut pattern: Vec<(usize, usize)> = Vec::with_capacity(pairs + d_all.len() + m);
         for b in &parts.blocks {
             let rows = &parts.rows[b.rows.clone()];
             for &r in rows {
@@ -375,10 +378,13 @@ impl COrder {
 fn sparse_c_factor(c_amd: Csc, amd: SparseLdlt) -> Result<CFactor, KktError> {
     let m = c_amd.n;
     let upper = amd.reads_upper();
-    let mut triangle: Vec<(usize, usize)> = (0..m)
-        .flat_map(|s| c_amd.column(s).iter().map(move |&r| (s, r)))
-        .filter(|&(s, r)| if upper { r <= s } else { r >= s })
-        .collect();
+    // Sized for a symmetric pattern's triangle at once.
+    let mut triangle: Vec<(usize, usize)> = Vec::with_capacity(c_amd.nnz().div_ceil(2) + m);
+    triangle.extend(
+        (0..m)
+            .flat_map(|s| c_amd.column(s).iter().map(move |&r| (s, r)))
+            .filter(|&(s, r)| if upper { r <= s } else { r >= s }),
+    );
     let c_tri = csc_of(m, &mut triangle);
     Ok(match SparseLdlt::preordered_triangle(&c_tri, upper)? {
         Some(ldlt) => CFactor::Sparse {
@@ -445,20 +451,8 @@ impl BColumns {
 /// The `n × n` CSC pattern of the `(column, row)` pairs (sorted and
 /// deduplicated in place), values zero.
 pub(super) fn csc_of(n: usize, pairs: &mut Vec<(usize, usize)>) -> Csc {
-    pairs.sort_unstable();
-    pairs.dedup();
-    let mut c = Csc {
-        n,
-        col_ptr: vec![0; n + 1],
-        row_idx: Vec::with_capacity(pairs.len()),
-        values: vec![0.0; pairs.len()],
-    };
-    for &(col, row) in pairs.iter() {
-        c.col_ptr[col + 1] += 1;
-        c.row_idx.push(row);
-    }
-    for j in 0..n {
-        c.col_ptr[j + 1] += c.col_ptr[j];
-    }
+    let c = Csc::from_pairs(n, pairs);
+    pairs.clear();
+    pairs.extend((0..n).flat_map(|j| c.column(j).iter().map(move |&i| (j, i))));
     c
 }

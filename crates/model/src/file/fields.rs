@@ -54,6 +54,11 @@ impl<'a> Fields<'a> {
         self.span.as_ref()
     }
 
+    /// The value of `key`, not marked as read.
+    pub(crate) fn peek(&self, key: &str) -> Option<&'a Node> {
+        self.entries.iter().find(|e| e.key == key).map(|e| &e.node)
+    }
+
     /// The entry `key`, marked as read.
     pub(crate) fn entry(&mut self, key: &str) -> Option<&'a Entry> {
         let k = self.entries.iter().position(|e| e.key == key)?;

@@ -51,11 +51,12 @@ pub(crate) fn read<'a>(doc: Doc<'a>, root: &'a Node) -> Result<PlanarSystem, Fil
     let gravity = top
         .optional("gravity", numbers::<2>)?
         .unwrap_or([0.0, -9.81]);
+    let counts = bodies::element_counts(&top);
     let mut m = Model {
         doc,
         builder: PlanarBuilder::new(),
-        bodies: Bodies::new(),
-        names: Names::default(),
+        bodies: Bodies::with_capacity(counts.1),
+        names: Names::with_capacity(counts.0),
     };
     m.builder.gravity(gravity[0], gravity[1]);
     // ([simulation] and [output] are the caller's: settings, not the mechanism.)

@@ -99,12 +99,13 @@ pub(crate) fn read<'a>(
     let gravity = top
         .optional("gravity", numbers::<3>)?
         .unwrap_or([0.0, 0.0, -9.81]);
+    let counts = bodies::element_counts(&top);
     let mut m = Model {
         doc,
         builder: SpatialBuilder::new(),
-        bodies: Bodies::new(),
+        bodies: Bodies::with_capacity(counts.1),
         joints: HashMap::new(),
-        names: Names::default(),
+        names: Names::with_capacity(counts.0),
         warnings: Vec::new(),
     };
     m.builder.gravity(gravity);

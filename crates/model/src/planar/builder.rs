@@ -418,7 +418,8 @@ impl PlanarBuilder {
 
     /// Every body and element has its own name.
     fn check_names(&self) -> Result<(), ModelError> {
-        let mut names = std::collections::HashSet::new();
+        let count = self.bodies.len() + self.joints.len() + self.drivers.len() + self.forces.len();
+        let mut names = std::collections::HashSet::with_capacity(count);
         let all_names = self
             .bodies
             .iter()
@@ -427,7 +428,7 @@ impl PlanarBuilder {
             .chain(self.drivers.iter().map(|d| &d.0))
             .chain(self.forces.iter().map(|f| &f.0));
         for name in all_names {
-            if !names.insert(name.clone()) {
+            if !names.insert(name.as_str()) {
                 return Err(ModelError::DuplicateName(name.clone()));
             }
         }

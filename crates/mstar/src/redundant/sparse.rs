@@ -144,10 +144,15 @@ impl Elimination {
         let keep = independent && pivot.is_some();
         if let (true, Some(pivot)) = (keep, pivot) {
             let p = self.work[pivot as usize];
+            // Sized at once: growing 2·10⁵ short rows one push at a time
+            // took a third of the elimination at 10⁵ bodies.
+            let len = self.nz.len();
             let mut row = KeptRow {
-                cols: vec![pivot],
-                vals: vec![1.0],
+                cols: Vec::with_capacity(len),
+                vals: Vec::with_capacity(len),
             };
+            row.cols.push(pivot);
+            row.vals.push(1.0);
             for &c in &self.nz {
                 let x = self.work[c as usize];
                 if c != pivot && free(self, c) && x != 0.0 {
