@@ -26,7 +26,17 @@ fn every_spatial_model_animates_in_every_output() {
     for (name, bodies) in models {
         let file = model(&format!("spatial/{name}.toml"));
         let csv = dir.join(format!("{name}.csv"));
-        let ran = mstar(&["run", &file, "--t-end", "0.1", "--out", &path(&csv)]);
+        // (At h = 1e-3 whatever the file's: 101 rows.)
+        let ran = mstar(&[
+            "run",
+            &file,
+            "--t-end",
+            "0.1",
+            "--h",
+            "1e-3",
+            "--out",
+            &path(&csv),
+        ]);
         assert!(ran.status.success(), "{name}: {}", text(&ran.stderr));
         let (gif, html, png) = (
             dir.join(format!("{name}.gif")),
