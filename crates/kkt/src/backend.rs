@@ -2,9 +2,13 @@
 //!
 //! A backend is one type implementing [`KktBackend`] (its numeric part:
 //! factor, solve, product) and one [`Registration`] (its name, the structure
-//! it reads, its symbolic analysis). Adding a backend is one new file with
-//! both, plus its registration in [`REGISTRY`]: [`KktSolver`](crate::KktSolver),
-//! the integrator, the command line and the benchmarks find it there.
+//! it reads, its symbolic analysis, whether the automatic choice tries it).
+//! The built-in backends are listed in [`BUILT_IN`]; a backend of another
+//! crate joins them at run time with [`register`]. [`KktSolver`](crate::KktSolver),
+//! the integrator and [`KktOptions::candidates`] find both kinds the same way
+//! ([`backends`]).
+
+use std::sync::RwLock;
 
 use crate::{Csc, KktError, KktOptions, dense, schur, sparse_ldlt, sparse_lu};
 
@@ -78,6 +82,17 @@ pub trait KktBackend: Send {
     fn is_regularized(&self) -> bool {
         false
     }
+
+    /// A backend with this one's symbolic analysis and fresh numeric
+    /// buffers, as [`Registration::analyse`] would build it for the same
+    /// structure and options, or `None` when it cannot share its analysis
+    /// (the default). Called on backends that have not factored yet:
+    /// [`KktSolver::new`](crate::KktSolver::new) keeps one such template per
+    /// recent structure, so that the runs of a sweep analyse an identical
+    /// pattern once.
+    fn fork(&self) -> Option<Box<dyn KktBackend>> {
+        None
+    }
 }
 
 /// A backend's symbolic analysis of a structure (values ignored).
@@ -100,6 +115,14 @@ pub struct Registration {
     pub symmetric: bool,
     /// The symbolic analysis of a structure (values ignored).
     pub analyse: Analyse,
+    /// Whether and when [`Backend::AUTO`] tries it above the dense
+    /// threshold ([`KktOptions::candidates`]): `None` never (it must be
+    /// named), `Some(rank)` in ascending rank (the built-ins: `schur` 10,
+    /// `schur-lu` 20, `ldlt` 30, `lu` 100; ties in registration order).
+    pub automatic: Option<u16>,
+    /// Whether it needs [`KktOptions::n_primal`]: the automatic choice skips
+    /// it without.
+    pub needs_n_primal: bool,
 }
 
 impl std::fmt::Debug for Registration {
@@ -111,8 +134,8 @@ impl std::fmt::Debug for Registration {
     }
 }
 
-/// Every backend, in the order help texts list them.
-const REGISTRY: &[Registration] = &[
+/// The built-in backends, in the order help texts list them.
+const BUILT_IN: &[Registration] = &[
     dense::REGISTRATION,
     sparse_lu::REGISTRATION,
     sparse_ldlt::REGISTRATION,
@@ -120,10 +143,44 @@ const REGISTRY: &[Registration] = &[
     schur::REGISTRATION_LU,
 ];
 
-/// The registered backends.
+/// The backends of other crates, in the order they were registered.
+static REGISTERED: RwLock<Vec<Registration>> = RwLock::new(Vec::new());
+
+/// The backends registered with [`register`] (none if the lock was
+/// poisoned by a panic while registering).
+fn registered() -> Vec<Registration> {
+    REGISTERED.read().map(|r| r.clone()).unwrap_or_default()
+}
+
+/// Every backend: the built-in ones, then those added with [`register`].
 #[must_use]
-pub fn backends() -> &'static [Registration] {
-    REGISTRY
+pub fn backends() -> Vec<Registration> {
+    let mut all = BUILT_IN.to_vec();
+    all.extend(registered());
+    all
+}
+
+/// Adds a backend of your own: from then on [`Backend::named`],
+/// [`KktSolver::new`](crate::KktSolver::new), the integrator and, with
+/// [`Registration::automatic`], the automatic choice find it like a built-in
+/// one (docs/extending.md, "Your own KKT backend").
+///
+/// # Errors
+/// [`KktError::NameTaken`] when its name is `auto`, empty, or already a
+/// backend's.
+pub fn register(registration: Registration) -> Result<Backend, KktError> {
+    let name = registration.backend.0;
+    let taken = name.is_empty() || name == Backend::AUTO.0 || Backend::named(name).is_some();
+    if taken {
+        return Err(KktError::NameTaken { name });
+    }
+    let mut list = REGISTERED.write().map_err(|_| KktError::NameTaken { name })?;
+    // Checked again under the write lock: two threads may register one name.
+    if list.iter().any(|r| r.backend.0 == name) {
+        return Err(KktError::NameTaken { name });
+    }
+    list.push(registration);
+    Ok(registration.backend)
 }
 
 /// A KKT backend by name: [`Backend::AUTO`] or a registered backend
@@ -146,16 +203,28 @@ impl Backend {
     /// symmetric, `C` by an envelope LU (`crates/kkt/src/schur/`).
     pub const SCHUR_LU: Self = Self("schur-lu");
 
+    /// The name of a backend of your own, for its [`Registration`]; it
+    /// refers to a backend once [`register`]ed.
+    #[must_use]
+    pub const fn new(name: &'static str) -> Self {
+        Self(name)
+    }
+
     /// The backend called `name` (`"auto"` or a registered name).
     #[must_use]
     pub fn named(name: &str) -> Option<Self> {
         if name == Self::AUTO.0 {
             return Some(Self::AUTO);
         }
-        REGISTRY
-            .iter()
-            .find(|r| r.backend.0 == name)
-            .map(|r| r.backend)
+        Self::find(|r| r.backend.0 == name).map(|r| r.backend)
+    }
+
+    /// The first registration that `matches`, built-in ones first.
+    fn find(matches: impl Fn(&Registration) -> bool) -> Option<Registration> {
+        if let Some(r) = BUILT_IN.iter().find(|r| matches(r)) {
+            return Some(*r);
+        }
+        registered().into_iter().find(|r| matches(r))
     }
 
     /// Its name.
@@ -164,10 +233,11 @@ impl Backend {
         self.0
     }
 
-    /// Its registration (`None` for [`Backend::AUTO`]).
+    /// Its registration (`None` for [`Backend::AUTO`] and for a name not
+    /// registered).
     #[must_use]
-    pub fn registration(self) -> Option<&'static Registration> {
-        REGISTRY.iter().find(|r| r.backend == self)
+    pub fn registration(self) -> Option<Registration> {
+        Self::find(|r| r.backend == self)
     }
 
     /// The structure it reads (`None` for [`Backend::AUTO`], which depends on

@@ -12,6 +12,8 @@ pub(crate) const REGISTRATION: Registration = Registration {
     structure: Structure::AUGMENTED,
     symmetric: false,
     analyse: |a, _: &KktOptions| Ok(Box::new(DenseLu::new(a))),
+    automatic: None,
+    needs_n_primal: false,
 };
 
 /// Dense LU factors of a small square matrix given in CSC form.

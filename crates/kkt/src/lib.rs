@@ -10,9 +10,12 @@
 //!
 //! ## Backends
 //!
-//! Each backend is one file and one line in the registry ([`backends`]); it
-//! is selected by name ([`Backend`]) and says which KKT structure it reads
-//! ([`Structure`]), so that the caller assembles what it needs.
+//! Each built-in backend is one file and one line in the registry
+//! ([`backends`]); a backend of another crate joins them with [`register`]
+//! (docs/extending.md, "Your own KKT backend"). A backend is selected by name
+//! ([`Backend`]) and says which KKT structure it reads ([`Structure`]), so
+//! that the caller assembles what it needs. The runs of a sweep share one
+//! symbolic analysis per structure while a [`SharedAnalyses`] guard lives.
 //!
 //! - `dense` ([`Backend::DENSE`]): dense LU with partial pivoting, for tiny
 //!   systems.
@@ -84,14 +87,16 @@ mod solver;
 mod sparse_ldlt;
 mod sparse_lu;
 mod stored;
+mod templates;
 #[cfg(test)]
 mod testing;
 
-pub use backend::{Analyse, Backend, KktBackend, Registration, Structure, backends};
+pub use backend::{Analyse, Backend, KktBackend, Registration, Structure, backends, register};
 pub use csc::{Csc, condition_number};
 pub use norm::{Finite, MaxAbs, argmax_abs, max_abs};
 pub use schur::MAX_BLOCK as MAX_SCHUR_BLOCK;
 pub use solver::KktSolver;
+pub use templates::SharedAnalyses;
 
 /// Options of a [`KktSolver`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -138,7 +143,10 @@ impl Default for KktOptions {
 impl KktOptions {
     /// The backends [`KktSolver::new`] tries, in order, for a matrix of
     /// dimension `dim`: the chosen one alone, or for [`Backend::AUTO`] dense up
-    /// to [`dense_threshold`](Self::dense_threshold) unknowns, else with
+    /// to [`dense_threshold`](Self::dense_threshold) unknowns, else the
+    /// backends whose [`Registration::automatic`] has a rank, in ascending
+    /// rank, leaving out those that [`need n_primal`](Registration::needs_n_primal)
+    /// when it is not given. For the built-in backends: with
     /// [`n_primal`](Self::n_primal) Schur, Schur with LU, LDLᵀ, then sparse
     /// LU (both Schur backends refuse a structure whose `S` is not
     /// block-diagonal with small blocks, `schur-lu` also one whose `C` has a
@@ -163,19 +171,19 @@ impl KktOptions {
     #[must_use]
     pub fn candidates(&self, dim: usize) -> Vec<Backend> {
         if self.backend != Backend::AUTO {
-            vec![self.backend]
-        } else if dim <= self.dense_threshold {
-            vec![Backend::DENSE]
-        } else if self.n_primal.is_some() {
-            vec![
-                Backend::SCHUR,
-                Backend::SCHUR_LU,
-                Backend::SPARSE_LDLT,
-                Backend::SPARSE_LU,
-            ]
-        } else {
-            vec![Backend::SPARSE_LU]
+            return vec![self.backend];
         }
+        if dim <= self.dense_threshold {
+            return vec![Backend::DENSE];
+        }
+        let mut ranked: Vec<(u16, Backend)> = backends()
+            .iter()
+            .filter(|r| self.n_primal.is_some() || !r.needs_n_primal)
+            .filter_map(|r| r.automatic.map(|rank| (rank, r.backend)))
+            .collect();
+        // Stable: equal ranks keep the registration order.
+        ranked.sort_by_key(|&(rank, _)| rank);
+        ranked.into_iter().map(|(_, b)| b).collect()
     }
 
     /// The number of primal unknowns, required by `backend`.
@@ -225,4 +233,10 @@ pub enum KktError {
     /// An error reported by faer.
     #[error("sparse factorization failed: {0}")]
     Backend(String),
+    /// [`register`]: the name is `auto`, empty, or already a backend's.
+    #[error("a KKT backend cannot be registered as '{name}': the name is taken or reserved")]
+    NameTaken {
+        /// The name asked for.
+        name: &'static str,
+    },
 }

@@ -1,6 +1,8 @@
 //! [`KktSolver`]: any backend, with the checks every solution must pass.
 
-use crate::{Backend, Csc, KktBackend, KktError, KktOptions, MaxAbs, REFINEMENT_STEPS, max_abs};
+use crate::{
+    Backend, Csc, KktBackend, KktError, KktOptions, MaxAbs, REFINEMENT_STEPS, max_abs, templates,
+};
 
 /// Factors and solves one sparse square system many times: symbolic analysis
 /// once, numeric factorization per call to [`factor`](Self::factor), no
@@ -19,6 +21,9 @@ pub struct KktSolver {
     /// The right-hand side of a solve being checked, and `A x` (scratch).
     rhs: Vec<f64>,
     ax: Vec<f64>,
+    /// Whether the backend is a fork of an analysis made before
+    /// ([`SharedAnalyses`](crate::SharedAnalyses)).
+    shared: bool,
 }
 
 impl std::fmt::Debug for KktSolver {
@@ -59,8 +64,16 @@ impl KktSolver {
                     "no KKT backend is called '{backend}'"
                 )));
             };
+            if let Some(inner) = templates::fork(*backend, a, options) {
+                let mut solver = Self::with_backend(inner, *backend, a.n, options);
+                solver.shared = true;
+                return Ok(solver);
+            }
             match (registration.analyse)(a, options) {
-                Ok(inner) => return Ok(Self::with_backend(inner, *backend, a.n, options)),
+                Ok(inner) => {
+                    templates::keep(*backend, a, options, inner.as_ref());
+                    return Ok(Self::with_backend(inner, *backend, a.n, options));
+                }
                 // The next candidate may take what this one refuses.
                 Err(e @ KktError::Structure(_)) if k + 1 < candidates.len() => last = e,
                 Err(e) => return Err(e),
@@ -88,7 +101,16 @@ impl KktSolver {
             a_norm: 0.0,
             rhs: vec![0.0; n],
             ax: vec![0.0; n],
+            shared: false,
         }
+    }
+
+    /// Whether [`new`](Self::new) reused an analysis of the same structure
+    /// made before, while a [`SharedAnalyses`](crate::SharedAnalyses) guard
+    /// lived, instead of analysing.
+    #[must_use]
+    pub fn reused_analysis(&self) -> bool {
+        self.shared
     }
 
     /// The backend in use ([`Backend::AUTO`] resolved).

@@ -25,6 +25,8 @@
 //! constraint), and is reported as singular. This also catches singular
 //! systems with a consistent right-hand side, whose residual is small.
 
+use std::sync::Arc;
+
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::linalg::cholesky::ldlt::factor::{LdltError, LdltRegularization};
 use faer::perm::PermRef;
@@ -48,10 +50,13 @@ pub(crate) const REGISTRATION: Registration = Registration {
     structure: Structure::AUGMENTED,
     symmetric: true,
     analyse: |a, options| Ok(Box::new(LdltBackend::new(a, options)?)),
+    automatic: Some(30),
+    needs_n_primal: true,
 };
 
 /// The `ldlt` backend: [`SparseLdlt`] of the whole KKT matrix, with a copy of
 /// it for the solver's checks.
+#[derive(Clone)]
 struct LdltBackend {
     stored: Stored,
     ldlt: SparseLdlt,
@@ -95,6 +100,10 @@ impl KktBackend for LdltBackend {
     fn is_regularized(&self) -> bool {
         self.ldlt.is_regularized()
     }
+
+    fn fork(&self) -> Option<Box<dyn KktBackend>> {
+        Some(Box::new(self.clone()))
+    }
 }
 
 /// A pivot whose magnitude is at most this times the magnitude of the terms it
@@ -105,7 +114,8 @@ pub(crate) const PIVOT_TOLERANCE: f64 = 1e4 * f64::EPSILON;
 
 /// Symbolic LDLᵀ analysis and reused numeric buffers.
 pub(crate) struct SparseLdlt {
-    symbolic: SymbolicCholesky<usize>,
+    /// Shared by the copies (`Clone`): the analysis does not change.
+    symbolic: Arc<SymbolicCholesky<usize>>,
     /// Values of the factor `L` (unit diagonal replaced by `D`).
     l_values: Vec<f64>,
     /// `fwd[k]` = original unknown eliminated `k`-th.
@@ -121,6 +131,29 @@ pub(crate) struct SparseLdlt {
     /// Signed dynamic regularization: the expected pivot signs (original
     /// order: `+1` primal, `−1` multiplier) and `δ` relative to `max |a_ij|`.
     regularization: Option<(Vec<i8>, f64)>,
+}
+
+impl Clone for SparseLdlt {
+    /// The same analysis (shared) with copies of the numeric buffers and new
+    /// scratch (faer's `MemBuffer` is not `Clone`; like a `Vec`'s copy it
+    /// aborts when memory runs out).
+    fn clone(&self) -> Self {
+        let req = StackReq::any_of(&[
+            self.symbolic
+                .factorize_numeric_ldlt_scratch::<f64>(Par::Seq, Default::default()),
+            self.symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
+        ]);
+        Self {
+            symbolic: Arc::clone(&self.symbolic),
+            l_values: self.l_values.clone(),
+            fwd: self.fwd.clone(),
+            diag_pos: self.diag_pos.clone(),
+            scale: self.scale.clone(),
+            mem: MemBuffer::new(req),
+            side: self.side,
+            regularization: self.regularization.clone(),
+        }
+    }
 }
 
 impl SparseLdlt {
@@ -168,7 +201,7 @@ impl SparseLdlt {
             .collect();
         Ok(Self {
             l_values: vec![0.0; symbolic.len_val()],
-            symbolic,
+            symbolic: Arc::new(symbolic),
             fwd,
             diag_pos,
             scale: vec![0.0; n],

@@ -18,6 +18,8 @@ pub(crate) const REGISTRATION: Registration = Registration {
     structure: Structure::AUGMENTED,
     symmetric: false,
     analyse: |a, _: &KktOptions| Ok(Box::new(SparseLu::new(a)?)),
+    automatic: Some(100),
+    needs_n_primal: false,
 };
 
 pub(crate) struct SparseLu {
@@ -32,13 +34,18 @@ impl SparseLu {
         let sym = SymbolicSparseColMatRef::new_checked(a.n, a.n, &a.col_ptr, None, &a.row_idx);
         let symbolic = factorize_symbolic_lu(sym, Default::default())
             .map_err(|e| KktError::Backend(format!("{e:?}")))?;
+        Self::with_symbolic(Stored::new(a), symbolic)
+    }
+
+    /// The numeric buffers around a symbolic analysis of `stored`'s structure.
+    fn with_symbolic(stored: Stored, symbolic: SymbolicLu<usize>) -> Result<Self, KktError> {
         let req = StackReq::any_of(&[
             symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default()),
             symbolic.solve_in_place_scratch::<f64>(1, Par::Seq),
         ]);
         let mem = MemBuffer::try_new(req).map_err(|_| KktError::OutOfMemory)?;
         Ok(Self {
-            stored: Stored::new(a),
+            stored,
             symbolic,
             numeric: NumericLu::new(),
             mem,
@@ -88,5 +95,11 @@ impl KktBackend for SparseLu {
 
     fn mul(&self, x: &[f64], y: &mut [f64]) {
         self.stored.mul(x, y);
+    }
+
+    fn fork(&self) -> Option<Box<dyn KktBackend>> {
+        // faer's symbolic LU shares its analysis between clones.
+        let fork = Self::with_symbolic(self.stored.clone(), self.symbolic.clone()).ok()?;
+        Some(Box::new(fork))
     }
 }

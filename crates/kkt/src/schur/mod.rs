@@ -57,6 +57,8 @@ pub(crate) const REGISTRATION: Registration = Registration {
         let np = options.require_n_primal(Backend::SCHUR)?;
         Ok(Box::new(Schur::new(a, np)?))
     },
+    automatic: Some(10),
+    needs_n_primal: true,
 };
 
 /// The `schur-lu` backend: the same elimination for an `S` whose blocks are
@@ -72,6 +74,8 @@ pub(crate) const REGISTRATION_LU: Registration = Registration {
         let np = options.require_n_primal(Backend::SCHUR_LU)?;
         Ok(Box::new(Schur::with_symmetry(a, np, Symmetry::General)?))
     },
+    automatic: Some(20),
+    needs_n_primal: true,
 };
 
 /// Whether the Schur backend may take `S` (and so `C`) as symmetric.
@@ -111,6 +115,7 @@ struct Block {
 }
 
 /// The analysed structure and reused buffers of the Schur backend.
+#[derive(Clone)]
 pub(crate) struct Schur {
     n_primal: usize,
     blocks: Vec<Block>,
@@ -658,6 +663,10 @@ impl KktBackend for Schur {
     fn solve_with_residual(&mut self, rhs: &mut [f64]) -> Option<(f64, f64)> {
         self.checks_in_solve().then(|| self.solve_checked(rhs))
     }
+
+    fn fork(&self) -> Option<Box<dyn KktBackend>> {
+        Some(Box::new(self.clone()))
+    }
 }
 
 /// The positions `ptr[j]..ptr[j + 1]` (column `j`'s `B` entries in `b_rows`,
@@ -686,6 +695,7 @@ fn for_each_s(
 }
 
 /// `C` and how it is factored.
+#[derive(Clone)]
 enum CFactor {
     /// By its lower envelope, in the constraints' own order.
     Envelope(EnvelopeLdlt),

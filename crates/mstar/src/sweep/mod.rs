@@ -599,6 +599,8 @@ pub fn run_plan(
     progress.planned(todo.len(), skipped);
     let threads = threads(options.jobs, todo.len());
     progress.started(threads);
+    // Runs that differ only in values analyse their KKT structure once.
+    let _shared = mstar_kkt::SharedAnalyses::begin();
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
