@@ -174,7 +174,9 @@ pub fn register(registration: Registration) -> Result<Backend, KktError> {
     if taken {
         return Err(KktError::NameTaken { name });
     }
-    let mut list = REGISTERED.write().map_err(|_| KktError::NameTaken { name })?;
+    let mut list = REGISTERED
+        .write()
+        .map_err(|_| KktError::NameTaken { name })?;
     // Checked again under the write lock: two threads may register one name.
     if list.iter().any(|r| r.backend.0 == name) {
         return Err(KktError::NameTaken { name });

@@ -173,7 +173,10 @@ mod tests {
             let (_, reused_first) = solve(&first, &options);
             let (forked, reused_second) = solve(&second, &options);
             drop(guard);
-            assert!(!reused_first && reused_second, "{backend}: the second solver reuses");
+            assert!(
+                !reused_first && reused_second,
+                "{backend}: the second solver reuses"
+            );
             assert_eq!(forked, fresh, "{backend}");
             // And it is the solution: ‖A x − b‖∞ at the rounding level.
             let mut ax = vec![0.0; second.n];

@@ -37,7 +37,11 @@ impl KktBackend for Gauss {
         self.perm = (0..n).collect();
         for k in 0..n {
             let p = (k..n)
-                .max_by(|&x, &y| self.lu[x * n + k].abs().total_cmp(&self.lu[y * n + k].abs()))
+                .max_by(|&x, &y| {
+                    self.lu[x * n + k]
+                        .abs()
+                        .total_cmp(&self.lu[y * n + k].abs())
+                })
                 .unwrap_or(k);
             if self.lu[p * n + k] == 0.0 {
                 return Err(KktError::Singular { unknown: Some(k) });
@@ -168,6 +172,9 @@ fn a_registered_backend_is_found_by_name_and_by_the_automatic_choice() {
     assert!(x.iter().all(|v| v.is_finite()));
     let scale = max_abs(&reference);
     for (i, (xi, ri)) in x.iter().zip(&reference).enumerate() {
-        assert!((xi - ri).abs() <= 1e-12 * scale, "unknown {i}: {xi} against {ri}");
+        assert!(
+            (xi - ri).abs() <= 1e-12 * scale,
+            "unknown {i}: {xi} against {ri}"
+        );
     }
 }

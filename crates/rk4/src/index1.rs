@@ -15,6 +15,34 @@
 use mstar_model::System;
 use nalgebra::{DMatrix, DVector};
 
+/// Why [`Index1Rk4`] could not integrate.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum Index1Error {
+    /// A requested time is NaN, negative, or before the one asked for
+    /// previously.
+    #[error("times must be non-negative and increasing (got {got} after {after})")]
+    TimesOutOfOrder {
+        /// The time asked for.
+        got: f64,
+        /// The time reached before it.
+        after: f64,
+    },
+    /// The acceleration-level KKT matrix `[M Bᵀ; B 0]` has no inverse.
+    #[error("the acceleration-level KKT matrix is singular at t = {t}")]
+    SingularKkt {
+        /// Where.
+        t: f64,
+    },
+    /// `B Bᵀ` has no inverse in the projection: redundant constraints or a
+    /// singular position.
+    #[error("B Bᵀ is singular at t = {t}: redundant constraints or a singular position")]
+    SingularProjection {
+        /// Where.
+        t: f64,
+    },
+}
+
 /// RK4 on the index-1 form of `sys` with projection (module documentation).
 #[derive(Debug)]
 pub struct Index1Rk4<'a, S: System + ?Sized> {
@@ -41,9 +69,9 @@ impl<'a, S: System + ?Sized> Index1Rk4<'a, S> {
     /// `times` (non-negative, non-decreasing).
     ///
     /// # Errors
-    /// A message when the KKT matrix or `B Bᵀ` is singular (redundant
+    /// [`Index1Error`]: the KKT matrix or `B Bᵀ` is singular (redundant
     /// constraints, a singular position), or a time is negative or out of order.
-    pub fn solve(&self, u0: &[f64], v0: &[f64], times: &[f64]) -> Result<Vec<State>, String> {
+    pub fn solve(&self, u0: &[f64], v0: &[f64], times: &[f64]) -> Result<Vec<State>, Index1Error> {
         let (mut t, mut u, mut v) = (0.0, u0.to_vec(), v0.to_vec());
         // An inconsistent start is projected before the first step: else the
         // projection after it would move the state by O(1), differently for
@@ -52,9 +80,10 @@ impl<'a, S: System + ?Sized> Index1Rk4<'a, S> {
         let mut out = Vec::with_capacity(times.len());
         for &target in times {
             if target.is_nan() || target < t {
-                return Err(format!(
-                    "times must be non-negative and increasing (got {target} after {t})"
-                ));
+                return Err(Index1Error::TimesOutOfOrder {
+                    got: target,
+                    after: t,
+                });
             }
             while target - t > 1e-14 * target.max(1.0) {
                 let h = self.max_step.min(target - t);
@@ -72,7 +101,7 @@ impl<'a, S: System + ?Sized> Index1Rk4<'a, S> {
     }
 
     /// One classic RK4 step of `(u, u̇)' = (u̇, ü(t, u, u̇))`.
-    fn step(&self, t: f64, u: &[f64], v: &[f64], h: f64) -> Result<State, String> {
+    fn step(&self, t: f64, u: &[f64], v: &[f64], h: f64) -> Result<State, Index1Error> {
         let axpy = |x: &[f64], k: &[f64], c: f64| -> Vec<f64> {
             x.iter().zip(k).map(|(x, k)| x + c * k).collect()
         };
@@ -94,7 +123,7 @@ impl<'a, S: System + ?Sized> Index1Rk4<'a, S> {
     }
 
     /// `ü` from the acceleration-level KKT system at `(t, u, u̇)`.
-    fn acceleration(&self, t: f64, u: &[f64], v: &[f64]) -> Result<Vec<f64>, String> {
+    fn acceleration(&self, t: f64, u: &[f64], v: &[f64]) -> Result<Vec<f64>, Index1Error> {
         let n = self.sys.n_coords();
         Ok(self.kkt_solution(t, u, v)?[..n].to_vec())
     }
@@ -105,13 +134,13 @@ impl<'a, S: System + ?Sized> Index1Rk4<'a, S> {
     ///
     /// # Errors
     /// A message when the KKT matrix is singular (redundant constraints).
-    pub fn multipliers(&self, t: f64, u: &[f64], v: &[f64]) -> Result<Vec<f64>, String> {
+    pub fn multipliers(&self, t: f64, u: &[f64], v: &[f64]) -> Result<Vec<f64>, Index1Error> {
         let n = self.sys.n_coords();
         Ok(self.kkt_solution(t, u, v)?[n..].to_vec())
     }
 
     /// `[ü; λ]` from `[M Bᵀ; B 0][ü; λ] = [g; c]` at `(t, u, u̇)`.
-    fn kkt_solution(&self, t: f64, u: &[f64], v: &[f64]) -> Result<Vec<f64>, String> {
+    fn kkt_solution(&self, t: f64, u: &[f64], v: &[f64]) -> Result<Vec<f64>, Index1Error> {
         let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
         let mut kkt = DMatrix::<f64>::zeros(n + m, n + m);
         let pattern = self.sys.mass_pattern();
@@ -137,7 +166,7 @@ impl<'a, S: System + ?Sized> Index1Rk4<'a, S> {
         let x = kkt
             .full_piv_lu()
             .solve(&rhs)
-            .ok_or_else(|| format!("the acceleration-level KKT matrix is singular at t = {t}"))?;
+            .ok_or(Index1Error::SingularKkt { t })?;
         Ok(x.iter().copied().collect())
     }
 
@@ -155,7 +184,7 @@ impl<'a, S: System + ?Sized> Index1Rk4<'a, S> {
 
     /// Minimum-norm corrections onto `Φ(u, t) = 0` (Gauss-Newton) and
     /// `B u̇ + Φ_t = 0`.
-    fn project(&self, t: f64, u: &mut [f64], v: &mut [f64]) -> Result<(), String> {
+    fn project(&self, t: f64, u: &mut [f64], v: &mut [f64]) -> Result<(), Index1Error> {
         let m = self.sys.n_constraints();
         if m == 0 {
             return Ok(());
@@ -188,13 +217,11 @@ impl<'a, S: System + ?Sized> Index1Rk4<'a, S> {
 }
 
 /// `Bᵀ (B Bᵀ)⁻¹ r`: the least-norm `x` with `B x = r`.
-fn minimum_norm(b: &DMatrix<f64>, r: &[f64], t: f64) -> Result<DVector<f64>, String> {
+fn minimum_norm(b: &DMatrix<f64>, r: &[f64], t: f64) -> Result<DVector<f64>, Index1Error> {
     let y = (b * b.transpose())
         .lu()
         .solve(&DVector::from_column_slice(r))
-        .ok_or_else(|| {
-            format!("B Bᵀ is singular at t = {t}: redundant constraints or a singular position")
-        })?;
+        .ok_or(Index1Error::SingularProjection { t })?;
     Ok(b.transpose() * y)
 }
 
@@ -248,7 +275,16 @@ mod tests {
         let sys = PendulumChain::paper(1.0, 1.0, 9.81);
         let u0 = sys.position(&[1.0]);
         let reference = Index1Rk4::new(&sys);
-        assert!(reference.solve(&u0, &[0.0; 3], &[0.5, 0.2]).is_err());
-        assert!(reference.solve(&u0, &[0.0; 3], &[f64::NAN]).is_err());
+        assert_eq!(
+            reference.solve(&u0, &[0.0; 3], &[0.5, 0.2]),
+            Err(Index1Error::TimesOutOfOrder {
+                got: 0.2,
+                after: 0.5
+            })
+        );
+        assert!(matches!(
+            reference.solve(&u0, &[0.0; 3], &[f64::NAN]),
+            Err(Index1Error::TimesOutOfOrder { got, .. }) if got.is_nan()
+        ));
     }
 }

@@ -34,7 +34,7 @@ mod index1;
 /// asymmetric body and the heavy symmetric top, with their textbook sources.
 pub mod rigid;
 
-pub use index1::{Index1Rk4, State};
+pub use index1::{Index1Error, Index1Rk4, State};
 
 use mstar_model::{PendulumChain, Sample};
 use nalgebra::{DMatrix, DVector};

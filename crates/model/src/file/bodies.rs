@@ -44,7 +44,7 @@ impl<P: Copy> Bodies<P> {
     /// body, and not the same twice.
     pub(crate) fn sides(&self, f: &mut Fields<'_>) -> Result<[Side<P>; 2], FileError> {
         let names = f.required("bodies", two_names)?;
-        let e = f.entry("bodies").expect("read above");
+        let e = f.read_entry("bodies")?;
         let side = |name: &str| -> Result<Side<P>, FileError> {
             if name == GROUND {
                 return Ok(Side::Ground);
@@ -70,7 +70,7 @@ impl<P: Copy> Bodies<P> {
     /// The body named by the key `key` of `f` (not the ground).
     pub(crate) fn body_of(&self, f: &mut Fields<'_>, key: &str) -> Result<P, FileError> {
         let name = f.required(key, string)?;
-        let e = f.entry(key).expect("read above");
+        let e = f.read_entry(key)?;
         if name == GROUND {
             return Err(f.bad(e, "the ground cannot move: name a body"));
         }

@@ -66,6 +66,17 @@ impl<'a> Fields<'a> {
         Some(&self.entries[k])
     }
 
+    /// The entry `key`, already read by the caller (a required key, or an
+    /// optional one found): an error at the table, not a panic, if it was not.
+    pub(crate) fn read_entry(&mut self, key: &str) -> Result<&'a Entry, FileError> {
+        let span = self.span.clone();
+        let what = self.what.clone();
+        self.entry(key).ok_or_else(|| {
+            self.doc
+                .error(span.as_ref(), format!("{what}: the key '{key}' is missing"))
+        })
+    }
+
     /// An error about the value of `key`.
     pub(crate) fn bad(&self, entry: &Entry, why: impl std::fmt::Display) -> FileError {
         let span = entry.node.span.as_ref().or(entry.key_span.as_ref());

@@ -57,6 +57,7 @@ use node::Node;
 
 /// An error in a model file: where (when known) and what.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
 #[error("{}{}: {message}", .origin, .place.map(|(l, c)| format!(":{l}:{c}")).unwrap_or_default())]
 pub struct FileError {
     /// The file (or what stands for it).

@@ -184,7 +184,7 @@ impl<'a> Model<'a> {
             _ => {
                 let axis = f.required("axis", numbers::<2>)?;
                 if axis == [0.0, 0.0] {
-                    let e = f.entry("axis").expect("read above");
+                    let e = f.read_entry("axis")?;
                     return Err(f.bad(e, "must not be zero: it is the sliding direction"));
                 }
                 if matches!(sides[1], Side::Ground) {
@@ -209,7 +209,7 @@ impl<'a> Model<'a> {
         let body = self.bodies.body_of(&mut f, "body")?;
         let coordinate = f.required("coordinate", choice(&["x", "y", "theta"]))?;
         if coordinate == "theta" && !body.rigid {
-            let e = f.entry("coordinate").expect("read above");
+            let e = f.read_entry("coordinate")?;
             return Err(f.bad(e, "a point mass has no angle: drive x or y"));
         }
         let function = self

@@ -275,7 +275,7 @@ fn consistent(f: &mut Fields<'_>, s: &Simulation) -> Result<(), FileError> {
     ];
     for (key, given, owner, name) in belongs {
         if given && integrator != owner {
-            let e: &Entry = f.entry(key).expect("given");
+            let e: &Entry = f.read_entry(key)?;
             return Err(f.bad(
                 e,
                 format!("applies to integrator = \"{name}\", and this model uses another"),
@@ -285,13 +285,13 @@ fn consistent(f: &mut Fields<'_>, s: &Simulation) -> Result<(), FileError> {
     if let (Some(h_min), Some(h)) = (s.h_min, s.h)
         && h_min > h
     {
-        let e: &Entry = f.entry("h_min").expect("given");
+        let e: &Entry = f.read_entry("h_min")?;
         return Err(f.bad(e, format!("must not exceed h = {h}")));
     }
     if let (Some(h_max), Some(h)) = (s.h_max, s.h)
         && h_max < h
     {
-        let e: &Entry = f.entry("h_max").expect("given");
+        let e: &Entry = f.read_entry("h_max")?;
         return Err(f.bad(e, format!("must be at least h = {h}")));
     }
     if s.rtol == Some(0.0)

@@ -158,7 +158,7 @@ impl<'a> Model<'a> {
             "velocity",
             "angular_velocity",
         ])?;
-        let e = f.entry("orientation").expect("read above");
+        let e = f.read_entry("orientation")?;
         // (Scaled by the largest, so that tiny parameters do not underflow.)
         let largest = given.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
         let norm = largest
@@ -248,7 +248,7 @@ impl<'a> Model<'a> {
                 && !b.rigid
                 && (kind.uses_axes() || kind == JointType::Weld)
             {
-                let e = f.entry("type").expect("read above");
+                let e = f.read_entry("type")?;
                 return Err(f.bad(
                     e,
                     format!(
@@ -321,7 +321,7 @@ impl<'a> Model<'a> {
                 [sides[0].local_axis(g), sides[1].local_axis(g)]
             }
             (None, Some(_)) => {
-                let e = f.entry("axis").expect("read above");
+                let e = f.read_entry("axis")?;
                 return Err(f.bad(
                     e,
                     "a universal joint has two cross axes, one per body: give 'axes = [[..], [..]]'",
@@ -357,7 +357,7 @@ impl<'a> Model<'a> {
         for (k, a) in axes.iter().enumerate() {
             if a.iter().all(|x| *x == 0.0) {
                 let key = if axis.is_some() { "axis" } else { "axes" };
-                let e = f.entry(key).expect("read above");
+                let e = f.read_entry(key)?;
                 return Err(f.bad(e, format!("axis {} must not be zero", k + 1)));
             }
         }
@@ -377,7 +377,7 @@ impl<'a> Model<'a> {
         // the universal joint's: 1e-6 rad.
         let apart = (1.0 - c * c).max(0.0).sqrt().asin();
         if parallel && axis.is_none() && (apart.is_nan() || apart > 1e-6) {
-            let e = f.entry("axes").expect("read above");
+            let e = f.read_entry("axes")?;
             return Err(f.bad(
                 e,
                 format!(
@@ -391,7 +391,7 @@ impl<'a> Model<'a> {
             ));
         }
         if kind == JointType::Universal && c.abs() > 1e-6 {
-            let e = f.entry("axes").expect("read above");
+            let e = f.read_entry("axes")?;
             return Err(f.bad(
                 e,
                 format!(
@@ -406,7 +406,7 @@ impl<'a> Model<'a> {
     fn driver(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
         let (mut f, name) = self.named(node, what, "driver")?;
         let joint = f.required("joint", string)?;
-        let e = f.entry("joint").expect("read above");
+        let e = f.read_entry("joint")?;
         let Some(&kind) = self.joints.get(joint) else {
             let mut known: Vec<&str> = self.joints.keys().map(String::as_str).collect();
             known.sort_unstable();
@@ -436,7 +436,7 @@ impl<'a> Model<'a> {
             }
         };
         if !fits {
-            let e = f.entry("motion").expect("read above");
+            let e = f.read_entry("motion")?;
             return Err(f.bad(
                 e,
                 format!(
@@ -471,7 +471,7 @@ impl<'a> Model<'a> {
                 let body = self.bodies.body_of(&mut f, "body")?;
                 let torque = kind == "torque";
                 if torque && !body.rigid {
-                    let e = f.entry("body").expect("read above");
+                    let e = f.read_entry("body")?;
                     return Err(f.bad(e, "a torque needs a rigid body, not a point mass"));
                 }
                 let point = if torque {
@@ -480,7 +480,7 @@ impl<'a> Model<'a> {
                     f.optional("point", numbers::<3>)?.unwrap_or([0.0; 3])
                 };
                 if !body.rigid && point != [0.0; 3] {
-                    let e = f.entry("point").expect("read above");
+                    let e = f.read_entry("point")?;
                     return Err(f.bad(e, "a point mass has no extent: its point is [0, 0, 0]"));
                 }
                 let keys = if torque {
@@ -498,7 +498,7 @@ impl<'a> Model<'a> {
                     .optional("axes", choice(&["global", "body"]))?
                     .unwrap_or("global");
                 if axes == "body" && !body.rigid {
-                    let e = f.entry("axes").expect("read above");
+                    let e = f.read_entry("axes")?;
                     return Err(f.bad(e, "a point mass has no axes: use \"global\""));
                 }
                 let mut known = vec!["name", "type", "body", "axes"];
@@ -552,7 +552,7 @@ impl<'a> Model<'a> {
                     if let Side::Body(b) = s
                         && !b.rigid
                     {
-                        let e = f.entry("bodies").expect("read above");
+                        let e = f.read_entry("bodies")?;
                         return Err(f.bad(
                             e,
                             "a rotational spring joins rigid bodies (or the ground); point masses have no orientation",
