@@ -5,13 +5,15 @@ use std::sync::Arc;
 
 use super::SpatialBodyId;
 use super::body::Inertia;
+use super::data::{BodyData, JointData, LoadData};
 use super::joints::{
     AngleDriver, Cylindrical, Distance, Geometry, Prismatic, Revolute, SlideDriver, SpatialJoint,
     Spherical, Universal, Weld, triad, unit,
 };
 use super::loads::{PointForce, RotationalSpring, SpatialLoad, Spring, Torque};
 use super::rotation::rotates_to_body;
-use super::system::{BodyData, JointData, LoadData, SpatialSystem};
+use super::rotation::{normalized, rates_of_omega};
+use super::system::SpatialSystem;
 use crate::planar::{ModelError, TimeFunction};
 
 /// How a rigid body's rotational mass block is formed (`docs/theory.md`,
@@ -535,7 +537,7 @@ impl SpatialBuilder {
                     "orientation must be a non-zero quaternion".to_string(),
                 ));
             }
-            let data = BodyData::new(name.clone(), b, inertia, x);
+            let data = body_data(name.clone(), b, inertia, x);
             x += data.count();
             out.push(data);
         }
@@ -697,13 +699,20 @@ fn point_mass_points(
     Ok(())
 }
 
-/// Unit Euler parameters (`[1, 0, 0, 0]` for a zero vector).
-pub(crate) fn normalized(p: [f64; 4]) -> [f64; 4] {
-    let n = p.iter().map(|e| e * e).sum::<f64>().sqrt();
-    if n > 0.0 && n.is_finite() {
-        p.map(|e| e / n)
-    } else {
-        [1.0, 0.0, 0.0, 0.0]
+/// A body as assembled, its first coordinate `x`; unit Euler parameters
+/// and their rates from the given orientation and angular velocity.
+fn body_data(name: String, b: &SpatialBody, inertia: Option<Inertia>, x: usize) -> BodyData {
+    let p = normalized(b.orientation);
+    let pd = rates_of_omega(&p, b.angular_velocity);
+    let [x0, y0, z0] = b.position;
+    let [vx, vy, vz] = b.velocity;
+    BodyData {
+        name,
+        mass: b.mass,
+        inertia,
+        x,
+        u0: [x0, y0, z0, p[0], p[1], p[2], p[3]],
+        v0: [vx, vy, vz, pd[0], pd[1], pd[2], pd[3]],
     }
 }
 

@@ -3,9 +3,9 @@
 //! coordinates at 0..7, side B's at 7..14, time at 14; for loads, the rates
 //! at 14..28), and the structural patterns found by probing.
 
+use super::data::{BodyData, JointData, LoadData};
 use super::frame::{D15, D28, Frame};
 use super::real::{Dual, Jet, Real, TIME, VARS};
-use super::system::{BodyData, JointData, LoadData};
 
 /// Structural entries as pairs of local indices.
 pub(crate) type Entries = Vec<(usize, usize)>;

@@ -19,6 +19,7 @@
 mod body;
 mod builder;
 mod chain;
+mod data;
 mod evaluate;
 mod examples;
 mod frame;

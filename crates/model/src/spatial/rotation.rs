@@ -99,6 +99,16 @@ pub(crate) fn rotates_to_body(p: &[f64; 4], v: [f64; 3]) -> [f64; 3] {
     rotate(&[p[0], -p[1], -p[2], -p[3]], v)
 }
 
+/// Unit Euler parameters (`[1, 0, 0, 0]` for a zero vector).
+pub(crate) fn normalized(p: [f64; 4]) -> [f64; 4] {
+    let n = p.iter().map(|e| e * e).sum::<f64>().sqrt();
+    if n > 0.0 && n.is_finite() {
+        p.map(|e| e / n)
+    } else {
+        [1.0, 0.0, 0.0, 0.0]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

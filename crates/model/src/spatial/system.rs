@@ -1,19 +1,12 @@
 //! [`SpatialSystem`]: the assembled model and its [`System`] implementation.
 
-use std::sync::Arc;
-
-use super::SpatialBody;
-use super::body::Inertia;
-use super::builder::normalized;
+use super::data::{BodyData, JointData, LoadData};
 use super::evaluate::{
     SIDE, d15, d28, frames, global, jet, joint_patterns, load_patterns, probe_states,
 };
 use super::frame::D28;
-use super::joints::SpatialJoint;
 use super::kernel::{JointLayout, SphericalKernel};
-use super::loads::SpatialLoad;
 use super::real::{Jet, Real, TIME};
-use super::rotation::rates_of_omega;
 use super::spherical;
 use crate::planar::split_at_bases;
 use crate::{Pattern, System};
@@ -21,99 +14,6 @@ use rayon::prelude::*;
 
 /// A chunk of kernels and where its output starts.
 type Part<'a> = crate::parallel::Part<'a, SphericalKernel>;
-
-/// A body as assembled.
-#[derive(Clone, Debug)]
-pub(crate) struct BodyData {
-    pub(crate) name: String,
-    pub(crate) mass: f64,
-    /// `None` for a point mass.
-    pub(crate) inertia: Option<Inertia>,
-    /// Its first coordinate.
-    pub(crate) x: usize,
-    u0: [f64; 7],
-    v0: [f64; 7],
-}
-
-impl BodyData {
-    pub(crate) fn new(name: String, b: &SpatialBody, inertia: Option<Inertia>, x: usize) -> Self {
-        let p = normalized(b.orientation);
-        let pd = rates_of_omega(&p, b.angular_velocity);
-        let [x0, y0, z0] = b.position;
-        let [vx, vy, vz] = b.velocity;
-        Self {
-            name,
-            mass: b.mass,
-            inertia,
-            x,
-            u0: [x0, y0, z0, p[0], p[1], p[2], p[3]],
-            v0: [vx, vy, vz, pd[0], pd[1], pd[2], pd[3]],
-        }
-    }
-
-    /// Its number of coordinates: 7 for a rigid body, 3 for a point mass.
-    pub(crate) fn count(&self) -> usize {
-        if self.inertia.is_some() { 7 } else { 3 }
-    }
-
-    pub(crate) fn is_rigid(&self) -> bool {
-        self.inertia.is_some()
-    }
-}
-
-/// A joint or driver as assembled: its rows, its structural entries and where
-/// its values go.
-#[derive(Clone, Debug)]
-pub(crate) struct JointData {
-    pub(crate) name: String,
-    pub(crate) sides: [Option<usize>; 2],
-    pub(crate) element: Arc<dyn SpatialJoint>,
-    pub(crate) row0: usize,
-    /// `(row, local variable)` of its entries of `B`, in value order.
-    b_local: Vec<(usize, usize)>,
-    /// Local pairs of its Hessian entries, in value order.
-    h_local: Vec<(usize, usize)>,
-    b_off: usize,
-    h_off: usize,
-}
-
-impl JointData {
-    pub(crate) fn new(
-        name: String,
-        sides: [Option<usize>; 2],
-        element: Arc<dyn SpatialJoint>,
-    ) -> Self {
-        Self {
-            name,
-            sides,
-            element,
-            row0: 0,
-            b_local: Vec::new(),
-            h_local: Vec::new(),
-            b_off: 0,
-            h_off: 0,
-        }
-    }
-
-    pub(crate) fn rows(&self) -> usize {
-        self.element.row_names().len()
-    }
-}
-
-/// A load as assembled.
-#[derive(Clone, Debug)]
-pub(crate) struct LoadData {
-    pub(crate) name: String,
-    pub(crate) sides: [Option<usize>; 2],
-    pub(crate) element: Arc<dyn SpatialLoad>,
-}
-
-impl LoadData {
-    /// The number of coordinates of each side (0 for the ground).
-    pub(crate) fn counts(&self, bodies: &[BodyData]) -> [usize; 2] {
-        self.sides.map(|s| s.map_or(0, |i| bodies[i].count()))
-    }
-}
 
 /// A load's structural entries and value offsets.
 #[derive(Clone, Debug)]
