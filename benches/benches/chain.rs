@@ -34,7 +34,7 @@ use mstar::kkt::{Backend, KktOptions, KktSolver};
 use mstar::linearize::{Coefficients, Linearization};
 use mstar::model::spatial::{RotationalMass, SpatialSystem, spatial_bar_chain};
 use mstar::planar::{PlanarSystem, bar_chain};
-use mstar::{Config, Integrator, Newton, Sample, Scheme, System};
+use mstar::{Config, Integrator, Newton, Sample, Scheme, StateRef, System};
 
 /// A chain model and its initial state.
 trait Chain: System {
@@ -243,7 +243,7 @@ fn phases(c: &mut Criterion) {
         // chose (Schur: S_T without BᵀB, no Bᵀ block).
         let structure = integ.backend().structure().expect("a resolved backend");
         let mut lin = Linearization::with_structure(&sys, structure).expect("valid model");
-        lin.eval_residual(&sys, s.t, &s.u, &s.v, &s.a, &s.lambda);
+        lin.eval_residual(&sys, &s.view().state());
         let inputs = (&sys, &s, &coefficients, &pool);
         evaluation_phases(&mut group, n, &mut lin, inputs);
         for r in mstar::kkt::backends() {
@@ -253,8 +253,8 @@ fn phases(c: &mut Criterion) {
                 continue;
             }
             let mut l = Linearization::with_structure(&sys, r.structure).expect("valid model");
-            l.eval_residual(&sys, s.t, &s.u, &s.v, &s.a, &s.lambda);
-            l.eval_jacobians(&sys, s.t, &s.u, &s.v, &s.a, &s.lambda);
+            l.eval_residual(&sys, &s.view().state());
+            l.eval_jacobians(&sys, &s.view().state());
             l.assemble(&coefficients);
             solver_phases(&mut group, n, r.backend, &l, coefficients.scale);
         }
@@ -279,15 +279,37 @@ fn evaluation_phases(
     (sys, s, coefficients, pool): Inputs<'_>,
 ) {
     group.bench_with_input(BenchmarkId::new("residual", n), &n, |b, _| {
-        b.iter(|| lin.eval_residual(sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda));
+        b.iter(|| {
+            lin.eval_residual(
+                sys,
+                &StateRef {
+                    u: black_box(&s.u),
+                    ..s.view().state()
+                },
+            )
+        });
     });
     group.bench_with_input(BenchmarkId::new("residual-2-threads", n), &n, |b, _| {
         b.iter(|| {
-            pool.install(|| lin.eval_residual(sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda));
+            pool.install(|| {
+                lin.eval_residual(
+                    sys,
+                    &StateRef {
+                        u: black_box(&s.u),
+                        ..s.view().state()
+                    },
+                )
+            });
         });
     });
     let jacobians = |lin: &mut Linearization| {
-        lin.eval_jacobians(sys, s.t, black_box(&s.u), &s.v, &s.a, &s.lambda);
+        lin.eval_jacobians(
+            sys,
+            &StateRef {
+                u: black_box(&s.u),
+                ..s.view().state()
+            },
+        );
         lin.assemble(coefficients);
     };
     group.bench_with_input(BenchmarkId::new("jacobians+assembly", n), &n, |b, _| {

@@ -7,7 +7,7 @@ use criterion::{Criterion, criterion_group, criterion_main};
 use mstar::kkt::{KktOptions, KktSolver};
 use mstar::linearize::{Coefficients, Linearization};
 use mstar::pendulum::PendulumRun;
-use mstar::{Integrator, PendulumChain};
+use mstar::{Integrator, PendulumChain, StateRef};
 use std::hint::black_box;
 
 fn phases(c: &mut Criterion) {
@@ -28,11 +28,31 @@ fn phases(c: &mut Criterion) {
     };
     let mut group = c.benchmark_group("pendulum/phase");
     group.bench_function("residual", |b| {
-        b.iter(|| lin.eval_residual(&sys, 0.0, black_box(&u), &v, &a, &lambda));
+        b.iter(|| {
+            lin.eval_residual(
+                &sys,
+                &StateRef {
+                    t: 0.0,
+                    u: black_box(&u),
+                    v: &v,
+                    a: &a,
+                    lambda: &lambda,
+                },
+            )
+        });
     });
     group.bench_function("jacobians+assembly", |b| {
         b.iter(|| {
-            lin.eval_jacobians(&sys, 0.0, black_box(&u), &v, &a, &lambda);
+            lin.eval_jacobians(
+                &sys,
+                &StateRef {
+                    t: 0.0,
+                    u: black_box(&u),
+                    v: &v,
+                    a: &a,
+                    lambda: &lambda,
+                },
+            );
             lin.assemble(&coefficients);
         });
     });

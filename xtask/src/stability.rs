@@ -18,7 +18,7 @@ use anyhow::{Context as _, Result};
 use mstar::analysis::{fitted_order, nyquist_amplitude};
 use mstar::kkt::condition_number;
 use mstar::linearize::Linearization;
-use mstar::{Config, Link, PendulumChain, Sample};
+use mstar::{Config, Link, PendulumChain, Sample, StateRef};
 
 use crate::common::{
     Case, Initial, Table, color, draw_figures, generalized_alpha, paper_scheme, sci, trapezoidal,
@@ -460,8 +460,26 @@ fn condition_table() -> Result<Table> {
     let v = sys.velocity(&[0.7], &[2.0]);
     let (a, lambda) = ([-3.0, 2.0, -6.0], [4.0, -9.0]);
     let mut lin = Linearization::new(&sys).context("linearizing the pendulum")?;
-    lin.eval_residual(&sys, 0.0, &u, &v, &a, &lambda);
-    lin.eval_jacobians(&sys, 0.0, &u, &v, &a, &lambda);
+    lin.eval_residual(
+        &sys,
+        &StateRef {
+            t: 0.0,
+            u: &u,
+            v: &v,
+            a: &a,
+            lambda: &lambda,
+        },
+    );
+    lin.eval_jacobians(
+        &sys,
+        &StateRef {
+            t: 0.0,
+            u: &u,
+            v: &v,
+            a: &a,
+            lambda: &lambda,
+        },
+    );
     let params = generalized_alpha(0.01, 0.9)
         .scheme
         .params()

@@ -14,8 +14,8 @@
 //! let sys = PendulumChain::paper(1.0, 1.0, 10.0);
 //! let mut lin = Linearization::new(&sys).expect("valid patterns");
 //! let u = sys.position(&[0.3]);
-//! lin.eval_residual(&sys, 0.0, &u, &[0.0; 3], &[0.0; 3], &[0.0; 2]);
-//! lin.eval_jacobians(&sys, 0.0, &u, &[0.0; 3], &[0.0; 3], &[0.0; 2]);
+//! lin.eval_residual(&sys, &StateRef { t: 0.0, u: &u, v: &[0.0; 3], a: &[0.0; 3], lambda: &[0.0; 2] });
+//! lin.eval_jacobians(&sys, &StateRef { t: 0.0, u: &u, v: &[0.0; 3], a: &[0.0; 3], lambda: &[0.0; 2] });
 //! let (beta, gamma, h) = (0.25, 0.5, 0.01);
 //! lin.assemble(&Coefficients {
 //!     c_u: 1.0,

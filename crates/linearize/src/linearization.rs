@@ -1,7 +1,7 @@
 //! Residual, constraints and the KKT iteration matrix of a [`System`] on a
 //! pattern computed once (`algorithm.md` §2-4, the paper's eqs. 3-17).
 
-use mstar_model::{Pattern, System};
+use mstar_model::{Pattern, StateRef, System};
 
 use mstar_kkt::{Csc, MaxAbs, Structure, max_abs};
 
@@ -372,18 +372,9 @@ impl Linearization {
 
     /// Evaluates `M`, `B`, `g`, `Φ` and the residual `r = g − Bᵀλ − M ü` (eq. 3)
     /// at the given state.
-    #[allow(clippy::too_many_arguments)]
-    pub fn eval_residual<S: System + ?Sized>(
-        &mut self,
-        sys: &S,
-        t: f64,
-        u: &[f64],
-        v: &[f64],
-        a: &[f64],
-        lambda: &[f64],
-    ) {
+    pub fn eval_residual<S: System + ?Sized>(&mut self, sys: &S, x: &StateRef<'_>) {
         let mut r = std::mem::take(&mut self.r);
-        self.residual_into(sys, t, u, v, a, lambda, 1.0, &mut r);
+        self.residual_into(sys, x, 1.0, &mut r);
         self.r = r;
         self.phi_max = max_abs(&self.phi);
     }
@@ -398,21 +389,16 @@ impl Linearization {
     ///
     /// # Panics
     /// If `rhs` is not of length `n + m`.
-    #[allow(clippy::too_many_arguments)]
     pub fn eval_kkt_rhs<S: System + ?Sized>(
         &mut self,
         sys: &S,
-        t: f64,
-        u: &[f64],
-        v: &[f64],
-        a: &[f64],
-        lambda: &[f64],
+        x: &StateRef<'_>,
         scale: f64,
         rhs: &mut [f64],
     ) -> f64 {
         assert_eq!(rhs.len(), self.n + self.m);
         let (primal, dual) = rhs.split_at_mut(self.n);
-        self.residual_into(sys, t, u, v, a, lambda, scale, primal);
+        self.residual_into(sys, x, scale, primal);
         // −Φ and ‖Φ‖∞ in one pass.
         let mut phi_max = MaxAbs::new();
         for (x, &p) in dual.iter_mut().zip(&self.phi) {
@@ -425,33 +411,21 @@ impl Linearization {
 
     /// `M`, `B`, `g`, `Φ` at the state, then `out = scale·r` with the force
     /// scale and `‖r‖∞` (not `‖Φ‖∞`).
-    #[allow(clippy::too_many_arguments)]
     fn residual_into<S: System + ?Sized>(
         &mut self,
         sys: &S,
-        t: f64,
-        u: &[f64],
-        v: &[f64],
-        a: &[f64],
-        lambda: &[f64],
+        x: &StateRef<'_>,
         scale_out: f64,
         out: &mut [f64],
     ) {
-        self.evaluate(sys, t, u, v, a, lambda);
-        self.form_residual(a, lambda, scale_out, out);
+        self.evaluate(sys, x);
+        self.form_residual(x.a, x.lambda, scale_out, out);
     }
 
     /// `M` (once when constant), `Φ` and `B`, `g` (once when constant), and
     /// where they are stored `Bᵀλ` and `M ü`.
-    fn evaluate<S: System + ?Sized>(
-        &mut self,
-        sys: &S,
-        t: f64,
-        u: &[f64],
-        v: &[f64],
-        a: &[f64],
-        lambda: &[f64],
-    ) {
+    fn evaluate<S: System + ?Sized>(&mut self, sys: &S, x: &StateRef<'_>) {
+        let StateRef { t, u, v, a, lambda } = *x;
         if !(self.mass_ready && sys.mass_is_constant()) {
             sys.mass_into(t, u, &mut self.mass);
             self.mass_ready = true;
@@ -503,16 +477,8 @@ impl Linearization {
     /// Evaluates the parts of `K_T` and `C_T` (eqs. 6-7): the constraint Hessian
     /// contracted with `λ`, `∂g/∂u`, `∂g/∂u̇` and `∂(M ü)/∂u`. `M` and `B` come
     /// from the last [`eval_residual`](Self::eval_residual).
-    #[allow(clippy::too_many_arguments)]
-    pub fn eval_jacobians<S: System + ?Sized>(
-        &mut self,
-        sys: &S,
-        t: f64,
-        u: &[f64],
-        v: &[f64],
-        a: &[f64],
-        lambda: &[f64],
-    ) {
+    pub fn eval_jacobians<S: System + ?Sized>(&mut self, sys: &S, x: &StateRef<'_>) {
+        let StateRef { t, u, v, a, lambda } = *x;
         // (An empty pattern needs no call: the defaults of a constant M or
         // constant forces would evaluate nothing.)
         if !self.hessian.is_empty() {

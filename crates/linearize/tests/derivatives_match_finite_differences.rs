@@ -5,7 +5,7 @@
 //! states, and the assembled KKT matrix with the dense formula of eqs. (16)-(17).
 
 use mstar_linearize::{Coefficients, Linearization, check_derivatives};
-use mstar_model::{Link, PendulumChain, System};
+use mstar_model::{Link, PendulumChain, StateRef, System};
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 
@@ -114,8 +114,26 @@ fn kkt_matrix_is_eq_16_with_m_star() {
     let u = sys.position(&[th]);
     let lambda = [2.0, -3.0];
     let mut lin = Linearization::new(&sys).expect("valid");
-    lin.eval_residual(&sys, 0.0, &u, &[0.0; 3], &[0.0; 3], &lambda);
-    lin.eval_jacobians(&sys, 0.0, &u, &[0.0; 3], &[0.0; 3], &lambda);
+    lin.eval_residual(
+        &sys,
+        &StateRef {
+            t: 0.0,
+            u: &u,
+            v: &[0.0; 3],
+            a: &[0.0; 3],
+            lambda: &lambda,
+        },
+    );
+    lin.eval_jacobians(
+        &sys,
+        &StateRef {
+            t: 0.0,
+            u: &u,
+            v: &[0.0; 3],
+            a: &[0.0; 3],
+            lambda: &lambda,
+        },
+    );
     let (beta, gamma, h) = (0.25, 0.5, 0.01);
     let ca = 1.0 / (beta * h * h);
     lin.assemble(&Coefficients {

@@ -7,7 +7,7 @@
 
 use mstar_linearize::{Linearization, max_abs};
 use mstar_model::planar::{At, PlanarBuilder, PlanarSystem, RigidBody, SpringDamper, bar_chain};
-use mstar_model::{Link, PendulumChain, System};
+use mstar_model::{Link, PendulumChain, StateRef, System};
 use proptest::prelude::*;
 
 /// `g − Bᵀλ − M ü` at `t` from the dense matrices, for the state
@@ -81,7 +81,16 @@ fn check<S: System>(sys: &S, seed: &[f64], scale: f64) -> Result<(), TestCaseErr
         .enumerate()
     {
         let (u, v, a, lambda) = (&s[..n], &s[n..2 * n], &s[2 * n..3 * n], &s[3 * n..]);
-        lin.eval_residual(sys, 0.2, u, v, a, lambda);
+        lin.eval_residual(
+            sys,
+            &StateRef {
+                t: 0.2,
+                u,
+                v,
+                a,
+                lambda,
+            },
+        );
         let want = definition(sys, 0.2, s);
         for (i, (&r, &w)) in lin.r().iter().zip(&want).enumerate() {
             // Sums of a few terms of size ≤ 10·max(|λ|, |ü|) in another order.
@@ -96,7 +105,18 @@ fn check<S: System>(sys: &S, seed: &[f64], scale: f64) -> Result<(), TestCaseErr
         let norm = lin.kkt_rhs(scale, &mut rhs);
         prop_assert_eq!(norm, max_abs(&rhs));
         let mut fused_rhs = vec![f64::NAN; n + m];
-        let fused_norm = fused.eval_kkt_rhs(sys, 0.2, u, v, a, lambda, scale, &mut fused_rhs);
+        let fused_norm = fused.eval_kkt_rhs(
+            sys,
+            &StateRef {
+                t: 0.2,
+                u,
+                v,
+                a,
+                lambda,
+            },
+            scale,
+            &mut fused_rhs,
+        );
         prop_assert_eq!(&fused_rhs, &rhs, "pass {}: eval_kkt_rhs", pass);
         prop_assert_eq!(fused_norm, norm);
         prop_assert_eq!(fused.residual_norm(), lin.residual_norm());
@@ -131,13 +151,33 @@ fn a_nan_in_the_residual_is_not_lost() {
     for at in [0, m / 2, m - 1] {
         let mut lambda = vec![1.0; m];
         lambda[at] = f64::NAN;
-        lin.eval_residual(&sys, 0.0, &u, &vec![0.0; n], &vec![0.0; n], &lambda);
+        lin.eval_residual(
+            &sys,
+            &StateRef {
+                t: 0.0,
+                u: &u,
+                v: &vec![0.0; n],
+                a: &vec![0.0; n],
+                lambda: &lambda,
+            },
+        );
         assert!(lin.residual_norm().is_nan(), "NaN in λ[{at}]");
         let mut rhs = vec![0.0; n + m];
         assert!(lin.kkt_rhs(0.5, &mut rhs).is_nan(), "NaN in λ[{at}]");
         let mut fused = Linearization::new(&sys).expect("structure");
         let zeros = vec![0.0; n];
-        let norm = fused.eval_kkt_rhs(&sys, 0.0, &u, &zeros, &zeros, &lambda, 0.5, &mut rhs);
+        let norm = fused.eval_kkt_rhs(
+            &sys,
+            &StateRef {
+                t: 0.0,
+                u: &u,
+                v: &zeros,
+                a: &zeros,
+                lambda: &lambda,
+            },
+            0.5,
+            &mut rhs,
+        );
         assert!(norm.is_nan(), "eval_kkt_rhs, NaN in λ[{at}]");
     }
 }

@@ -6,8 +6,8 @@
 //! a slot).
 
 use mstar_linearize::{Coefficients, Linearization, Structure};
-use mstar_model::System;
 use mstar_model::planar::bar_chain;
+use mstar_model::{StateRef, System};
 
 #[test]
 fn the_schur_assembly_equals_the_full_one_outside_the_transpose_block() {
@@ -45,8 +45,26 @@ fn the_schur_assembly_equals_the_full_one_outside_the_transpose_block() {
         let a = vec![0.5; n];
         let lambda: Vec<f64> = (0..m).map(|i| 3.0 + (i + k) as f64).collect();
         for lin in [&mut full, &mut lean] {
-            lin.eval_residual(&sys, 0.1, &u, &v, &a, &lambda);
-            lin.eval_jacobians(&sys, 0.1, &u, &v, &a, &lambda);
+            lin.eval_residual(
+                &sys,
+                &StateRef {
+                    t: 0.1,
+                    u: &u,
+                    v: &v,
+                    a: &a,
+                    lambda: &lambda,
+                },
+            );
+            lin.eval_jacobians(
+                &sys,
+                &StateRef {
+                    t: 0.1,
+                    u: &u,
+                    v: &v,
+                    a: &a,
+                    lambda: &lambda,
+                },
+            );
             lin.assemble(&c);
         }
         let (f, l) = (full.kkt(), lean.kkt());

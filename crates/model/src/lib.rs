@@ -35,6 +35,6 @@ mod system;
 pub use fn_system::{FnSystem, NamesError};
 pub use pattern::Pattern;
 pub use pendulum::{Link, PendulumChain};
-pub use sample::{Sample, SampleRef};
+pub use sample::{Sample, SampleRef, StateRef};
 pub use subset::RowSubset;
 pub use system::{System, constraint_names, coord_names, kinetic_energy};

@@ -36,6 +36,23 @@ impl Sample {
     }
 }
 
+/// The point at which a system is evaluated: time, coordinates, velocities,
+/// accelerations and multipliers (`algorithm.md` §2: the arguments of the
+/// residual (3) and its Jacobians (6)-(7)), borrowed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StateRef<'a> {
+    /// Time, s.
+    pub t: f64,
+    /// Coordinates `u`.
+    pub u: &'a [f64],
+    /// Velocities `u̇`.
+    pub v: &'a [f64],
+    /// Accelerations `ü`.
+    pub a: &'a [f64],
+    /// Lagrange multipliers `λ`.
+    pub lambda: &'a [f64],
+}
+
 /// A [`Sample`] borrowed from where it lives (an integrator's state): what
 /// an observer sees at every step, without copying the vectors.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -62,7 +79,19 @@ pub struct SampleRef<'a> {
     pub constraint: f64,
 }
 
-impl SampleRef<'_> {
+impl<'a> SampleRef<'a> {
+    /// Its state, without the diagnostics.
+    #[must_use]
+    pub fn state(&self) -> StateRef<'a> {
+        StateRef {
+            t: self.t,
+            u: self.u,
+            v: self.v,
+            a: self.a,
+            lambda: self.lambda,
+        }
+    }
+
     /// Total energy, kinetic plus potential.
     #[must_use]
     pub fn energy(&self) -> f64 {

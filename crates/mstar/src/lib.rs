@@ -53,7 +53,9 @@ pub use mstar_newmark as newmark;
 pub use mstar_rk4 as rk4;
 
 pub use mstar_model::planar;
-pub use mstar_model::{FnSystem, Link, Pattern, PendulumChain, Sample, SampleRef, System};
+pub use mstar_model::{
+    FnSystem, Link, Pattern, PendulumChain, Sample, SampleRef, StateRef, System,
+};
 pub use mstar_newmark::{
     AlphaParams, Config, EnergyReport, ErrorControl, ErrorReport, IntegrationError, Integrator,
     Newton, Observer, Predictor, Resample, RunStats, Scheme, Start, StartReport, StepMode,

@@ -10,7 +10,7 @@ use mstar::analysis::{fitted_order, max_lambda_error, nyquist_amplitude};
 use mstar::kkt::condition_number;
 use mstar::linearize::Linearization;
 use mstar::pendulum::PendulumRun;
-use mstar::{Config, Sample, Scheme};
+use mstar::{Config, Sample, Scheme, StateRef};
 
 fn with_reference(run: &PendulumRun) -> (Vec<Sample>, Vec<Sample>) {
     run.run_with_reference()
@@ -113,8 +113,26 @@ fn condition(h: f64, scaling: bool) -> f64 {
     let v = sys.velocity(&[0.7], &[2.0]);
     let (a, lambda) = ([-3.0, 2.0, -6.0], [4.0, -9.0]);
     let mut lin = Linearization::new(&sys).expect("valid model");
-    lin.eval_residual(&sys, 0.0, &u, &v, &a, &lambda);
-    lin.eval_jacobians(&sys, 0.0, &u, &v, &a, &lambda);
+    lin.eval_residual(
+        &sys,
+        &StateRef {
+            t: 0.0,
+            u: &u,
+            v: &v,
+            a: &a,
+            lambda: &lambda,
+        },
+    );
+    lin.eval_jacobians(
+        &sys,
+        &StateRef {
+            t: 0.0,
+            u: &u,
+            v: &v,
+            a: &a,
+            lambda: &lambda,
+        },
+    );
     let params = run.config.scheme.params().expect("valid scheme");
     lin.assemble(&params.coefficients(h, scaling));
     condition_number(lin.kkt())

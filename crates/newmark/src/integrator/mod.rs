@@ -8,7 +8,7 @@ mod start;
 
 use mstar_kkt::{Backend, KktError, KktSolver};
 use mstar_linearize::Linearization;
-use mstar_model::{Sample, SampleRef, System, kinetic_energy};
+use mstar_model::{Sample, SampleRef, StateRef, System, kinetic_energy};
 
 use crate::{
     AlphaParams, Config, IntegrationError, Newton, Observer, Predictor, RunStats, Start, StepMode,
@@ -64,6 +64,17 @@ struct State {
 }
 
 impl State {
+    /// The point `(t, u, u̇, ü, λ)` at which the system is evaluated.
+    fn at(&self, t: f64) -> StateRef<'_> {
+        StateRef {
+            t,
+            u: &self.u,
+            v: &self.v,
+            a: &self.a,
+            lambda: &self.lambda,
+        }
+    }
+
     fn zeros(n: usize, m: usize) -> Self {
         Self {
             u: vec![0.0; n],
@@ -235,7 +246,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         this.start_up()?;
         // The state's own residual and constraint norms, for the t0 sample.
         let s = &this.state;
-        this.lin.eval_residual(sys, t0, &s.u, &s.v, &s.a, &s.lambda);
+        this.lin.eval_residual(sys, &s.at(t0));
         this.residual = this.lin.residual_norm();
         this.constraint = this.lin.constraint_norm();
         this.record_energy();

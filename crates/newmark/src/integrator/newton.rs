@@ -168,16 +168,9 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     /// norms and tolerances.
     fn residual(&mut self, k: &Corrector, u_max: f64) -> Result<Norms, Failure> {
         let s = &self.trial;
-        let rhs = self.lin.eval_kkt_rhs(
-            self.sys,
-            k.t1,
-            &s.u,
-            &s.v,
-            &s.a,
-            &s.lambda,
-            k.coefficients.scale,
-            &mut self.rhs,
-        );
+        let rhs = self
+            .lin
+            .eval_kkt_rhs(self.sys, &s.at(k.t1), k.coefficients.scale, &mut self.rhs);
         let residual = self.lin.residual_norm();
         let constraint = self.lin.constraint_norm();
         if !residual.is_finite() || !constraint.is_finite() {
@@ -208,8 +201,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     /// matrix (16)-(17) and factors it.
     fn refactor(&mut self, k: &Corrector, h: f64) -> Result<(), Failure> {
         let s = &self.trial;
-        self.lin
-            .eval_jacobians(self.sys, k.t1, &s.u, &s.v, &s.a, &s.lambda);
+        self.lin.eval_jacobians(self.sys, &s.at(k.t1));
         self.lin.assemble(&k.coefficients);
         self.factored_h = None;
         self.solver

@@ -4,7 +4,7 @@
 
 use mstar_kkt::{Backend, KktOptions, KktSolver, argmax_abs};
 use mstar_linearize::{Coefficients, max_abs};
-use mstar_model::System;
+use mstar_model::{StateRef, System};
 
 use super::Integrator;
 use crate::{AlphaParams, IntegrationError, Start};
@@ -30,11 +30,13 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         let (zeros_n, zeros_m) = (vec![0.0; n], vec![0.0; m]);
         self.lin.eval_residual(
             self.sys,
-            self.t,
-            &self.state.u,
-            &zeros_n,
-            &zeros_n,
-            &zeros_m,
+            &StateRef {
+                t: self.t,
+                u: &self.state.u,
+                v: &zeros_n,
+                a: &zeros_n,
+                lambda: &zeros_m,
+            },
         );
         let ctol = self.config.tol * max_abs(&self.state.u).max(1.0);
         let (k, value) = argmax_abs(self.lin.phi());
@@ -100,8 +102,16 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             vec![0.0; self.sys.n_coords()],
             vec![0.0; self.sys.n_constraints()],
         );
-        self.lin
-            .eval_residual(self.sys, t, &self.state.u, &zeros_n, &zeros_n, &zeros_m);
+        self.lin.eval_residual(
+            self.sys,
+            &StateRef {
+                t,
+                u: &self.state.u,
+                v: &zeros_n,
+                a: &zeros_n,
+                lambda: &zeros_m,
+            },
+        );
         self.start.position_violation = self.lin.constraint_norm();
         let mut iterations = 0;
         loop {
@@ -137,8 +147,16 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 *x += d;
             }
             iterations += 1;
-            self.lin
-                .eval_residual(self.sys, t, &self.state.u, &zeros_n, &zeros_n, &zeros_m);
+            self.lin.eval_residual(
+                self.sys,
+                &StateRef {
+                    t,
+                    u: &self.state.u,
+                    v: &zeros_n,
+                    a: &zeros_n,
+                    lambda: &zeros_m,
+                },
+            );
         }
     }
 
@@ -215,8 +233,16 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     ) -> Result<(), IntegrationError> {
         let n = u.len();
         let (zeros_n, zeros_m) = (vec![0.0; n], vec![0.0; lambda.len()]);
-        self.lin
-            .eval_residual(self.sys, t, u, v, &zeros_n, &zeros_m);
+        self.lin.eval_residual(
+            self.sys,
+            &StateRef {
+                t,
+                u,
+                v,
+                a: &zeros_n,
+                lambda: &zeros_m,
+            },
+        );
         self.rhs[..n].copy_from_slice(self.lin.g());
         self.sys.accel_rhs_into(t, u, v, &mut self.rhs[n..]);
         self.augment_acceleration_system();
@@ -255,8 +281,16 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     ) -> Result<Vec<f64>, IntegrationError> {
         let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
         let (zeros_n, zeros_m) = (vec![0.0; n], vec![0.0; m]);
-        self.lin
-            .eval_residual(self.sys, self.t, u, &zeros_n, &zeros_n, &zeros_m);
+        self.lin.eval_residual(
+            self.sys,
+            &StateRef {
+                t: self.t,
+                u,
+                v: &zeros_n,
+                a: &zeros_n,
+                lambda: &zeros_m,
+            },
+        );
         self.rhs.fill(0.0);
         self.lin
             .b_pattern()
@@ -310,7 +344,16 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     ) -> Result<(), IntegrationError> {
         let t = self.t;
         let (u, v) = (self.state.u.clone(), self.state.v.clone());
-        self.lin.eval_residual(self.sys, t, &u, &v, a, lambda0);
+        self.lin.eval_residual(
+            self.sys,
+            &StateRef {
+                t,
+                u: &u,
+                v: &v,
+                a,
+                lambda: lambda0,
+            },
+        );
         let m_star = self.lin.m_star().clone();
         let context = "solving M* ü₀ = g − Bᵀλ₀ (eq. 11)";
         let options = KktOptions {
