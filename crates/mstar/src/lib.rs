@@ -1,8 +1,9 @@
 //! # mstar — time integration of constrained multibody systems
 //!
 //! The facade of the mstar workspace: it re-exports the stages of the algorithm
-//! (`algorithm.md`; the paper's eqs. 1-17) and holds the `mstar` command-line
-//! program.
+//! (`algorithm.md`; the paper's eqs. 1-17) and holds what every front end
+//! shares: run settings, records, output sinks, sweeps. The `mstar`
+//! command-line program is the crate `mstar-cli` (`crates/cli`) on top of it.
 //!
 //! - [`model`]: the [`System`] trait and models ([`PendulumChain`]);
 //! - [`linearize`]: residual, `K_T`, `C_T` and the KKT matrix on a fixed pattern;

@@ -511,9 +511,9 @@ fn builtin_setting(simulation: &mut Simulation, assignment: &str) -> Result<()> 
     let (key, value) = assignment.split_once('=').unwrap_or((assignment, ""));
     if key == "simulation.error_control" {
         simulation.error_control = Some(match value {
-            "adaptive" => mstar_model::file::ErrorControlChoice::Adaptive,
-            "strict" => mstar_model::file::ErrorControlChoice::Strict,
-            "monitor" => mstar_model::file::ErrorControlChoice::Monitor,
+            "adaptive" => mstar::model::file::ErrorControlChoice::Adaptive,
+            "strict" => mstar::model::file::ErrorControlChoice::Strict,
+            "monitor" => mstar::model::file::ErrorControlChoice::Monitor,
             _ => bail!("{key}: expected monitor, strict or adaptive, got '{value}'"),
         });
         return Ok(());

@@ -66,7 +66,7 @@ fn mknod(p: &Path, major: u32, minor: u32) -> bool {
 }
 
 #[test]
-#[ignore = "needs root (mknod, mount): cargo test -p mstar --test output_faults -- --ignored"]
+#[ignore = "needs root (mknod, mount): cargo test -p mstar-cli --test output_faults -- --ignored"]
 fn devices_are_written_not_replaced() {
     let dir = scratch("faults-devices");
     let (null, full) = (dir.join("null"), dir.join("full"));
@@ -340,7 +340,7 @@ impl Drop for Tmpfs {
 }
 
 #[test]
-#[ignore = "needs root (mknod, mount): cargo test -p mstar --test output_faults -- --ignored"]
+#[ignore = "needs root (mknod, mount): cargo test -p mstar-cli --test output_faults -- --ignored"]
 fn a_full_disk_is_an_error_and_an_oversized_run_is_refused() {
     let dir = scratch("faults-tmpfs");
     let fs = Tmpfs::mount(&dir, "1m");
@@ -394,7 +394,7 @@ fn advised<'a>(message: &'a str, option: &str) -> &'a str {
 }
 
 #[test]
-#[ignore = "needs root (mknod, mount): cargo test -p mstar --test output_faults -- --ignored"]
+#[ignore = "needs root (mknod, mount): cargo test -p mstar-cli --test output_faults -- --ignored"]
 fn advice_for_a_full_disk_works_where_steps_are_halved() {
     // The advice must hold whatever the steps: the double pendulum at
     // steps of 0.028 s (a larger --h, the advice this replaced) has Newton
@@ -447,7 +447,7 @@ fn advice_for_a_full_disk_works_where_steps_are_halved() {
 }
 
 #[test]
-#[ignore = "needs root (mknod, mount): cargo test -p mstar --test output_faults -- --ignored"]
+#[ignore = "needs root (mknod, mount): cargo test -p mstar-cli --test output_faults -- --ignored"]
 fn a_disk_that_fills_at_the_last_rows_keeps_them() {
     let dir = scratch("faults-tmpfs-end");
     let fs = Tmpfs::mount(&dir, "32k");
@@ -572,7 +572,7 @@ fn the_pendulum_streams_its_samples() {
 }
 
 #[test]
-#[ignore = "needs root (mknod, mount): cargo test -p mstar --test output_faults -- --ignored"]
+#[ignore = "needs root (mknod, mount): cargo test -p mstar-cli --test output_faults -- --ignored"]
 fn a_sweep_larger_than_the_disk_is_refused_and_the_advice_fits() {
     let dir = scratch("faults-tmpfs-sweep");
     let fs = Tmpfs::mount(&dir, "300k");
