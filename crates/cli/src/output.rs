@@ -165,14 +165,14 @@ fn tell_kept(out: &Path, kept: &Kept) {
     match kept {
         Kept::File { path, rows } => note(format_args!(
             "note: {out} was not written; {} written before the run stopped {} in {}",
-            crate::samples_phrase(*rows),
+            crate::messages::samples_phrase(*rows),
             if *rows == 1 { "is" } else { "are" },
             path.display()
         )),
         Kept::Streamed { rows: 0 } => {}
         Kept::Streamed { rows } => note(format_args!(
             "note: {out} received {} before the run stopped",
-            crate::samples_phrase(*rows)
+            crate::messages::samples_phrase(*rows)
         )),
         Kept::Nothing(e) => note(format_args!(
             "note: {out} was not written, and the samples so far could not be kept: {e}"
@@ -202,10 +202,10 @@ pub fn exit_code(result: anyhow::Result<()>, files: bool, failure: u8) -> u8 {
         }
         return i.code();
     }
-    note(format_args!("error: {}", crate::report(&e)));
+    note(format_args!("error: {}", crate::messages::report(&e)));
     if let Some(hint) = e
         .downcast_ref::<IntegrationError>()
-        .and_then(|e| crate::hint(e, files))
+        .and_then(|e| crate::messages::hint(e, files))
     {
         note(format_args!("hint: {hint}"));
     }

@@ -1,4 +1,4 @@
-//! `mstar run` and `mstar check`: model files on the command line.
+//! `mstar run`: a model file (or a built-in model) on the command line.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -78,16 +78,6 @@ pub enum Builtin {
     Chain,
 }
 
-/// Arguments of `mstar check`.
-#[derive(clap::Args, Debug)]
-pub struct CheckArgs {
-    /// The model file.
-    model: PathBuf,
-    /// Override a key of the file (as for `mstar run`).
-    #[arg(long = "set", value_name = "KEY=VALUE")]
-    set: Vec<String>,
-}
-
 /// A model to run: the system, its start and its settings.
 struct Loaded {
     label: String,
@@ -159,7 +149,7 @@ fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
     if e.downcast_ref::<crate::signals::Interrupted>().is_some() {
         return ExitCode::from(crate::output::exit_code(Err(e), true, 1));
     }
-    eprintln!("error: {}", crate::report(&e));
+    eprintln!("error: {}", crate::messages::report(&e));
     if e.downcast_ref::<crate::output::Usage>().is_some() {
         return ExitCode::from(2);
     }
@@ -174,7 +164,7 @@ fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
         let hint = model
             .and_then(|m| m.system.named())
             .and_then(|sys| start_hint(sys, e));
-        if let Some(hint) = hint.or_else(|| crate::hint(e, true).map(String::from)) {
+        if let Some(hint) = hint.or_else(|| crate::messages::hint(e, true).map(String::from)) {
             eprintln!("hint: {hint}");
         }
     }
@@ -235,13 +225,13 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     };
     crate::limits::check_steps(t_end, config.h)?;
     let fields = csv::header_len(sys) + columns.as_ref().map_or(0, Columns::count);
-    crate::check_output(
+    super::check_output(
         args.out.as_deref(),
         fields,
         (t_end, config.h),
         (args.builtin.is_none().then_some(every), every_time),
     )?;
-    let stream = crate::open_output(args.out.as_deref(), sys, &extra)?;
+    let stream = super::open_output(args.out.as_deref(), sys, &extra)?;
     let columns = columns.as_ref().map(|c| c as &dyn Columns);
     let grid = crate::output::Grid::new(every_time)?;
     let mut output = RunOutput::new(stream, columns, (every, grid), t_end);
@@ -264,7 +254,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     output.recorder.finish_rows();
     let (stats, t, wall, ended) = outcome?;
     print_summary(stats, t, &output, wall);
-    let warned = crate::warn_accuracy(&stats, &config_used, sys, true);
+    let warned = super::warn_accuracy(&stats, &config_used, sys, true);
     crate::output::conclude(output.recorder.into_stream(), args.out.as_deref(), ended, t)?;
     // The samples are written; they are wrong from the drift on.
     if let (Some(mstar::run::RunError::RedundancyChanged { t, .. }), Some(out)) =
@@ -660,48 +650,4 @@ fn print_summary(st: mstar::RunStats, t: f64, out: &RunOutput<'_>, wall: f64) {
         "wall time: {wall:.3} s ({:.2} µs per step)",
         wall * 1e6 / steps
     );
-}
-
-/// `mstar check`: exit 0 when the model can run as written, 1 when it
-/// cannot (or its redundant constraints could not be computed), 2 when the file cannot be read or holds a value out of range.
-pub fn check(args: &CheckArgs) -> ExitCode {
-    let file = match MechanismFile::load_with(&args.model, &args.set) {
-        Ok(file) => file,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::from(2);
-        }
-    };
-    let config = match mstar::run::config(&file.simulation) {
-        Ok((config, _)) => config,
-        // A setting out of range, as a value the file cannot hold: 2.
-        Err(e) => {
-            eprintln!("error: {}: {e}", args.model.display());
-            return ExitCode::from(2);
-        }
-    };
-    let redundant = file.simulation.redundant.unwrap_or_default();
-    for w in &file.warnings {
-        eprintln!("warning: {w}");
-    }
-    let report = mstar::run::check(mstar::run::lookup(&file.mechanism), &config, redundant);
-    // As `run`: the process ends next.
-    std::mem::forget(file);
-    print!("{report}");
-    if report.can_run() {
-        ExitCode::SUCCESS
-    } else {
-        if let Some(why) = &report.not_computed {
-            eprintln!("error: the redundant constraints were not computed: {why}");
-        }
-        if !report.redundant.is_empty() && !report.minimum_norm {
-            let e = mstar::run::RunError::redundant(
-                report.redundant.clone(),
-                report.coordinates,
-                report.constraints,
-            );
-            eprintln!("error: {e}");
-        }
-        ExitCode::from(1)
-    }
 }
