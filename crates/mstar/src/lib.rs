@@ -16,9 +16,11 @@
 //! - [`run`]: model files' settings as an integrator configuration, and
 //!   `mstar check`'s report; [`record`]: what a run writes (its CSV rows) and
 //!   measures; [`sweep`]: many runs of a model file over parameter values,
-//!   on all cores, sharded, resumable;
-//! - [`testing`]: for model authors, the derivative checker;
-//!   [`catalogue`]: the test models with their independent references.
+//!   on all cores, sharded, resumable.
+//!
+//! A model's derivatives are checked against finite differences by
+//! [`linearize::check_derivatives`]. The test models and validation cases
+//! are in the crate `mstar-testkit` (`crates/testkit`, not published).
 //!
 //! ```
 //! use mstar::pendulum::PendulumRun;
@@ -37,15 +39,12 @@
 
 pub mod accuracy;
 pub mod analysis;
-pub mod catalogue;
 pub mod csv;
 pub mod pendulum;
 pub mod record;
 pub mod redundant;
 pub mod run;
 pub mod sweep;
-pub mod testing;
-pub mod validation;
 
 pub use mstar_kkt as kkt;
 pub use mstar_linearize as linearize;

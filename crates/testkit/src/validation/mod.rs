@@ -2,7 +2,7 @@
 //! table of `cargo xtask validate` and `docs/validation.md`, and the tests of
 //! `crates/mstar/tests/validation.rs`.
 //!
-//! Each case loads its model file, runs it through [`crate::run::simulate`]
+//! Each case loads its model file, runs it through [`mstar::run::simulate`]
 //! (what `mstar run` does) and compares with a reference that shares no code
 //! with the integration path: a closed form, a loop-closure solve, the RK4
 //! oracle on minimal coordinates (`mstar-rk4`), published values. Tolerances
@@ -22,9 +22,9 @@ mod top;
 
 use std::path::Path;
 
-use mstar_model::SampleRef;
-use mstar_model::file::{Mechanism, MechanismFile, ModelFile};
-use mstar_model::spatial::SpatialSystem;
+use mstar::model::SampleRef;
+use mstar::model::file::{Mechanism, MechanismFile, ModelFile};
+use mstar::model::spatial::SpatialSystem;
 
 /// One line of the validation table.
 #[derive(Clone, Debug, PartialEq)]
@@ -111,8 +111,8 @@ fn load_spatial(models: &Path, name: &str, set: &[String]) -> Result<SpatialSyst
 fn samples(models: &Path, name: &str, set: &[String]) -> Result<Vec<Sample>, String> {
     let model = MechanismFile::load_with(&models.join(name), set).map_err(|e| e.to_string())?;
     let mut out = Vec::new();
-    let sys = crate::run::lookup(&model.mechanism);
-    crate::run::simulate(sys, &model.simulation, &mut |s: &SampleRef<'_>| {
+    let sys = mstar::run::lookup(&model.mechanism);
+    mstar::run::simulate(sys, &model.simulation, &mut |s: &SampleRef<'_>| {
         out.push(Sample {
             t: s.t,
             u: s.u.to_vec(),

@@ -1,6 +1,6 @@
 //! Rigid-body kinematics in Euler parameters `p = (e₀, e)`, written out here
 //! from Haug, *Computer-Aided Kinematics and Dynamics of Mechanical Systems*
-//! (1989), §6.3 — independently of `mstar_model::spatial`, so that the
+//! (1989), §6.3 — independently of `mstar::model::spatial`, so that the
 //! spatial references share no code with the path they check.
 
 /// `A(p) = (2e₀² − 1) I + 2(e eᵀ + e₀ ẽ)`, body to global, for a unit `p`.

@@ -1,13 +1,13 @@
 //! Spatial mechanisms of `models/spatial/` against the index-1 reference
-//! (`mstar_rk4::Index1Rk4`: RK4 on the acceleration-level KKT system with
+//! (`mstar::rk4::Index1Rk4`: RK4 on the acceleration-level KKT system with
 //! projection, no code shared with the linearize / kkt / newmark path), a
 //! one-angle pendulum, the torque-free closed form and energy conservation.
 
 use std::path::Path;
 
-use mstar_model::System;
-use mstar_rk4::rigid::torque_free_period;
-use mstar_rk4::{AngleChain, AngleLink, Index1Rk4};
+use mstar::model::System;
+use mstar::rk4::rigid::torque_free_period;
+use mstar::rk4::{AngleChain, AngleLink, Index1Rk4};
 
 use super::kinematics::{dot, omega_body};
 

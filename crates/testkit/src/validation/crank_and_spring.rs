@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use mstar_rk4::rk4_at;
+use mstar::rk4::rk4_at;
 
 use super::order::order_row;
 use super::{Case, Level, Row, samples, worse};

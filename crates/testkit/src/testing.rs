@@ -2,7 +2,7 @@
 //! against finite differences before integrating it.
 //!
 //! ```
-//! use mstar::testing::check_derivatives;
+//! use mstar_testkit::testing::check_derivatives;
 //! use mstar::PendulumChain;
 //!
 //! let sys = PendulumChain::paper(1.0, 1.0, 9.81);
@@ -11,6 +11,6 @@
 //! assert!(e.max() < 1e-6, "{e:?}"); // NaN fails too
 //! ```
 //!
-//! [`System`]: crate::System
+//! [`System`]: mstar::System
 
-pub use mstar_linearize::{DerivativeErrors, check_derivatives};
+pub use mstar::linearize::{DerivativeErrors, check_derivatives};

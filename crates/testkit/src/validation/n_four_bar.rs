@@ -8,7 +8,7 @@
 
 use std::path::Path;
 
-use mstar_rk4::rk4_at;
+use mstar::rk4::rk4_at;
 
 use super::{Case, Level, Row, samples, worse};
 

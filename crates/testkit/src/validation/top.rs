@@ -1,11 +1,11 @@
 //! The heavy symmetric top (`models/spatial/top.toml`,
 //! `models/spatial/top-steady.toml`): its three invariants, and its
 //! precession and nutation rates against the closed forms of
-//! `mstar_rk4::rigid` (Goldstein §5.7).
+//! `mstar::rk4::rigid` (Goldstein §5.7).
 
 use std::path::Path;
 
-use mstar_rk4::rigid::top_slow_rates;
+use mstar::rk4::rigid::top_slow_rates;
 
 use super::kinematics::{apply, cross, dot, omega_body, rotation};
 use super::order::{order_at_least_row, order_row};

@@ -1,7 +1,7 @@
 //! Bars described by their proximal joint: a chain whose mass matrix depends
 //! on the configuration and is not diagonal.
 
-use mstar_model::{Pattern, System};
+use mstar::model::{Pattern, System};
 
 /// One bar of a [`JointFrameChain`].
 #[derive(Clone, Copy, Debug, PartialEq)]

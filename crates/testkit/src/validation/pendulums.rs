@@ -1,9 +1,9 @@
 //! The paper's pendulum and a double pendulum against RK4 on their
-//! joint-angle equations (`mstar_rk4::AngleChain`, minimal coordinates).
+//! joint-angle equations (`mstar::rk4::AngleChain`, minimal coordinates).
 
 use std::path::Path;
 
-use mstar_rk4::{AngleChain, AngleLink};
+use mstar::rk4::{AngleChain, AngleLink};
 
 use super::order::order_row;
 use super::{Case, Level, Row, samples, worse};

@@ -18,9 +18,9 @@ mod joint_frame;
 
 pub use joint_frame::{JointFrameBar, JointFrameChain};
 
-use mstar_model::planar::{Bar, bar_chain_of, point_mass_chain};
-use mstar_model::{FnSystem, Link, PendulumChain, System};
-use mstar_rk4::{AngleChain, AngleLink, ChainOracle};
+use mstar::model::planar::{Bar, bar_chain_of, point_mass_chain};
+use mstar::model::{FnSystem, Link, PendulumChain, System};
+use mstar::rk4::{AngleChain, AngleLink, ChainOracle};
 
 /// Gravity of every case, m/s².
 pub const G0: f64 = 9.81;
