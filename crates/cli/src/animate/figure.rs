@@ -5,7 +5,7 @@
 
 use mstar::planar::{Attachment, Sketch};
 
-use super::scene::{Point, Shape, hull, whole_body};
+use super::geometry::{Point, Shape, hull, whole_body};
 
 /// What the scene needs of a model: its bodies and elements, and where each
 /// of them is in the picture's plane (world metres, y up) at a state `u`.

@@ -6,8 +6,9 @@
 
 use std::fmt::Write as _;
 
+use super::geometry::Shape;
 use super::results::Results;
-use super::scene::{INK, Item, Scene, Shape, View, body_colour};
+use super::scene::{INK, Item, Scene, View, body_colour};
 
 /// The most frames a page carries (longer runs are resampled evenly).
 pub const MAX_FRAMES: usize = 2000;

@@ -7,6 +7,7 @@
 //! picture by `--view` ([`spatial`]).
 
 pub mod figure;
+pub mod geometry;
 pub mod html;
 pub mod picture;
 pub mod results;

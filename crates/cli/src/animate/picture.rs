@@ -10,7 +10,8 @@ use plotters::prelude::*;
 use plotters::style::{FontStyle, RGBAColor};
 use plotters_backend::DrawingErrorKind;
 
-use super::scene::{Colour, INK, Item, Scene, Shape, View, body_colour};
+use super::geometry::Shape;
+use super::scene::{Colour, INK, Item, Scene, View, body_colour};
 
 /// DejaVu Sans, built into the program: plotters draws text only with a
 /// registered font, and the program must not depend on the system's fonts

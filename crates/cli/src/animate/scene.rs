@@ -6,9 +6,7 @@
 use mstar::planar::{Attachment, Sketch};
 
 use super::figure::Figure;
-
-/// A point `[x, y]`: world metres, or pixels (x right, y down).
-pub type Point = [f64; 2];
+use super::geometry::{Point, Shape, whole_body};
 
 /// An RGB colour.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -49,41 +47,6 @@ const PALETTE: [Colour; 10] = [
 #[must_use]
 pub fn body_colour(body: usize) -> Colour {
     PALETTE[body % PALETTE.len()]
-}
-
-/// A shape in pixels.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Shape {
-    /// An open polyline.
-    Line(Vec<Point>),
-    /// A closed polygon.
-    Polygon(Vec<Point>),
-    /// A circle: centre and radius, px.
-    Circle(Point, f64),
-    /// An axis-aligned square: centre and half side, px.
-    Square(Point, f64),
-}
-
-impl Shape {
-    /// The same shape with every point mapped by `f` (world to pixels).
-    #[must_use]
-    pub fn map(self, f: impl Fn(Point) -> Point) -> Self {
-        match self {
-            Self::Line(p) => Self::Line(p.into_iter().map(f).collect()),
-            Self::Polygon(p) => Self::Polygon(p.into_iter().map(f).collect()),
-            Self::Circle(c, r) => Self::Circle(f(c), r),
-            Self::Square(c, h) => Self::Square(f(c), h),
-        }
-    }
-
-    /// Its points (a circle's or square's centre).
-    #[must_use]
-    pub fn points(&self) -> &[Point] {
-        match self {
-            Self::Line(p) | Self::Polygon(p) => p,
-            Self::Circle(c, _) | Self::Square(c, _) => std::slice::from_ref(c),
-        }
-    }
 }
 
 /// How a shape is drawn.
@@ -265,34 +228,6 @@ pub fn spiral(c: Point, r0: f64, r1: f64, start: f64, span: f64, n: usize) -> Ve
         .collect()
 }
 
-/// The convex hull of `points`, counter-clockwise (Andrew's monotone chain);
-/// collinear or repeated points give the two ends, a single point itself.
-#[must_use]
-pub fn hull(points: &[Point]) -> Vec<Point> {
-    let mut p = points.to_vec();
-    p.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
-    p.dedup();
-    if p.len() < 3 {
-        return p;
-    }
-    let cross = |o: Point, a: Point, b: Point| {
-        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
-    };
-    let mut out: Vec<Point> = Vec::with_capacity(2 * p.len());
-    for pass in [p.clone(), p.iter().rev().copied().collect()] {
-        let start = out.len();
-        for q in pass {
-            while out.len() >= start + 2 && cross(out[out.len() - 2], out[out.len() - 1], q) <= 0.0
-            {
-                out.pop();
-            }
-            out.push(q);
-        }
-        out.pop();
-    }
-    out
-}
-
 /// Where a prismatic joint's guide lies: its direction in the frame of its
 /// first attachment's body (or the world), and how far point b travels along
 /// it from point a over the run, m.
@@ -305,12 +240,6 @@ struct Guide {
 /// The elements whose second end is a placeholder, not a ground point.
 fn one_body(kind: &str) -> bool {
     matches!(kind, "driver" | "force" | "torque")
-}
-
-/// The elements that attach at a body as a whole (its centre of mass), not
-/// at a point of its outline.
-pub fn whole_body(kind: &str) -> bool {
-    matches!(kind, "driver" | "torque" | "rotational-spring-damper")
 }
 
 /// A model's drawing: what stays the same in every frame (its [`Figure`],
@@ -580,6 +509,7 @@ fn ground_symbol(g: Point, k: f64, out: &mut Vec<Item>) {
 mod tests {
     use super::*;
     use crate::animate::figure::PlanarFigure;
+    use crate::animate::geometry::hull;
     use mstar::planar::{At, PlanarBuilder, PointMass, RigidBody, SpringDamper};
 
     /// A plate hinged to the ground with a third point, a bob on a rod from

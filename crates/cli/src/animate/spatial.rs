@@ -6,7 +6,7 @@ use mstar::model::spatial::{SpatialAttachment, SpatialSketch};
 use mstar::planar::{Attachment, Sketch, SketchBody, SketchElement};
 
 use super::figure::Figure;
-use super::scene::{Point, Shape, whole_body};
+use super::geometry::{Point, Shape, whole_body};
 
 /// How far the oblique view draws the global y axis, per metre.
 pub const OBLIQUE_DEPTH: f64 = 0.5;
