@@ -1,9 +1,10 @@
 //! The `mstar` command-line program.
 
-/// Report lines for the whole program (see `output::say`): a closed pipe
-/// (`mstar chain | head -1`) loses them quietly instead of panicking as the
-/// standard `println!` does. Defined before the modules to cover them.
-macro_rules! println {
+/// A report line (`output::say`): on standard output, or on standard error
+/// when standard output carries the CSV; a closed pipe (`mstar chain | head
+/// -1`) loses it quietly instead of panicking as `println!` does. Defined
+/// before the modules to cover them.
+macro_rules! say {
     () => {
         $crate::output::say(format_args!(""))
     };
@@ -12,8 +13,9 @@ macro_rules! println {
     };
 }
 
-/// `eprintln!` that never panics (see `output::note`).
-macro_rules! eprintln {
+/// A line on standard error that never panics (`output::note`), where
+/// `eprintln!` would.
+macro_rules! note {
     ($($arg:tt)*) => {
         $crate::output::note(format_args!($($arg)*))
     };
@@ -87,7 +89,7 @@ fn main() -> ExitCode {
     match thread_pool() {
         Ok(pool) => pool.install(|| dispatch(cli)),
         Err(e) => {
-            eprintln!("error: could not start the thread pool: {e}");
+            note!("error: could not start the thread pool: {e}");
             ExitCode::FAILURE
         }
     }

@@ -27,7 +27,7 @@ pub fn is_stdout(out: Option<&Path>) -> bool {
     out.is_some_and(|p| p.as_os_str() == "-" || p == Path::new("/dev/stdout"))
 }
 
-/// A report line (`println!` in this program): on standard output, or on
+/// A report line (`say!` in this program): on standard output, or on
 /// standard error when standard output carries the CSV. A closed pipe
 /// (`mstar chain | head -1`) or a full disk loses the report, never the run,
 /// and is not a panic.
@@ -38,7 +38,7 @@ pub fn say(args: std::fmt::Arguments<'_>) {
     let _ = writeln!(std::io::stdout().lock(), "{args}");
 }
 
-/// A line on standard error (`eprintln!` in this program), never a panic.
+/// A line on standard error (`note!` in this program), never a panic.
 pub fn note(args: std::fmt::Arguments<'_>) {
     let _ = writeln!(std::io::stderr().lock(), "{args}");
 }

@@ -116,12 +116,12 @@ impl Summary {
             return;
         };
         let l = |i: usize| lambda.get(i).copied().unwrap_or(f64::NAN);
-        println!(
+        say!(
             "t reached: {t} s; θ = {theta:.9} rad, θ̇ = {theta_dot:.9} rad/s, λ = [{:.6}, {:.6}]",
             l(0),
             l(1)
         );
-        println!(
+        say!(
             "energy: E₀ = {:.6} J, max |E − E₀| = {:.3e} J; max ‖Φ‖∞ = {:.3e} m",
             self.e0,
             self.drift.value(),
@@ -133,7 +133,7 @@ impl Summary {
             && late > 10.0 * early
             && late > 1e-3 * self.scale.value()
         {
-            println!(
+            say!(
                 "warning: the period-2h oscillation of λ grew from {early:.3e} in the first second to {late:.3e} in the last: \
                  the multipliers are not trustworthy (an undamped scheme on an index-3 system, or a step \
                  too large for it: see the accuracy warning, if any); use generalized-α with ρ∞ < 1"

@@ -119,20 +119,20 @@ fn positive(text: &str) -> Result<f64, String> {
 /// file cannot be read (as `mstar check`).
 pub fn animate(args: &AnimateArgs) -> ExitCode {
     if let Err(e) = check_outputs(args) {
-        eprintln!("error: {e}");
+        note!("error: {e}");
         return ExitCode::from(2);
     }
     let file = match MechanismFile::load_with(&args.model, &args.set) {
         Ok(file) => file,
         Err(e) => {
-            eprintln!("error: {e}");
+            note!("error: {e}");
             return ExitCode::from(2);
         }
     };
     let figure = match figure(args, &file.mechanism) {
         Ok(figure) => figure,
         Err(e) => {
-            eprintln!("error: {e}");
+            note!("error: {e}");
             return ExitCode::from(2);
         }
     };
@@ -143,7 +143,7 @@ pub fn animate(args: &AnimateArgs) -> ExitCode {
             ExitCode::from(crate::output::exit_code(Err(e), false, 1))
         }
         Err(e) => {
-            eprintln!("error: {e:#}");
+            note!("error: {e:#}");
             ExitCode::from(1)
         }
     }
@@ -223,7 +223,7 @@ fn render(args: &AnimateArgs, figure: Box<dyn Figure>, n_coords: usize) -> Resul
             );
         }
         picture::write_png(path, &canvas, t, &run.at(t))?;
-        println!(
+        say!(
             "wrote {} (t = {t:.3} s, {}×{})",
             path.display(),
             view.width,
@@ -256,7 +256,7 @@ fn write_html(path: &Path, args: &AnimateArgs, canvas: &Canvas<'_>, run: &Result
     );
     let page = html::page(canvas.scene, &canvas.view, &frames, &title);
     mstar::csv::write_atomically(path, page.as_bytes())?;
-    println!(
+    say!(
         "wrote {} ({} frames, {} kB)",
         path.display(),
         frames.times.len(),
@@ -269,7 +269,7 @@ fn write_gif(path: &Path, args: &AnimateArgs, canvas: &Canvas<'_>, run: &Results
     let (t0, t1) = run.span();
     let plan = GifPlan::new(t1 - t0, args);
     if let Some(note) = &plan.note {
-        eprintln!("note: {note}");
+        note!("note: {note}");
     }
     let frames: Vec<(f64, Vec<f64>)> = (0..plan.count)
         .map(|k| {
@@ -287,7 +287,7 @@ fn write_gif(path: &Path, args: &AnimateArgs, canvas: &Canvas<'_>, run: &Results
     let written = picture::write_gif(path, canvas, &frames, plan.delay_cs, &progress);
     progress.finish_and_clear();
     written?;
-    println!(
+    say!(
         "wrote {} ({} frames, {}×{})",
         path.display(),
         frames.len(),

@@ -163,7 +163,7 @@ fn run_chain<S: ChainModel>(
         (None, args.output_every),
     )?;
     let mut stream = open_output(out, sys, &[])?;
-    println!(
+    say!(
         "{n}-link chain of {} ({} coordinates, {} constraints); h = {} s, t_end = {} s",
         sys.describe(),
         sys.n_coords(),
@@ -174,7 +174,7 @@ fn run_chain<S: ChainModel>(
     let (u0, v0) = sys.start();
     let mut integ = mstar::Integrator::new(sys, config.clone(), 0.0, &u0, &v0)?;
     let setup = clock.elapsed();
-    println!(
+    say!(
         "KKT solver: {}; Newton: {}",
         integ.backend(),
         integ.newton()
@@ -211,13 +211,13 @@ fn chain_summary<S: ChainModel>(
 ) -> Result<()> {
     let st = integ.stats();
     let steps = st.steps.max(1) as f64;
-    println!(
+    say!(
         "wall time: {wall:.3} s (+ {:.3} s setup); steps: {} accepted, {} rejected",
         setup.as_secs_f64(),
         st.steps,
         st.rejected
     );
-    println!(
+    say!(
         "Newton iterations: {} ({:.2} per step, {} max); factorizations: {} ({:.3} per step)",
         st.iterations,
         st.iterations as f64 / steps,
@@ -225,7 +225,7 @@ fn chain_summary<S: ChainModel>(
         st.factorizations,
         st.factorizations as f64 / steps
     );
-    println!(
+    say!(
         "time per step: {:.2} µs; per body per step: {:.3} µs",
         wall * 1e6 / steps,
         wall * 1e6 / steps / n as f64
@@ -237,7 +237,7 @@ fn chain_summary<S: ChainModel>(
         .zip(&tip)
         .map(|(c, v)| format!("{c} = {v:.9} m"))
         .collect();
-    println!(
+    say!(
         "tip ({name}) at t = {}: {}; max ‖Φ‖∞ = {:.3e} m",
         Short(s.t),
         at.join(", "),
@@ -270,7 +270,7 @@ impl Progress {
         self.steps += 1;
         if self.last.elapsed().as_secs_f64() > 2.0 {
             self.last = Instant::now();
-            eprintln!(
+            note!(
                 "  t = {:.4} s of {} ({:.0} %), {} steps, {:.1} s elapsed",
                 t,
                 Short(self.t_end),

@@ -21,7 +21,7 @@ pub fn check(args: &CheckArgs) -> ExitCode {
     let file = match MechanismFile::load_with(&args.model, &args.set) {
         Ok(file) => file,
         Err(e) => {
-            eprintln!("error: {e}");
+            note!("error: {e}");
             return ExitCode::from(2);
         }
     };
@@ -29,13 +29,13 @@ pub fn check(args: &CheckArgs) -> ExitCode {
         Ok((config, _)) => config,
         // A setting out of range, as a value the file cannot hold: 2.
         Err(e) => {
-            eprintln!("error: {}: {e}", args.model.display());
+            note!("error: {}: {e}", args.model.display());
             return ExitCode::from(2);
         }
     };
     let redundant = file.simulation.redundant.unwrap_or_default();
     for w in &file.warnings {
-        eprintln!("warning: {w}");
+        note!("warning: {w}");
     }
     let report = mstar::run::check(mstar::run::lookup(&file.mechanism), &config, redundant);
     // As `run`: the process ends next.
@@ -45,7 +45,7 @@ pub fn check(args: &CheckArgs) -> ExitCode {
         ExitCode::SUCCESS
     } else {
         if let Some(why) = &report.not_computed {
-            eprintln!("error: the redundant constraints were not computed: {why}");
+            note!("error: the redundant constraints were not computed: {why}");
         }
         if !report.redundant.is_empty() && !report.minimum_norm {
             let e = mstar::run::RunError::redundant(
@@ -53,7 +53,7 @@ pub fn check(args: &CheckArgs) -> ExitCode {
                 report.coordinates,
                 report.constraints,
             );
-            eprintln!("error: {e}");
+            note!("error: {e}");
         }
         ExitCode::from(1)
     }

@@ -68,7 +68,7 @@ pub fn open_output<S: System + ?Sized>(
     };
     let stream = csv::CsvStream::create_with(path, sys, extra)?;
     for leftover in stream.removed_leftovers() {
-        eprintln!(
+        note!(
             "note: removed {}, left by an earlier run that was killed",
             leftover.display()
         );
@@ -86,7 +86,7 @@ pub fn warn_accuracy<S: System + ?Sized>(
 ) -> bool {
     let warning = mstar::accuracy::warning(stats, config, &|i| sys.coord_name(i), files);
     if let Some(w) = &warning {
-        eprintln!("{w}");
+        note!("{w}");
     }
     warning.is_some()
 }

@@ -202,7 +202,7 @@ pub fn pendulum(args: &PendulumArgs) -> Result<()> {
         return pendulum_reference(args, &run);
     }
     let mut stream = open_output(out, &sys, &[])?;
-    println!("{}", describe(&run));
+    say!("{}", describe(&run));
     let u0 = sys.position(&[run.theta0]);
     let v0 = sys.velocity(&[run.theta0], &[run.omega0]);
     let clock = Instant::now();
@@ -224,7 +224,7 @@ pub fn pendulum(args: &PendulumArgs) -> Result<()> {
     summary.print();
     if ended.is_ok() {
         let stats = integ.stats();
-        println!(
+        say!(
             "steps: {} accepted, {} rejected; Newton iterations: {} total, {:.2} per step, {} max; factorizations: {}",
             stats.steps,
             stats.rejected,
@@ -233,7 +233,7 @@ pub fn pendulum(args: &PendulumArgs) -> Result<()> {
             stats.max_iterations,
             stats.factorizations
         );
-        println!(
+        say!(
             "wall time: {:.3} s ({:.2} µs per step)",
             wall.as_secs_f64(),
             wall.as_secs_f64() * 1e6 / stats.steps.max(1) as f64
@@ -252,10 +252,10 @@ fn pendulum_reference(args: &PendulumArgs, run: &PendulumRun) -> Result<()> {
     let sys = run.system();
     let samples = run.reference_on_grid();
     let mut stream = open_output(args.out.as_deref(), &sys, &[])?;
-    println!("RK4 reference (minimal coordinate θ): {}", describe(run));
-    println!("samples: {}", samples.len());
+    say!("RK4 reference (minimal coordinate θ): {}", describe(run));
+    say!("samples: {}", samples.len());
     if let Some(last) = samples.last() {
-        println!("θ(t_end) = {:.9} rad at t = {}", last.u[2], Short(last.t));
+        say!("θ(t_end) = {:.9} rad at t = {}", last.u[2], Short(last.t));
     }
     let mut ended = Ok(());
     if let Some(stream) = stream.as_mut() {

@@ -149,7 +149,7 @@ fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
     if e.downcast_ref::<crate::signals::Interrupted>().is_some() {
         return ExitCode::from(crate::output::exit_code(Err(e), true, 1));
     }
-    eprintln!("error: {}", crate::messages::report(&e));
+    note!("error: {}", crate::messages::report(&e));
     if e.downcast_ref::<crate::output::Usage>().is_some() {
         return ExitCode::from(2);
     }
@@ -165,7 +165,7 @@ fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
             .and_then(|m| m.system.named())
             .and_then(|sys| start_hint(sys, e));
         if let Some(hint) = hint.or_else(|| crate::messages::hint(e, true).map(String::from)) {
-            eprintln!("hint: {hint}");
+            note!("hint: {hint}");
         }
     }
     ExitCode::FAILURE
@@ -205,7 +205,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         mstar::run::config(&model.simulation).map_err(mstar::run::RunError::Settings)?;
     check_tolerances(&config.error, &model.u0)?;
     let sys = model.system.system();
-    println!(
+    say!(
         "{}: {} coordinates, {} constraints; h = {} s, t_end = {} s",
         model.label,
         sys.n_coords(),
@@ -260,7 +260,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     if let (Some(mstar::run::RunError::RedundancyChanged { t, .. }), Some(out)) =
         (&drift, &args.out)
     {
-        eprintln!(
+        note!(
             "note: {} holds the whole run, and from t = {} s on it is not the mechanism's motion",
             out.display(),
             Short(*t)
@@ -278,7 +278,7 @@ fn warn_far_start(sys: &dyn ModelLookup) {
     if let Some((owner, row, value)) = mstar::run::initial_violation(sys)
         && value > FAR
     {
-        eprintln!(
+        note!(
             "note: the initial pose violates '{owner}' by {value:.3e} (row {row}); the start moves the coordinates onto the constraints (mstar check shows what it moves)"
         );
     }
@@ -312,7 +312,7 @@ fn warn_projection<S: System + ?Sized>(
             .collect();
         let (i, by) = mstar::kkt::argmax_abs(&of_given);
         if by.abs() > 1e-9 * scale {
-            eprintln!(
+            note!(
                 "warning: the start changed the given {level} to satisfy the joints: '{}' from {} \
                  to {} (the largest change), the smallest change in the coordinates' Euclidean \
                  norm (every coordinate weighted alike); give {level} that satisfy the joints to \
@@ -339,7 +339,7 @@ fn independent_rows(model: &Loaded) -> Result<Option<mstar::redundant::Rows>> {
     let Some(rows) = mstar::run::solve_rows(sys, &model.u0, choice)? else {
         return Ok(None);
     };
-    println!(
+    say!(
         "redundant constraints: {} (left out of the solve: minimum-norm multipliers)",
         mstar::run::owners(sys, &rows.dependent).join(", ")
     );
@@ -360,7 +360,7 @@ fn integrate<S: System + ?Sized>(
     let mut integ = Integrator::new(sys, config, 0.0, u0, v0)?;
     check_start(integ.view().u)?;
     warn_projection(sys, integ.start_report(), u0, v0);
-    println!(
+    say!(
         "KKT solver: {}; Newton: {}",
         integ.backend(),
         integ.newton()
@@ -403,7 +403,7 @@ fn load(args: &RunArgs) -> Result<Loaded> {
     let path = args.model.as_deref().context("a model file or --builtin")?;
     let file = MechanismFile::load_with(path, &set)?;
     for w in &file.warnings {
-        eprintln!("warning: {w}");
+        note!("warning: {w}");
     }
     let sys = mstar::run::lookup(&file.mechanism);
     Ok(Loaded {
@@ -626,7 +626,7 @@ impl Observer for RunOutput<'_> {
 
 fn print_summary(st: mstar::RunStats, t: f64, out: &RunOutput<'_>, wall: f64) {
     let steps = st.steps.max(1) as f64;
-    println!("t reached: {} s", Short(t));
+    say!("t reached: {} s", Short(t));
     // Iterations count every attempt, the maximum accepted steps only.
     let per_step = if st.steps == 0 {
         "no step accepted".to_string()
@@ -637,16 +637,19 @@ fn print_summary(st: mstar::RunStats, t: f64, out: &RunOutput<'_>, wall: f64) {
             st.max_iterations
         )
     };
-    println!(
+    say!(
         "steps: {} accepted, {} rejected; Newton iterations: {} ({per_step}); factorizations: {}",
-        st.steps, st.rejected, st.iterations, st.factorizations
+        st.steps,
+        st.rejected,
+        st.iterations,
+        st.factorizations
     );
-    println!(
+    say!(
         "max ‖Φ‖∞ = {:.3e}; energy drift max |E − E₀| = {:.3e} J",
         out.recorder.max_constraint(),
         out.recorder.energy_drift()
     );
-    println!(
+    say!(
         "wall time: {wall:.3} s ({:.2} µs per step)",
         wall * 1e6 / steps
     );

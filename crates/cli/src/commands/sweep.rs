@@ -66,7 +66,7 @@ pub fn sweep(args: &SweepArgs) -> ExitCode {
         }
         Ok(Ended::Signal(signal)) => ExitCode::from(u8::try_from(128 + signal).unwrap_or(1)),
         Err(e) => {
-            eprintln!("error: {e}");
+            note!("error: {e}");
             ExitCode::from(if e.is_usage() { 2 } else { 1 })
         }
     }
@@ -126,7 +126,7 @@ fn run(args: &SweepArgs) -> Result<Ended, SweepError> {
     let report = mstar::sweep::run_plan(&plan, &options, &progress)?;
     progress.bar.finish_and_clear();
     let (failed, beyond) = (report.failed.len(), report.beyond.len());
-    println!(
+    say!(
         "{} runs of {} in this shard: {} run now, {} complete before; {} failed, {} beyond the error tolerance",
         report.ran + report.skipped + report.stopped,
         plan.len(),
@@ -135,9 +135,9 @@ fn run(args: &SweepArgs) -> Result<Ended, SweepError> {
         failed,
         beyond
     );
-    println!("wrote {}", report.summary.display());
+    say!("wrote {}", report.summary.display());
     if let Some(signal) = crate::signals::received() {
-        eprintln!(
+        note!(
             "interrupted by {}: {} runs not run; the summary holds the runs complete so far; rerun the same command to run the others",
             signal_name(signal),
             report.stopped
@@ -159,7 +159,7 @@ fn signal_name(signal: i32) -> String {
 /// `--merge DIR`.
 fn merge(dir: &std::path::Path) -> Result<Ended, SweepError> {
     let merged = mstar::sweep::merge(dir)?;
-    println!(
+    say!(
         "wrote {} ({} runs, {} failed, {} beyond the error tolerance)",
         merged.summary.display(),
         merged.runs,
@@ -213,7 +213,7 @@ impl Bar {
 impl Progress for Bar {
     fn planned(&self, to_run: usize, skipped: usize) {
         if skipped > 0 {
-            eprintln!("{skipped} runs complete from an earlier sweep: skipped");
+            note!("{skipped} runs complete from an earlier sweep: skipped");
         }
         self.total.store(to_run, Ordering::Relaxed);
         self.bar.set_length(to_run as u64);
@@ -221,7 +221,7 @@ impl Progress for Bar {
 
     fn started(&self, threads: usize) {
         if let Some(jobs) = self.jobs.filter(|&j| j > threads) {
-            eprintln!(
+            note!(
                 "note: --jobs {jobs} capped to {threads} (at most one run at once per run to run and per core)"
             );
         }
@@ -243,12 +243,13 @@ impl Progress for Bar {
             let total = self.total.load(Ordering::Relaxed);
             let elapsed = self.start.elapsed().as_secs_f64();
             let left = elapsed / done as f64 * total.saturating_sub(done) as f64;
-            eprintln!(
+            note!(
                 "run {} {status} ({:.2} s); {done}/{total} done, about {left:.0} s left",
-                o.index, o.wall
+                o.index,
+                o.wall
             );
         } else if o.error.is_some() || o.beyond.is_some() {
-            self.bar.suspend(|| eprintln!("run {} {status}", o.index));
+            self.bar.suspend(|| note!("run {} {status}", o.index));
         }
     }
 }
