@@ -27,7 +27,7 @@ def _cli() -> Path:
     built = [ROOT / "target" / p / "mstar" for p in ("release", "debug")]
     built = [p for p in built if p.exists()]
     if not built:
-        pytest.fail("no mstar program: run `cargo build -p mstar` or set MSTAR_CLI")
+        pytest.fail("no mstar program: run `cargo build -p mstar-cli` or set MSTAR_CLI")
     return max(built, key=lambda p: p.stat().st_mtime)
 
 

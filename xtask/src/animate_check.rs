@@ -152,11 +152,11 @@ fn copy(from: &Path, to: &Path) -> Result<()> {
 fn build_mstar() -> Result<PathBuf> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let status = Command::new(cargo)
-        .args(["build", "--quiet", "-p", "mstar", "--bin", "mstar"])
+        .args(["build", "--quiet", "-p", "mstar-cli", "--bin", "mstar"])
         .status()
         .context("could not run cargo")?;
     if !status.success() {
-        bail!("cargo build -p mstar failed");
+        bail!("cargo build -p mstar-cli failed");
     }
     let target =
         std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| PathBuf::from("target"), PathBuf::from);

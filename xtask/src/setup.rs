@@ -170,7 +170,7 @@ const SIZES: [usize; 3] = [500, 5_000, 50_000];
 pub fn release_binary() -> Result<&'static Path> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let status = Command::new(cargo)
-        .args(["build", "--release", "-p", "mstar", "--bin", "mstar"])
+        .args(["build", "--release", "-p", "mstar-cli", "--bin", "mstar"])
         .status()
         .context("could not run cargo build")?;
     if !status.success() {

@@ -1,5 +1,5 @@
 //! `cargo xtask validate`: every model of `models/` against its independent
-//! reference at the published spans (`mstar::validation`, level `Tight`);
+//! reference at the published spans (`mstar_testkit::validation`, level `Tight`);
 //! prints the table and writes it to `docs/validation.md`. Fails when a row
 //! does.
 
@@ -7,7 +7,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Result, bail};
-use mstar::validation::{CASES, Level, Row, markdown};
+use mstar_testkit::validation::{CASES, Level, Row, markdown};
 
 /// Runs the validation and writes `docs/validation.md`.
 pub fn run() -> Result<()> {

@@ -179,8 +179,8 @@ fn andrews_problem(file: &ModelFile) -> Result<Problem<'_>> {
         hs: vec![4e-5, 2e-5, 1e-5, 5e-6, 2.5e-6, 1.25e-6],
         h_adaptive: 1e-6,
         error: Box::new(move |u| {
-            let ours = mstar::validation::andrews::angles(theta.map(|i| u[i]));
-            mstar::validation::andrews::REFERENCE
+            let ours = mstar_testkit::validation::andrews::angles(theta.map(|i| u[i]));
+            mstar_testkit::validation::andrews::REFERENCE
                 .iter()
                 .zip(ours)
                 .map(|(&(_, want), got)| ((got - want) / want).abs())

@@ -39,7 +39,7 @@ use crate::{Pattern, fd};
 /// The finite-difference defaults allocate scratch vectors and cost `O(n)`
 /// evaluations of `B`, `g` or `M` per call: fine for small systems, override
 /// them for large ones (the planar builder does). Check analytic overrides
-/// with `mstar_linearize::check_derivatives` (`mstar::testing`).
+/// with `mstar_linearize::check_derivatives` (`mstar::linearize` in the facade).
 ///
 /// # Storage
 ///

@@ -1,8 +1,9 @@
 //! # mstar — time integration of constrained multibody systems
 //!
 //! The facade of the mstar workspace: it re-exports the stages of the algorithm
-//! (`algorithm.md`; the paper's eqs. 1-17) and holds the `mstar` command-line
-//! program.
+//! (`algorithm.md`; the paper's eqs. 1-17) and holds what every front end
+//! shares: run settings, records, output sinks, sweeps. The `mstar`
+//! command-line program is the crate `mstar-cli` (`crates/cli`) on top of it.
 //!
 //! - [`model`]: the [`System`] trait and models ([`PendulumChain`]);
 //! - [`linearize`]: residual, `K_T`, `C_T` and the KKT matrix on a fixed pattern;
@@ -15,9 +16,11 @@
 //! - [`run`]: model files' settings as an integrator configuration, and
 //!   `mstar check`'s report; [`record`]: what a run writes (its CSV rows) and
 //!   measures; [`sweep`]: many runs of a model file over parameter values,
-//!   on all cores, sharded, resumable;
-//! - [`testing`]: for model authors, the derivative checker;
-//!   [`catalogue`]: the test models with their independent references.
+//!   on all cores, sharded, resumable.
+//!
+//! A model's derivatives are checked against finite differences by
+//! [`linearize::check_derivatives`]. The test models and validation cases
+//! are in the crate `mstar-testkit` (`crates/testkit`, not published).
 //!
 //! ```
 //! use mstar::pendulum::PendulumRun;
@@ -36,15 +39,12 @@
 
 pub mod accuracy;
 pub mod analysis;
-pub mod catalogue;
 pub mod csv;
 pub mod pendulum;
 pub mod record;
 pub mod redundant;
 pub mod run;
 pub mod sweep;
-pub mod testing;
-pub mod validation;
 
 pub use mstar_kkt as kkt;
 pub use mstar_linearize as linearize;

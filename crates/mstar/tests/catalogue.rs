@@ -1,4 +1,4 @@
-//! Every model of the catalogue (`mstar::catalogue`) through one harness,
+//! Every model of the catalogue (`mstar_testkit::catalogue`) through one harness,
 //! across the three schemes, every registered KKT backend and both Newton
 //! variants. What an index-3 integrator owes each of them:
 //!
@@ -15,10 +15,10 @@
 //!   consistent start solves `[M Bᵀ; B 0]` without `BᵀB`, which the
 //!   backends that factor without pivoting cannot). Never a different answer.
 
-use mstar::catalogue::{Case, cases};
 use mstar::kkt::{Backend, KktOptions, backends};
-use mstar::testing::check_derivatives;
 use mstar::{Config, IntegrationError, Integrator, Newton, SampleRef, Scheme, System};
+use mstar_testkit::catalogue::{Case, cases};
+use mstar_testkit::testing::check_derivatives;
 
 /// The Newton tolerance of every run (relative).
 const TOL: f64 = 1e-12;

@@ -126,7 +126,7 @@ fn every_kkt_backend_and_newton_variant_gives_the_same_motion() {
     };
     let (resolved, reference) = run(Backend::AUTO, Newton::default());
     // The automatic Newton variant is modified Newton with `schur` (full
-    // with `schur-lu`: crates/mstar/tests/model_files_spatial.rs).
+    // with `schur-lu`: crates/cli/tests/model_files_spatial.rs).
     assert_eq!(resolved, (Backend::SCHUR, Newton::MODIFIED));
     for (backend, newton) in [
         (Backend::SCHUR, Newton::Full),

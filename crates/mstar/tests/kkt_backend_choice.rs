@@ -7,10 +7,10 @@
 //! refused with the reason, and a system that misreports its symmetry still
 //! gets an error, labelled by what failed (the solve), never a wrong answer.
 
-use mstar::catalogue::{JointFrameBar, JointFrameChain};
 use mstar::kkt::{Backend, KktOptions};
 use mstar::planar::{At, PlanarBuilder, RigidBody, SpringDamper, bar_chain};
 use mstar::{Config, IntegrationError, Integrator, Link, Pattern, PendulumChain, System};
+use mstar_testkit::catalogue::{JointFrameBar, JointFrameChain};
 
 fn start(
     sys: &dyn System,

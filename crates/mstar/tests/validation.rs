@@ -1,10 +1,10 @@
 //! The classic mechanisms of `models/` against their independent references
-//! (`mstar::validation`, docs/validation.md), on the short spans of
+//! (`mstar_testkit::validation`, docs/validation.md), on the short spans of
 //! `Level::Quick`; `cargo xtask validate` runs the full ones.
 
 use std::path::{Path, PathBuf};
 
-use mstar::validation::{CASES, Level, Row};
+use mstar_testkit::validation::{CASES, Level, Row};
 
 fn models() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models")

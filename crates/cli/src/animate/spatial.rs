@@ -1,0 +1,269 @@
+//! A spatial model in the picture's plane: every point projected by one of
+//! four fixed [`Projection`]s (`--view`), the bodies drawn as the planar
+//! scene draws them from the projected points.
+
+use mstar::model::spatial::{SpatialAttachment, SpatialSketch};
+use mstar::planar::{Attachment, Sketch, SketchBody, SketchElement};
+
+use super::figure::Figure;
+use super::geometry::{Point, Shape, whole_body};
+
+/// How far the oblique view draws the global y axis, per metre.
+pub const OBLIQUE_DEPTH: f64 = 0.5;
+/// The angle of the oblique view's y axis above the picture's x axis, degrees.
+pub const OBLIQUE_ANGLE_DEG: f64 = 30.0;
+
+/// Which global axes go right and up in the picture (`--view`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum Projection {
+    /// Oblique (cabinet): x right, z up, y (into the picture) drawn at half
+    /// length, 30° above the horizontal: seen from the front, a little above
+    /// and to the right.
+    #[default]
+    Oblique,
+    /// From the front (looking along +y): x right, z up.
+    Xz,
+    /// From the side (looking along −x): y right, z up.
+    Yz,
+    /// From above (looking along −z): x right, y up.
+    Xy,
+}
+
+impl Projection {
+    /// A global point `[x, y, z]` in the picture's plane `[right, up]`, m.
+    #[must_use]
+    pub fn project(self, p: [f64; 3]) -> Point {
+        let [x, y, z] = p;
+        match self {
+            Self::Oblique => {
+                let (s, c) = OBLIQUE_ANGLE_DEG.to_radians().sin_cos();
+                [x + OBLIQUE_DEPTH * c * y, z + OBLIQUE_DEPTH * s * y]
+            }
+            Self::Xz => [x, z],
+            Self::Yz => [y, z],
+            Self::Xy => [x, y],
+        }
+    }
+}
+
+/// A spatial model seen through a [`Projection`].
+#[derive(Clone, Debug)]
+pub struct SpatialFigure {
+    model: SpatialSketch,
+    projection: Projection,
+    /// The bodies and elements for the scene: ground points projected,
+    /// kinds in the planar drawing's words.
+    sketch: Sketch,
+    /// Per body, the distinct local points where joints and loads attach.
+    points: Vec<Vec<[f64; 3]>>,
+}
+
+impl SpatialFigure {
+    /// The figure of a spatial model's sketch seen through `projection`.
+    #[must_use]
+    pub fn new(model: SpatialSketch, projection: Projection) -> Self {
+        let bodies = model
+            .bodies
+            .iter()
+            .map(|b| SketchBody {
+                name: b.name.clone(),
+                x: b.x,
+                rigid: b.rigid,
+                points: Vec::new(),
+            })
+            .collect();
+        let elements: Vec<SketchElement> = model
+            .elements
+            .iter()
+            .map(|e| SketchElement {
+                name: e.name.clone(),
+                kind: planar_kind(e.kind, e.driver),
+                ends: e.ends.map(|end| match end {
+                    SpatialAttachment::Ground(p) => Attachment::Ground(projection.project(p)),
+                    SpatialAttachment::Body { body, .. } => Attachment::Body {
+                        body,
+                        local: [0.0; 2],
+                    },
+                }),
+                axis: None,
+            })
+            .collect();
+        let mut points: Vec<Vec<[f64; 3]>> = vec![Vec::new(); model.bodies.len()];
+        for (e, drawn) in model.elements.iter().zip(&elements) {
+            if whole_body(drawn.kind) {
+                continue;
+            }
+            for end in &e.ends {
+                if let SpatialAttachment::Body { body, local } = *end
+                    && let Some(list) = points.get_mut(body)
+                    && !list.contains(&local)
+                {
+                    list.push(local);
+                }
+            }
+        }
+        Self {
+            model,
+            projection,
+            sketch: Sketch { bodies, elements },
+            points,
+        }
+    }
+}
+
+/// A spatial element's kind as the planar drawing names the same mark.
+fn planar_kind(kind: &'static str, driver: bool) -> &'static str {
+    match kind {
+        _ if driver => "driver",
+        "rotational spring-damper" => "rotational-spring-damper",
+        other => other,
+    }
+}
+
+impl Figure for SpatialFigure {
+    fn sketch(&self) -> &Sketch {
+        &self.sketch
+    }
+
+    fn end(&self, element: usize, side: usize, u: &[f64]) -> Point {
+        let at = &self.model.elements[element].ends[side];
+        self.projection.project(self.model.position(at, u))
+    }
+
+    fn centre(&self, body: usize, u: &[f64]) -> Point {
+        let x = self.model.bodies[body].x;
+        self.projection.project([u[x], u[x + 1], u[x + 2]])
+    }
+
+    /// Lines from the centre of mass to each of the body's points, in one
+    /// polyline (`p₁ c p₂ c p₃ …`: a bar through the centre for two points);
+    /// a body attached only at its centre is a square in its own x-y plane,
+    /// turning with it.
+    fn outline(&self, body: usize, u: &[f64], half: f64) -> Shape {
+        let at = |local: [f64; 3]| {
+            let p = SpatialAttachment::Body { body, local };
+            self.projection.project(self.model.position(&p, u))
+        };
+        let Some((first, rest)) = self.points[body]
+            .split_first()
+            .filter(|_| self.points[body].iter().any(|p| *p != [0.0; 3]))
+        else {
+            let h = half;
+            let square = [[-h, -h, 0.0], [h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0]];
+            return Shape::Polygon(square.map(at).to_vec());
+        };
+        let centre = self.centre(body, u);
+        let mut line = vec![at(*first)];
+        for &p in rest {
+            line.extend([centre, at(p)]);
+        }
+        if rest.is_empty() {
+            line.push(centre);
+        }
+        Shape::Line(line)
+    }
+
+    fn angle(&self, _: &Attachment, _: &[f64]) -> f64 {
+        0.0
+    }
+
+    fn columns(&self) -> Vec<(String, usize)> {
+        let mut out = Vec::new();
+        for body in &self.model.bodies {
+            let axes: &[&str] = if body.rigid {
+                &["x", "y", "z", "e0", "e1", "e2", "e3"]
+            } else {
+                &["x", "y", "z"]
+            };
+            for (k, axis) in axes.iter().enumerate() {
+                out.push((format!("u:{}.{axis}", body.name), body.x + k));
+            }
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mstar::model::spatial::{
+        Attach, JointSpec, JointType, SpatialBody, SpatialBuilder, SpatialInertia, euler_parameters,
+    };
+
+    fn close(p: Point, q: Point) -> bool {
+        (p[0] - q[0]).abs() < 1e-12 && (p[1] - q[1]).abs() < 1e-12
+    }
+
+    #[test]
+    fn each_view_takes_its_axes() {
+        let p = [1.0, 2.0, 3.0];
+        assert_eq!(Projection::Xz.project(p), [1.0, 3.0]);
+        assert_eq!(Projection::Yz.project(p), [2.0, 3.0]);
+        assert_eq!(Projection::Xy.project(p), [1.0, 2.0]);
+        // y = 2 m drawn 1 m long at 30°: (√3/2, 1/2) m.
+        let oblique = Projection::Oblique.project(p);
+        assert!(close(oblique, [1.0 + 0.75f64.sqrt(), 3.5]), "{oblique:?}");
+        assert_eq!(Projection::default(), Projection::Oblique);
+    }
+
+    /// A bar along its body x axis, centre at (1, 2, 3), turned 90° about
+    /// global z, on a ball joint at its local (−0.5, 0, 0), with a point
+    /// mass on a rod at its local (0.5, 0, 0).
+    fn bar() -> (SpatialFigure, Vec<f64>) {
+        let mut b = SpatialBuilder::new();
+        let bar = b.body(
+            "bar",
+            SpatialBody {
+                mass: 1.0,
+                inertia: SpatialInertia::Principal([0.001, 0.1, 0.1]),
+                position: [1.0, 2.0, 3.0],
+                orientation: euler_parameters([0.0, 0.0, 1.0], std::f64::consts::FRAC_PI_2),
+                velocity: [0.0; 3],
+                angular_velocity: [0.0; 3],
+            },
+        );
+        let spec = |kind, bodies, points| JointSpec {
+            kind,
+            bodies,
+            points,
+            axes: [[0.0, 0.0, 1.0]; 2],
+            length: None,
+        };
+        b.joint(
+            "ball",
+            spec(
+                JointType::Spherical,
+                [Attach::Ground, Attach::Body(bar)],
+                [[1.0, 1.5, 3.0], [-0.5, 0.0, 0.0]],
+            ),
+        );
+        let sys = b.build().expect("valid");
+        let u = sys.initial_position();
+        (SpatialFigure::new(sys.sketch(), Projection::Xy), u)
+    }
+
+    #[test]
+    fn body_points_turn_with_the_body_and_are_projected() {
+        let (figure, u) = bar();
+        // The ball end at (1, 1.5, 3): seen from above, (1, 1.5).
+        assert!(close(figure.end(0, 1, &u), [1.0, 1.5]));
+        assert!(close(figure.end(0, 0, &u), [1.0, 1.5]));
+        assert!(close(figure.centre(0, &u), [1.0, 2.0]));
+        // One point: a line from it to the centre.
+        let Shape::Line(line) = figure.outline(0, &u, 0.1) else {
+            panic!("a line");
+        };
+        assert!(
+            close(line[0], [1.0, 1.5]) && close(line[1], [1.0, 2.0]),
+            "{line:?}"
+        );
+        assert_eq!(figure.sketch().elements[0].kind, "spherical");
+        assert_eq!(
+            figure.sketch().elements[0].ends[0],
+            Attachment::Ground([1.0, 1.5])
+        );
+        let columns: Vec<String> = figure.columns().into_iter().map(|c| c.0).collect();
+        assert_eq!(columns[0], "u:bar.x");
+        assert_eq!(columns[6], "u:bar.e3");
+    }
+}

@@ -1,0 +1,60 @@
+//! `mstar check`: a model file checked without integrating it.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use mstar::model::file::MechanismFile;
+
+/// Arguments of `mstar check`.
+#[derive(clap::Args, Debug)]
+pub struct CheckArgs {
+    /// The model file.
+    model: PathBuf,
+    /// Override a key of the file (as for `mstar run`).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+/// `mstar check`: exit 0 when the model can run as written, 1 when it
+/// cannot (or its redundant constraints could not be computed), 2 when the file cannot be read or holds a value out of range.
+pub fn check(args: &CheckArgs) -> ExitCode {
+    let file = match MechanismFile::load_with(&args.model, &args.set) {
+        Ok(file) => file,
+        Err(e) => {
+            note!("error: {e}");
+            return ExitCode::from(2);
+        }
+    };
+    let config = match mstar::run::config(&file.simulation) {
+        Ok((config, _)) => config,
+        // A setting out of range, as a value the file cannot hold: 2.
+        Err(e) => {
+            note!("error: {}: {e}", args.model.display());
+            return ExitCode::from(2);
+        }
+    };
+    let redundant = file.simulation.redundant.unwrap_or_default();
+    for w in &file.warnings {
+        note!("warning: {w}");
+    }
+    let report = mstar::run::check(mstar::run::lookup(&file.mechanism), &config, redundant);
+    // As `run`: the process ends next.
+    std::mem::forget(file);
+    print!("{report}");
+    if report.can_run() {
+        ExitCode::SUCCESS
+    } else {
+        if let Some(why) = &report.not_computed {
+            note!("error: the redundant constraints were not computed: {why}");
+        }
+        if !report.redundant.is_empty() && !report.minimum_norm {
+            let e = mstar::run::RunError::redundant(
+                report.redundant.clone(),
+                report.coordinates,
+                report.constraints,
+            );
+            note!("error: {e}");
+        }
+        ExitCode::from(1)
+    }
+}

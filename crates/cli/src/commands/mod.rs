@@ -1,0 +1,92 @@
+//! One module per command, and what the commands that integrate share:
+//! checking and opening the CSV output, the accuracy warning.
+
+pub mod animate;
+pub mod chain;
+pub mod check;
+pub mod options;
+pub mod pendulum;
+pub mod run;
+pub mod sweep;
+
+use std::path::Path;
+
+use anyhow::Result;
+use mstar::newmark::Short;
+use mstar::{Config, System, csv};
+
+use crate::{limits, output};
+
+/// Refuses an output that would not fit on its file system (`every`: rows
+/// every so many steps, `every_time`: rows every Δt seconds).
+pub fn check_output(
+    out: Option<&Path>,
+    fields: usize,
+    (t_end, h): (f64, f64),
+    (every, every_time): (Option<usize>, Option<f64>),
+) -> Result<()> {
+    if let Some(dt) = every_time
+        && !(dt > 0.0 && dt.is_finite())
+    {
+        return Err(output::usage(format!(
+            "--output-every must be a finite positive number of seconds (got {})",
+            Short(dt)
+        )));
+    }
+    let Some(path) = out else {
+        return Ok(());
+    };
+    let rows = match every_time {
+        // The grid's rows and the last state.
+        Some(dt) => t_end / dt + 2.0,
+        None => t_end / h / every.unwrap_or(1) as f64 + 1.0,
+    };
+    // Also for devices and standard output, which have no free space to
+    // tell: rows at a tiny Δt are not bounded by the steps.
+    if let Some(dt) = every_time {
+        limits::check_rows(rows, t_end, dt)?;
+    }
+    let o = limits::Output {
+        path,
+        rows,
+        fields,
+        t_end,
+        every_time,
+    };
+    limits::check_output(&o, limits::free_space(path))
+}
+
+/// Opens the CSV output, if any, and says which leftovers of killed runs it
+/// removed.
+pub fn open_output<S: System + ?Sized>(
+    out: Option<&Path>,
+    sys: &S,
+    extra: &[String],
+) -> Result<Option<csv::CsvStream>> {
+    let Some(path) = out else {
+        return Ok(None);
+    };
+    let stream = csv::CsvStream::create_with(path, sys, extra)?;
+    for leftover in stream.removed_leftovers() {
+        note!(
+            "note: removed {}, left by an earlier run that was killed",
+            leftover.display()
+        );
+    }
+    Ok(Some(stream))
+}
+
+/// Prints the accuracy warning of a run (`mstar::accuracy::warning`), if
+/// any; returns whether it did.
+pub fn warn_accuracy<S: System + ?Sized>(
+    stats: &mstar::RunStats,
+    config: &Config,
+    sys: &S,
+    files: bool,
+) -> bool {
+    let warning = mstar::accuracy::warning(stats, config, &|i| sys.coord_name(i), files);
+    if let Some(w) = &warning {
+        note!("{w}");
+    }
+    warning.is_some()
+}

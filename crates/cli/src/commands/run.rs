@@ -1,0 +1,656 @@
+//! `mstar run`: a model file (or a built-in model) on the command line.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use mstar::csv::Columns;
+use mstar::model::RowSubset;
+use mstar::model::file::{MAX_MAGNITUDE, Mechanism, MechanismFile, Simulation};
+use mstar::newmark::Short;
+use mstar::pendulum::PendulumRun;
+use mstar::redundant::Expanded;
+use mstar::run::{ModelLookup, ReactionColumns};
+use mstar::{IntegrationError, Integrator, Observer, SampleRef, System, csv};
+
+use crate::output::Stop;
+
+/// Arguments of `mstar run`.
+#[derive(clap::Args, Debug)]
+pub struct RunArgs {
+    /// The model file (TOML, or JSON by its `.json` extension); see
+    /// docs/model-format.md.
+    #[arg(required_unless_present = "builtin", conflicts_with = "builtin")]
+    model: Option<PathBuf>,
+    /// A built-in model instead of a file: the paper's pendulum (released
+    /// horizontally; h = 0.01 s, t_end = 10 s) or a 10-bar chain (h = 1e-3 s,
+    /// t_end = 1 s).
+    #[arg(long, value_enum)]
+    builtin: Option<Builtin>,
+    /// Write the samples to this CSV file (streamed; complete, or on a failure
+    /// the samples so far in <name>.partial.csv).
+    #[arg(long)]
+    pub(crate) out: Option<PathBuf>,
+    /// End time, s (overrides [simulation] t_end).
+    #[arg(long, allow_hyphen_values = true)]
+    t_end: Option<f64>,
+    /// Step size, s (overrides [simulation] h).
+    #[arg(long, allow_hyphen_values = true)]
+    h: Option<f64>,
+    /// Adapt the step size to the local error estimate (sets
+    /// [simulation] error_control = "adaptive"; ρ∞ defaults to 0.5).
+    #[arg(long, conflicts_with = "strict")]
+    adaptive: bool,
+    /// Fixed step size, and an error at the first step whose estimated error
+    /// exceeds the tolerance (sets [simulation] error_control = "strict").
+    #[arg(long)]
+    strict: bool,
+    /// Relative tolerance of the local error estimate (overrides
+    /// [simulation] rtol).
+    #[arg(long, allow_hyphen_values = true)]
+    rtol: Option<f64>,
+    /// Absolute tolerance of the local error estimate, m or rad (overrides
+    /// [simulation] atol).
+    #[arg(long, allow_hyphen_values = true)]
+    atol: Option<f64>,
+    /// Newton tolerance (overrides [simulation] tol).
+    #[arg(long, allow_hyphen_values = true)]
+    tol: Option<f64>,
+    /// Write the state every DT seconds instead of every step, interpolated
+    /// within the steps (overrides [output] every_time and every).
+    #[arg(long, value_name = "DT", allow_hyphen_values = true)]
+    output_every: Option<f64>,
+    /// Override a key of the file, e.g. --set simulation.rho=0.8,
+    /// --set output.every=10, or of an element by its name,
+    /// --set body.upper.mass=2 (repeatable; values in TOML syntax).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+/// The built-in models of `mstar run --builtin`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Builtin {
+    /// The paper's pendulum in u = [x, y, θ] (`mstar pendulum` runs it too).
+    Pendulum,
+    /// Ten slender bars on revolute joints (`mstar chain --links 10`).
+    Chain,
+}
+
+/// A model to run: the system, its start and its settings.
+struct Loaded {
+    label: String,
+    system: Model,
+    u0: Vec<f64>,
+    v0: Vec<f64>,
+    simulation: Simulation,
+    every: usize,
+    /// `[output] every_time`, s.
+    every_time: Option<f64>,
+}
+
+/// A model file's mechanism, planar or spatial (whose CSV has reaction
+/// columns), or another system.
+enum Model {
+    Named(Box<Mechanism>),
+    Other(Box<dyn System>),
+}
+
+impl Model {
+    fn system(&self) -> &(dyn System + 'static) {
+        match self {
+            Self::Named(m) => m.system(),
+            Self::Other(sys) => sys.as_ref(),
+        }
+    }
+
+    /// The mechanism with its joints by name, when it is a model file's.
+    fn named(&self) -> Option<&dyn ModelLookup> {
+        match self {
+            Self::Named(m) => Some(mstar::run::lookup(m)),
+            Self::Other(_) => None,
+        }
+    }
+}
+
+/// `mstar run`: exit 0 when the run reaches its end within the error
+/// tolerance, 3 when it reaches its end beyond it (`mstar::accuracy`), 2 when
+/// the model file cannot be read (as `mstar check`), 130/143 after SIGINT /
+/// SIGTERM, 1 on any other failure.
+pub fn run(args: &RunArgs) -> ExitCode {
+    if let (Some(out), Some(file)) = (&args.out, &args.model)
+        && let Err(e) =
+            crate::output::refuse_overwrites(&[("the model file", file)], &[("--out", out)])
+    {
+        return failed(e, None);
+    }
+    let model = match load(args) {
+        Ok(model) => model,
+        Err(e) => return failed(e, None),
+    };
+    let code = match run_model(args, &model) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => failed(e, Some(&model)),
+    };
+    // The process ends next and its memory with it: freeing a 10⁵-body
+    // model piece by piece took 0.3 s.
+    std::mem::forget(model);
+    code
+}
+
+/// Reports a failure of `mstar run` (with a hint where there is one) and
+/// its exit code: 2 for a file that cannot be read, 130/143 for an
+/// interrupted run (`crate::output::exit_code`), else 1.
+fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
+    if e.downcast_ref::<mstar::accuracy::Inaccurate>().is_some() {
+        return ExitCode::from(mstar::accuracy::EXIT_INACCURATE);
+    }
+    if e.downcast_ref::<crate::signals::Interrupted>().is_some() {
+        return ExitCode::from(crate::output::exit_code(Err(e), true, 1));
+    }
+    note!("error: {}", crate::messages::report(&e));
+    if e.downcast_ref::<crate::output::Usage>().is_some() {
+        return ExitCode::from(2);
+    }
+    let settings = matches!(
+        e.downcast_ref::<mstar::run::RunError>(),
+        Some(mstar::run::RunError::Settings(_))
+    );
+    if settings || e.downcast_ref::<mstar::model::file::FileError>().is_some() {
+        return ExitCode::from(2);
+    }
+    if let Some(e) = e.downcast_ref::<IntegrationError>() {
+        let hint = model
+            .and_then(|m| m.system.named())
+            .and_then(|sys| start_hint(sys, e));
+        if let Some(hint) = hint.or_else(|| crate::messages::hint(e, true).map(String::from)) {
+            note!("hint: {hint}");
+        }
+    }
+    ExitCode::FAILURE
+}
+
+/// What to edit in the model file when the start fails on a constraint the
+/// initial pose violates: the pose of the bodies, or the points of the
+/// joint that owns it (or the driver's function).
+fn start_hint(sys: &dyn ModelLookup, e: &IntegrationError) -> Option<String> {
+    let name = match e {
+        IntegrationError::ProjectionFailed { initial, .. } => initial,
+        IntegrationError::StartFailed {
+            violated: Some((name, _)),
+            ..
+        } => name,
+        _ => return None,
+    };
+    let row = (0..sys.n_constraints()).find(|&i| sys.constraint_name(i) == *name)?;
+    let owner = sys.constraint_owner(row)?;
+    let what = if sys.is_driver(owner) == Some(true) {
+        format!("or the value of driver '{owner}' at t = 0")
+    } else {
+        format!("or the points of joint '{owner}'")
+    };
+    Some(format!(
+        "'{name}' is a row of '{owner}': in the model file, fix the initial pose of the bodies it joins ({}) {what}, so that it holds at t = 0; mstar check shows the initial violation",
+        sys.pose_keys()
+    ))
+}
+
+fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
+    let (every, every_time) = match args.output_every {
+        Some(dt) => (1, Some(dt)),
+        None => (model.every, model.every_time),
+    };
+    let (config, t_end) =
+        mstar::run::config(&model.simulation).map_err(mstar::run::RunError::Settings)?;
+    check_tolerances(&config.error, &model.u0)?;
+    let sys = model.system.system();
+    say!(
+        "{}: {} coordinates, {} constraints; h = {} s, t_end = {} s",
+        model.label,
+        sys.n_coords(),
+        sys.n_constraints(),
+        Short(config.h),
+        Short(t_end)
+    );
+    if let Some(sys) = model.system.named() {
+        warn_far_start(sys);
+    }
+    let rows = independent_rows(model)?;
+    let columns = model.system.named().map(ReactionColumns::new);
+    // Named only for a CSV file: 6·10⁵ names for 10⁵ bodies.
+    let extra = match (&columns, &args.out) {
+        (Some(c), Some(_)) => c.names(),
+        _ => Vec::new(),
+    };
+    crate::limits::check_steps(t_end, config.h)?;
+    let fields = csv::header_len(sys) + columns.as_ref().map_or(0, Columns::count);
+    super::check_output(
+        args.out.as_deref(),
+        fields,
+        (t_end, config.h),
+        (args.builtin.is_none().then_some(every), every_time),
+    )?;
+    let stream = super::open_output(args.out.as_deref(), sys, &extra)?;
+    let columns = columns.as_ref().map(|c| c as &dyn Columns);
+    let grid = crate::output::Grid::new(every_time)?;
+    let mut output = RunOutput::new(stream, columns, (every, grid), t_end);
+    let config_used = config.clone();
+    let start = (config, &model.u0[..], &model.v0[..], t_end);
+    let (outcome, drift) = match (model.system.named(), rows) {
+        (Some(named), Some(rows)) => {
+            let subset = RowSubset::new(sys, rows.kept.clone());
+            let hold = |u: &[f64]| mstar::run::left_out_rows_hold(named, &rows, u);
+            let mut expanded = Expanded::new(&subset, &mut output);
+            let outcome = integrate(&subset, start, &hold, &mut expanded);
+            let drift = expanded
+                .drifted()
+                .map(|d| mstar::run::redundancy_changed(named, d));
+            (outcome, drift)
+        }
+        _ => (integrate(sys, start, &|_| Ok(()), &mut output), None),
+    };
+    output.progress.finish_and_clear();
+    output.recorder.finish_rows();
+    let (stats, t, wall, ended) = outcome?;
+    print_summary(stats, t, &output, wall);
+    let warned = super::warn_accuracy(&stats, &config_used, sys, true);
+    crate::output::conclude(output.recorder.into_stream(), args.out.as_deref(), ended, t)?;
+    // The samples are written; they are wrong from the drift on.
+    if let (Some(mstar::run::RunError::RedundancyChanged { t, .. }), Some(out)) =
+        (&drift, &args.out)
+    {
+        note!(
+            "note: {} holds the whole run, and from t = {} s on it is not the mechanism's motion",
+            out.display(),
+            Short(*t)
+        );
+    }
+    if let Some(e) = drift {
+        return Err(e.into());
+    }
+    Ok(mstar::accuracy::verdict(warned)?)
+}
+
+/// Names the joint an initial pose is far from, before the start projects
+/// the state onto the constraints (and, if that fails, explains why).
+fn warn_far_start(sys: &dyn ModelLookup) {
+    if let Some((owner, row, value)) = mstar::run::initial_violation(sys)
+        && value > FAR
+    {
+        note!(
+            "note: the initial pose violates '{owner}' by {value:.3e} (row {row}); the start moves the coordinates onto the constraints (mstar check shows what it moves)"
+        );
+    }
+}
+
+/// An initial violation worth a note, m or rad.
+const FAR: f64 = 1e-6;
+
+/// Warns when the start's projection changed a given (non-zero) position or
+/// velocity by more than round-off (`1e-9` of their scale): the state
+/// integrated is not the one written, and the projection, the smallest
+/// change in the coordinates' Euclidean norm, weighs metres, radians and
+/// Euler parameters alike, so a given angular velocity is shared with the
+/// centre of mass's velocity (docs/model-format.md). Values left at zero
+/// (not given) are filled in without a warning.
+fn warn_projection<S: System + ?Sized>(
+    sys: &S,
+    report: &mstar::StartReport,
+    u0: &[f64],
+    v0: &[f64],
+) {
+    for (level, change, given) in [
+        ("positions", &report.position_correction, u0),
+        ("velocities", &report.velocity_correction, v0),
+    ] {
+        let scale = mstar::kkt::max_abs(given).max(1.0);
+        let of_given: Vec<f64> = change
+            .iter()
+            .zip(given)
+            .map(|(&d, &x)| if x == 0.0 { 0.0 } else { d })
+            .collect();
+        let (i, by) = mstar::kkt::argmax_abs(&of_given);
+        if by.abs() > 1e-9 * scale {
+            note!(
+                "warning: the start changed the given {level} to satisfy the joints: '{}' from {} \
+                 to {} (the largest change), the smallest change in the coordinates' Euclidean \
+                 norm (every coordinate weighted alike); give {level} that satisfy the joints to \
+                 have them kept (mstar check lists what it moves)",
+                sys.coord_name(i),
+                Short(given[i]),
+                Short(given[i] + change[i])
+            );
+        }
+    }
+}
+
+/// The rows to solve on when the model has redundant constraints and asks
+/// for minimum-norm multipliers (`None`: all rows).
+///
+/// # Errors
+/// Redundant constraints in a model that does not ask for them, by name,
+/// with what to do.
+fn independent_rows(model: &Loaded) -> Result<Option<mstar::redundant::Rows>> {
+    let Some(sys) = model.system.named() else {
+        return Ok(None);
+    };
+    let choice = model.simulation.redundant.unwrap_or_default();
+    let Some(rows) = mstar::run::solve_rows(sys, &model.u0, choice)? else {
+        return Ok(None);
+    };
+    say!(
+        "redundant constraints: {} (left out of the solve: minimum-norm multipliers)",
+        mstar::run::owners(sys, &rows.dependent).join(", ")
+    );
+    Ok(Some(rows))
+}
+
+/// A run's statistics, end time, wall time and outcome.
+type Outcome = (mstar::RunStats, f64, f64, Result<(), Stop>);
+
+/// Integrates `sys` from `(u0, v0)` to `t_end`, every sample to `observer`,
+/// once `check_start` accepts the start state.
+fn integrate<S: System + ?Sized>(
+    sys: &S,
+    (config, u0, v0, t_end): (mstar::Config, &[f64], &[f64], f64),
+    check_start: &dyn Fn(&[f64]) -> Result<(), mstar::run::RunError>,
+    observer: &mut dyn Observer,
+) -> Result<Outcome> {
+    let mut integ = Integrator::new(sys, config, 0.0, u0, v0)?;
+    check_start(integ.view().u)?;
+    warn_projection(sys, integ.start_report(), u0, v0);
+    say!(
+        "KKT solver: {}; Newton: {}",
+        integ.backend(),
+        integ.newton()
+    );
+    let clock = Instant::now();
+    let result = crate::output::drive(&mut integ, t_end, &mut |integ| {
+        observer.observe(&integ.view());
+    });
+    if result.is_err() {
+        // The last state reached, which `[output] every` may have skipped.
+        observer.observe(&integ.view());
+    }
+    let wall = clock.elapsed().as_secs_f64();
+    Ok((integ.stats(), integ.time(), wall, result))
+}
+
+/// The model of `mstar run`: a file or a built-in.
+fn load(args: &RunArgs) -> Result<Loaded> {
+    check_options(args)?;
+    let mut set = args.set.clone();
+    for (key, value) in [
+        ("t_end", args.t_end),
+        ("h", args.h),
+        ("rtol", args.rtol),
+        ("atol", args.atol),
+        ("tol", args.tol),
+    ] {
+        if let Some(v) = value {
+            set.push(format!("simulation.{key}={v:e}"));
+        }
+    }
+    for (flag, mode) in [(args.adaptive, "adaptive"), (args.strict, "strict")] {
+        if flag {
+            set.push(format!("simulation.error_control={mode}"));
+        }
+    }
+    if let Some(builtin) = args.builtin {
+        return builtin_model(builtin, &set);
+    }
+    let path = args.model.as_deref().context("a model file or --builtin")?;
+    let file = MechanismFile::load_with(path, &set)?;
+    for w in &file.warnings {
+        note!("warning: {w}");
+    }
+    let sys = mstar::run::lookup(&file.mechanism);
+    Ok(Loaded {
+        label: path.display().to_string(),
+        u0: sys.initial_position(),
+        v0: sys.initial_velocity(),
+        every: file.output.every,
+        every_time: file.output.every_time,
+        simulation: file.simulation,
+        system: Model::Named(Box::new(file.mechanism)),
+    })
+}
+
+/// Refuses a command-line value out of range, naming the option (before
+/// it becomes a `--set` of the model file, which would blame the file).
+///
+/// # Errors
+/// [`crate::output::Usage`].
+fn check_options(args: &RunArgs) -> Result<()> {
+    let positive = [
+        ("--t-end", args.t_end),
+        ("--h", args.h),
+        ("--tol", args.tol),
+        ("--output-every", args.output_every),
+    ];
+    for (option, value) in positive {
+        if let Some(v) = value
+            && !(v > 0.0 && v.is_finite())
+        {
+            return Err(crate::output::usage(format!(
+                "{option} must be a finite positive number (got {})",
+                Short(v)
+            )));
+        }
+    }
+    for (option, value) in [("--rtol", args.rtol), ("--atol", args.atol)] {
+        if let Some(v) = value
+            && !(v >= 0.0 && v.is_finite())
+        {
+            return Err(crate::output::usage(format!(
+                "{option} must be a finite number ≥ 0 (got {})",
+                Short(v)
+            )));
+        }
+    }
+    let all = positive
+        .into_iter()
+        .chain([("--rtol", args.rtol), ("--atol", args.atol)]);
+    for (option, value) in all {
+        if let Some(v) = value
+            && v > MAX_MAGNITUDE
+        {
+            return Err(crate::output::usage(format!(
+                "{option} {} is out of range: at most 1e100, as every number of a model file \
+                 (products of larger values overflow double precision)",
+                Short(v)
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The smallest relative tolerance of the error estimate: below it, the
+/// estimate is round-off (double precision's 2.2e-16 times the few hundred
+/// operations of a step).
+const RTOL_MIN: f64 = 1e-14;
+
+/// Refuses an error tolerance below round-off: `rtol` under [`RTOL_MIN`]
+/// with an `atol` under `RTOL_MIN` times the largest initial coordinate
+/// (at least 1): no step could meet it, and the advice the accuracy warning
+/// works out from it would be meaningless.
+///
+/// # Errors
+/// [`crate::output::Usage`] with tolerances that work.
+fn check_tolerances(error: &mstar::ErrorControl, u0: &[f64]) -> Result<()> {
+    let scale = u0.iter().fold(1.0_f64, |m, x| m.max(x.abs()));
+    if error.rtol >= RTOL_MIN || error.atol >= RTOL_MIN * scale {
+        return Ok(());
+    }
+    Err(crate::output::usage(format!(
+        "the error tolerance rtol = {}, atol = {} is below what double precision resolves \
+         (round-off is about 1e-14 of the coordinates): use --rtol {} or more, or --atol {} \
+         or more (or [simulation] rtol, atol)",
+        Short(error.rtol),
+        Short(error.atol),
+        Short(RTOL_MIN),
+        crate::limits::round2(RTOL_MIN * scale, true)
+    )))
+}
+
+/// One override of a built-in model: the command line's `--t-end`, `--h`,
+/// `--tol`, `--rtol`, `--atol`, `--adaptive`, `--strict` (as
+/// `simulation.<key>=…`); other keys are refused.
+fn builtin_setting(simulation: &mut Simulation, assignment: &str) -> Result<()> {
+    let (key, value) = assignment.split_once('=').unwrap_or((assignment, ""));
+    if key == "simulation.error_control" {
+        simulation.error_control = Some(match value {
+            "adaptive" => mstar::model::file::ErrorControlChoice::Adaptive,
+            "strict" => mstar::model::file::ErrorControlChoice::Strict,
+            "monitor" => mstar::model::file::ErrorControlChoice::Monitor,
+            _ => bail!("{key}: expected monitor, strict or adaptive, got '{value}'"),
+        });
+        return Ok(());
+    }
+    let number: f64 = value
+        .parse()
+        .ok()
+        .filter(|v: &f64| v.is_finite() && *v >= 0.0)
+        .with_context(|| format!("{key}: expected a number ≥ 0, got '{value}'"))?;
+    let positive = || -> Result<f64> {
+        if number > 0.0 {
+            Ok(number)
+        } else {
+            bail!("{key}: expected a positive number, got '{value}'")
+        }
+    };
+    match key {
+        "simulation.t_end" => simulation.t_end = Some(positive()?),
+        "simulation.h" => simulation.h = Some(positive()?),
+        "simulation.tol" => simulation.tol = Some(positive()?),
+        "simulation.rtol" => simulation.rtol = Some(number),
+        "simulation.atol" => simulation.atol = Some(number),
+        _ => bail!(
+            "--set {assignment}: a built-in model takes --t-end, --h, --tol, --rtol, --atol, --adaptive and --strict only"
+        ),
+    }
+    Ok(())
+}
+
+/// A built-in model with its defaults and the command line's overrides
+/// ([`builtin_setting`]).
+fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
+    let mut simulation = Simulation::default();
+    for assignment in set {
+        builtin_setting(&mut simulation, assignment)?;
+    }
+    Ok(match builtin {
+        Builtin::Pendulum => {
+            let run = PendulumRun::standard();
+            let sys = run.system();
+            simulation.t_end = simulation.t_end.or(Some(run.t_end));
+            simulation.h = simulation.h.or(Some(run.config.h));
+            Loaded {
+                label: "built-in pendulum".to_string(),
+                u0: sys.position(&[run.theta0]),
+                v0: sys.velocity(&[run.theta0], &[run.omega0]),
+                system: Model::Other(Box::new(sys)),
+                simulation,
+                every: 1,
+                every_time: None,
+            }
+        }
+        Builtin::Chain => {
+            let sys = mstar::planar::bar_chain(10);
+            Loaded {
+                label: "built-in 10-bar chain".to_string(),
+                u0: sys.initial_position(),
+                v0: sys.initial_velocity(),
+                system: Model::Named(Box::new(Mechanism::Planar(sys))),
+                simulation,
+                every: 1,
+                every_time: None,
+            }
+        }
+    })
+}
+
+/// What `mstar run` does with every sample: the CSV file and the figures of
+/// the summary ([`mstar::record::Recorder`]), and the progress bar.
+struct RunOutput<'a> {
+    recorder: mstar::record::Recorder<'a>,
+    t_end: f64,
+    progress: ProgressBar,
+    shown: bool,
+    start: Instant,
+}
+
+impl<'a> RunOutput<'a> {
+    fn new(
+        stream: Option<csv::CsvStream>,
+        columns: Option<&'a dyn Columns>,
+        (every, grid): (usize, crate::output::Grid),
+        t_end: f64,
+    ) -> Self {
+        let progress = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::hidden());
+        progress.set_style(
+            ProgressStyle::with_template("{bar:40} t = {msg} s [{elapsed_precise}, {eta} left]")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        let rows = mstar::record::Rows { every, grid };
+        Self {
+            recorder: mstar::record::Recorder::new(stream, columns, rows, t_end),
+            t_end,
+            progress,
+            shown: false,
+            start: Instant::now(),
+        }
+    }
+}
+
+impl Observer for RunOutput<'_> {
+    fn observe(&mut self, s: &SampleRef<'_>) {
+        self.recorder.observe(s);
+        if let Some(stream) = self.recorder.stream() {
+            crate::output::watch(stream);
+        }
+        // A bar on standard error for runs longer than a second (indicatif
+        // draws nothing when it is not a terminal).
+        if !self.shown && self.start.elapsed().as_secs_f64() > 1.0 {
+            self.progress.set_draw_target(ProgressDrawTarget::stderr());
+            self.shown = true;
+        }
+        if self.shown {
+            self.progress
+                .set_position((1000.0 * s.t / self.t_end) as u64);
+            self.progress.set_message(format!("{:.4}", s.t));
+        }
+    }
+}
+
+fn print_summary(st: mstar::RunStats, t: f64, out: &RunOutput<'_>, wall: f64) {
+    let steps = st.steps.max(1) as f64;
+    say!("t reached: {} s", Short(t));
+    // Iterations count every attempt, the maximum accepted steps only.
+    let per_step = if st.steps == 0 {
+        "no step accepted".to_string()
+    } else {
+        format!(
+            "{:.2} per accepted step, at most {} in one",
+            st.iterations as f64 / steps,
+            st.max_iterations
+        )
+    };
+    say!(
+        "steps: {} accepted, {} rejected; Newton iterations: {} ({per_step}); factorizations: {}",
+        st.steps,
+        st.rejected,
+        st.iterations,
+        st.factorizations
+    );
+    say!(
+        "max ‖Φ‖∞ = {:.3e}; energy drift max |E − E₀| = {:.3e} J",
+        out.recorder.max_constraint(),
+        out.recorder.energy_drift()
+    );
+    say!(
+        "wall time: {wall:.3} s ({:.2} µs per step)",
+        wall * 1e6 / steps
+    );
+}

@@ -1,0 +1,302 @@
+//! What the program writes, and how a run ends: report lines that survive a
+//! closed pipe, the integration loop that stops on a signal or a failed
+//! write, and what a stopped run keeps.
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use mstar::csv::{CsvStream, Kept};
+use mstar::{IntegrationError, Integrator, System};
+
+use crate::signals::{self, Interrupted};
+
+/// The report goes to standard error: standard output carries the CSV.
+static REPORT_ON_STDERR: AtomicBool = AtomicBool::new(false);
+
+/// An output file's write failed: the run stops at the next step.
+static WRITE_FAILED: AtomicBool = AtomicBool::new(false);
+
+/// Sends the report to standard error from now on (`--out -`).
+pub fn report_on_stderr() {
+    REPORT_ON_STDERR.store(true, Ordering::Relaxed);
+}
+
+/// Whether `out` is standard output (`-`, `/dev/stdout`).
+pub fn is_stdout(out: Option<&Path>) -> bool {
+    out.is_some_and(|p| p.as_os_str() == "-" || p == Path::new("/dev/stdout"))
+}
+
+/// A report line (`say!` in this program): on standard output, or on
+/// standard error when standard output carries the CSV. A closed pipe
+/// (`mstar chain | head -1`) or a full disk loses the report, never the run,
+/// and is not a panic.
+pub fn say(args: std::fmt::Arguments<'_>) {
+    if REPORT_ON_STDERR.load(Ordering::Relaxed) {
+        return note(args);
+    }
+    let _ = writeln!(std::io::stdout().lock(), "{args}");
+}
+
+/// A line on standard error (`note!` in this program), never a panic.
+pub fn note(args: std::fmt::Arguments<'_>) {
+    let _ = writeln!(std::io::stderr().lock(), "{args}");
+}
+
+/// Tells the loop to stop when `stream`'s last write failed.
+pub fn watch(stream: &CsvStream) {
+    if stream.failed() {
+        WRITE_FAILED.store(true, Ordering::Relaxed);
+    }
+}
+
+/// Why a run stopped before its end.
+#[derive(Debug)]
+pub enum Stop {
+    /// A step failed.
+    Failed(IntegrationError),
+    /// An output file could not be written (the stream has the error).
+    Write,
+    /// SIGINT or SIGTERM.
+    Signal(i32),
+}
+
+/// Integrates to `t_end`, handing the initial state and every accepted step
+/// to `each` (as `Integrator::run` does), and stops at the next step when a
+/// stop signal arrives or a write fails ([`watch`]).
+///
+/// # Errors
+/// Why it stopped; every step before it has been observed.
+pub fn drive<S: System + ?Sized>(
+    integ: &mut Integrator<'_, S>,
+    t_end: f64,
+    each: &mut dyn FnMut(&Integrator<'_, S>),
+) -> Result<(), Stop> {
+    each(integ);
+    loop {
+        if WRITE_FAILED.load(Ordering::Relaxed) {
+            return Err(Stop::Write);
+        }
+        if integ.reached(t_end) {
+            return Ok(());
+        }
+        if let Some(signal) = signals::received() {
+            return Err(Stop::Signal(signal));
+        }
+        integ.step(t_end).map_err(Stop::Failed)?;
+        each(integ);
+    }
+}
+
+/// `<stem>.partial.csv` beside `out`.
+pub fn partial_path(out: &Path) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    out.with_file_name(format!("{stem}.partial.csv"))
+}
+
+/// Ends a run: with `Ok`, writes the file into place; with a stop, keeps the
+/// samples so far in `<name>.partial.csv` (saying so) and returns why it
+/// stopped (`t`: how far it got). Without an output, only the why.
+///
+/// # Errors
+/// The stop's cause ([`Interrupted`] for a signal), or the output's error.
+pub fn conclude(
+    stream: Option<CsvStream>,
+    out: Option<&Path>,
+    ended: Result<(), Stop>,
+    t: f64,
+) -> anyhow::Result<()> {
+    let (Some(mut stream), Some(out)) = (stream, out) else {
+        return ended.map_err(|stop| cause(stop, None, t));
+    };
+    // The last rows may still fail (a disk that fills at the end): then the
+    // rows that got through are kept as for a write error during the run.
+    let ended = match ended {
+        Ok(()) if !stream.write_pending() => Err(Stop::Write),
+        other => other,
+    };
+    let stop = match ended {
+        Ok(()) => {
+            let rows = stream.finish()?;
+            say(format_args!(
+                "wrote {} ({rows} rows)",
+                mstar::csv::display(out)
+            ));
+            return Ok(());
+        }
+        Err(stop) => stop,
+    };
+    let error = stream.error();
+    let why = cause(stop, error, t);
+    let quiet = why
+        .downcast_ref::<Interrupted>()
+        .is_some_and(|i| i.signal == libc::SIGPIPE);
+    let kept = stream.keep_partial(&partial_path(out));
+    if !quiet {
+        tell_kept(out, &kept);
+    }
+    Err(why)
+}
+
+/// The error a stop ends the program with: a write error on a closed pipe
+/// reads as SIGPIPE (a quiet end).
+fn cause(stop: Stop, write: Option<std::io::Error>, t: f64) -> anyhow::Error {
+    match (stop, write) {
+        (Stop::Failed(e), _) => e.into(),
+        (Stop::Signal(signal), _) => Interrupted { signal, t }.into(),
+        (Stop::Write, Some(e)) if e.kind() == std::io::ErrorKind::BrokenPipe => Interrupted {
+            signal: libc::SIGPIPE,
+            t,
+        }
+        .into(),
+        (Stop::Write, Some(e)) => e.into(),
+        (Stop::Write, None) => {
+            anyhow::anyhow!("a write failed at t = {} s", mstar::newmark::Short(t))
+        }
+    }
+}
+
+/// Says where the samples of a stopped run are.
+fn tell_kept(out: &Path, kept: &Kept) {
+    let out = mstar::csv::display(out);
+    match kept {
+        Kept::File { path, rows } => note(format_args!(
+            "note: {out} was not written; {} written before the run stopped {} in {}",
+            crate::messages::samples_phrase(*rows),
+            if *rows == 1 { "is" } else { "are" },
+            path.display()
+        )),
+        Kept::Streamed { rows: 0 } => {}
+        Kept::Streamed { rows } => note(format_args!(
+            "note: {out} received {} before the run stopped",
+            crate::messages::samples_phrase(*rows)
+        )),
+        Kept::Nothing(e) => note(format_args!(
+            "note: {out} was not written, and the samples so far could not be kept: {e}"
+        )),
+    }
+}
+
+/// The exit status of a command's result, with the error (and a hint for a
+/// failed step, `files`: in terms of model-file keys) on standard error: 0,
+/// 128 + the signal for an interrupted run (quietly for a closed pipe), else
+/// `failure`.
+pub fn exit_code(result: anyhow::Result<()>, files: bool, failure: u8) -> u8 {
+    let Err(e) = result else {
+        return 0;
+    };
+    // The warning has said why.
+    if e.downcast_ref::<mstar::accuracy::Inaccurate>().is_some() {
+        return mstar::accuracy::EXIT_INACCURATE;
+    }
+    if e.downcast_ref::<Usage>().is_some() {
+        note(format_args!("error: {e}"));
+        return 2;
+    }
+    if let Some(i) = e.downcast_ref::<Interrupted>() {
+        if i.signal != libc::SIGPIPE {
+            note(format_args!("mstar: {i}"));
+        }
+        return i.code();
+    }
+    note(format_args!("error: {}", crate::messages::report(&e)));
+    if let Some(hint) = e
+        .downcast_ref::<IntegrationError>()
+        .and_then(|e| crate::messages::hint(e, files))
+    {
+        note(format_args!("hint: {hint}"));
+    }
+    failure
+}
+
+pub use mstar::record::Grid;
+
+/// A command line the program refuses before doing anything (a value out of
+/// range, an output that would overwrite an input): exit 2.
+#[derive(Debug)]
+pub struct Usage(pub String);
+
+impl std::fmt::Display for Usage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Usage {}
+
+/// A usage error ([`Usage`]) with `message`.
+pub fn usage(message: String) -> anyhow::Error {
+    Usage(message).into()
+}
+
+/// Which file a path names, to tell whether two paths are one file: the
+/// device and inode of an existing regular file (through symbolic and hard
+/// links), the canonical directory and name of a new path, standard output;
+/// `None` for what is written directly and never replaced (a device, a FIFO).
+#[derive(Debug, PartialEq, Eq)]
+enum Identity {
+    Inode(u64, u64),
+    New(PathBuf),
+    Stdout,
+}
+
+fn identity(path: &Path) -> Option<Identity> {
+    use std::os::unix::fs::MetadataExt as _;
+    if is_stdout(Some(path)) {
+        return Some(Identity::Stdout);
+    }
+    match std::fs::metadata(path) {
+        Ok(m) if m.is_file() => Some(Identity::Inode(m.dev(), m.ino())),
+        Ok(_) => None,
+        Err(_) => {
+            let dir = match path.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d,
+                _ => Path::new("."),
+            };
+            let name = path.file_name()?;
+            Some(Identity::New(std::fs::canonicalize(dir).ok()?.join(name)))
+        }
+    }
+}
+
+/// Refuses an output that names one of the inputs or another output, by
+/// [`Identity`] (through symbolic links, hard links and relative paths):
+/// writing it would destroy the input, or one output would overwrite the
+/// other. Each path comes with what it is for messages (`"--gif"`, `"the
+/// model file"`).
+///
+/// # Errors
+/// [`Usage`], naming both.
+pub fn refuse_overwrites(
+    inputs: &[(&str, &Path)],
+    outputs: &[(&str, &Path)],
+) -> anyhow::Result<()> {
+    let ids: Vec<Option<Identity>> = outputs.iter().map(|(_, p)| identity(p)).collect();
+    for (k, ((option, path), id)) in outputs.iter().zip(&ids).enumerate() {
+        let Some(id) = id else { continue };
+        for (what, input) in inputs {
+            if identity(input).as_ref() == Some(id) {
+                return Err(usage(format!(
+                    "{option} {} names {what} {}: name another file for the output",
+                    path.display(),
+                    input.display()
+                )));
+            }
+        }
+        if let Some(((other, earlier), _)) = outputs[..k]
+            .iter()
+            .zip(&ids)
+            .find(|(_, e)| e.as_ref() == Some(id))
+        {
+            return Err(usage(format!(
+                "{option} {} names the same file as {other} {}: name another file for each output",
+                path.display(),
+                earlier.display()
+            )));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,16 @@
+//! For authors of models: check every analytic derivative of a [`System`]
+//! against finite differences before integrating it.
+//!
+//! ```
+//! use mstar_testkit::testing::check_derivatives;
+//! use mstar::PendulumChain;
+//!
+//! let sys = PendulumChain::paper(1.0, 1.0, 9.81);
+//! let u = sys.position(&[0.4]);
+//! let e = check_derivatives(&sys, 0.0, &u, &[0.3, -0.2, 0.5], &[0.0; 3], &[1.0, -2.0]);
+//! assert!(e.max() < 1e-6, "{e:?}"); // NaN fails too
+//! ```
+//!
+//! [`System`]: mstar::System
+
+pub use mstar::linearize::{DerivativeErrors, check_derivatives};
