@@ -467,128 +467,146 @@ impl<'a> Model<'a> {
             ]),
         )?;
         match kind {
-            "force" | "torque" => {
-                let body = self.bodies.body_of(&mut f, "body")?;
-                let torque = kind == "torque";
-                if torque && !body.rigid {
-                    let e = f.read_entry("body")?;
-                    return Err(f.bad(e, "a torque needs a rigid body, not a point mass"));
-                }
-                let point = if torque {
-                    [0.0; 3]
-                } else {
-                    f.optional("point", numbers::<3>)?.unwrap_or([0.0; 3])
-                };
-                if !body.rigid && point != [0.0; 3] {
-                    let e = f.read_entry("point")?;
-                    return Err(f.bad(e, "a point mass has no extent: its point is [0, 0, 0]"));
-                }
-                let keys = if torque {
-                    ["tx", "ty", "tz"]
-                } else {
-                    ["fx", "fy", "fz"]
-                };
-                let mut c: [TimeFunction; 3] = std::array::from_fn(|_| TimeFunction::Constant(0.0));
-                for (c, key) in c.iter_mut().zip(keys) {
-                    if let Some(function) = self.function(&mut f, key)? {
-                        *c = function;
-                    }
-                }
-                let axes = f
-                    .optional("axes", choice(&["global", "body"]))?
-                    .unwrap_or("global");
-                if axes == "body" && !body.rigid {
-                    let e = f.read_entry("axes")?;
-                    return Err(f.bad(e, "a point mass has no axes: use \"global\""));
-                }
-                let mut known = vec!["name", "type", "body", "axes"];
-                known.extend(keys);
-                if !torque {
-                    known.push("point");
-                }
-                f.finish(&known)?;
-                if torque {
-                    self.builder.torque(&name, body.id, c, axes == "body");
-                } else {
-                    self.builder.force(&name, body.id, point, c, axes == "body");
-                }
-            }
-            "spring-damper" => {
-                let sides = self.bodies.sides(&mut f)?;
-                let points = self.anchors(&mut f, sides)?;
-                let stiffness =
-                    f.required("stiffness", number_in(|x| x >= 0.0, "non-negative, in N/m"))?;
-                let damping = f
-                    .optional("damping", number_in(|x| x >= 0.0, "non-negative, in N s/m"))?
-                    .unwrap_or(0.0);
-                let length = f.optional("length", number_in(|x| x >= 0.0, "non-negative, in m"))?;
-                let preload = f.optional("preload", number)?.unwrap_or(0.0);
-                f.finish(&[
-                    "name",
-                    "type",
-                    "bodies",
-                    "points",
-                    "at",
-                    "stiffness",
-                    "damping",
-                    "length",
-                    "preload",
-                ])?;
-                self.builder.spring(
-                    &name,
-                    sides.map(Side::attach),
-                    points,
-                    SpringSpec {
-                        stiffness,
-                        damping,
-                        length,
-                        preload,
-                    },
-                );
-            }
-            _ => {
-                let sides = self.bodies.sides(&mut f)?;
-                for s in sides {
-                    if let Side::Body(b) = s
-                        && !b.rigid
-                    {
-                        let e = f.read_entry("bodies")?;
-                        return Err(f.bad(
-                            e,
-                            "a rotational spring joins rigid bodies (or the ground); point masses have no orientation",
-                        ));
-                    }
-                }
-                let axes = self.joint_axes(&mut f, JointType::Revolute, sides)?;
-                let stiffness = f.required(
-                    "stiffness",
-                    number_in(|x| x >= 0.0, "non-negative, in N m/rad"),
-                )?;
-                let damping = f
-                    .optional(
-                        "damping",
-                        number_in(|x| x >= 0.0, "non-negative, in N m s/rad"),
-                    )?
-                    .unwrap_or(0.0);
-                let angle = f.optional("angle", number)?.unwrap_or(0.0);
-                f.finish(&[
-                    "name",
-                    "type",
-                    "bodies",
-                    "axes",
-                    "axis",
-                    "stiffness",
-                    "damping",
-                    "angle",
-                ])?;
-                self.builder.rotational_spring(
-                    &name,
-                    sides.map(Side::attach),
-                    axes,
-                    [stiffness, damping, angle],
-                );
+            "force" | "torque" => self.point_load(&mut f, &name, kind == "torque"),
+            "spring-damper" => self.spring_damper(&mut f, &name),
+            _ => self.rotational_spring_damper(&mut f, &name),
+        }
+    }
+
+    /// A `[[force]]` of type `force` (at a point) or `torque`.
+    fn point_load(
+        &mut self,
+        f: &mut Fields<'a>,
+        name: &str,
+        torque: bool,
+    ) -> Result<(), FileError> {
+        let body = self.bodies.body_of(f, "body")?;
+        if torque && !body.rigid {
+            let e = f.read_entry("body")?;
+            return Err(f.bad(e, "a torque needs a rigid body, not a point mass"));
+        }
+        let point = if torque {
+            [0.0; 3]
+        } else {
+            f.optional("point", numbers::<3>)?.unwrap_or([0.0; 3])
+        };
+        if !body.rigid && point != [0.0; 3] {
+            let e = f.read_entry("point")?;
+            return Err(f.bad(e, "a point mass has no extent: its point is [0, 0, 0]"));
+        }
+        let keys = if torque {
+            ["tx", "ty", "tz"]
+        } else {
+            ["fx", "fy", "fz"]
+        };
+        let mut c: [TimeFunction; 3] = std::array::from_fn(|_| TimeFunction::Constant(0.0));
+        for (c, key) in c.iter_mut().zip(keys) {
+            if let Some(function) = self.function(f, key)? {
+                *c = function;
             }
         }
+        let axes = f
+            .optional("axes", choice(&["global", "body"]))?
+            .unwrap_or("global");
+        if axes == "body" && !body.rigid {
+            let e = f.read_entry("axes")?;
+            return Err(f.bad(e, "a point mass has no axes: use \"global\""));
+        }
+        let mut known = vec!["name", "type", "body", "axes"];
+        known.extend(keys);
+        if !torque {
+            known.push("point");
+        }
+        f.finish(&known)?;
+        if torque {
+            self.builder.torque(name, body.id, c, axes == "body");
+        } else {
+            self.builder.force(name, body.id, point, c, axes == "body");
+        }
+        Ok(())
+    }
+
+    /// A `[[force]]` of type `spring-damper`.
+    fn spring_damper(&mut self, f: &mut Fields<'a>, name: &str) -> Result<(), FileError> {
+        let sides = self.bodies.sides(f)?;
+        let points = self.anchors(f, sides)?;
+        let stiffness = f.required("stiffness", number_in(|x| x >= 0.0, "non-negative, in N/m"))?;
+        let damping = f
+            .optional("damping", number_in(|x| x >= 0.0, "non-negative, in N s/m"))?
+            .unwrap_or(0.0);
+        let length = f.optional("length", number_in(|x| x >= 0.0, "non-negative, in m"))?;
+        let preload = f.optional("preload", number)?.unwrap_or(0.0);
+        f.finish(&[
+            "name",
+            "type",
+            "bodies",
+            "points",
+            "at",
+            "stiffness",
+            "damping",
+            "length",
+            "preload",
+        ])?;
+        self.builder.spring(
+            name,
+            sides.map(Side::attach),
+            points,
+            SpringSpec {
+                stiffness,
+                damping,
+                length,
+                preload,
+            },
+        );
+        Ok(())
+    }
+
+    /// A `[[force]]` of type `rotational-spring-damper`.
+    fn rotational_spring_damper(
+        &mut self,
+        f: &mut Fields<'a>,
+        name: &str,
+    ) -> Result<(), FileError> {
+        let sides = self.bodies.sides(f)?;
+        for s in sides {
+            if let Side::Body(b) = s
+                && !b.rigid
+            {
+                let e = f.read_entry("bodies")?;
+                return Err(f.bad(
+                    e,
+                    "a rotational spring joins rigid bodies (or the ground); point masses have no orientation",
+                ));
+            }
+        }
+        let axes = self.joint_axes(f, JointType::Revolute, sides)?;
+        let stiffness = f.required(
+            "stiffness",
+            number_in(|x| x >= 0.0, "non-negative, in N m/rad"),
+        )?;
+        let damping = f
+            .optional(
+                "damping",
+                number_in(|x| x >= 0.0, "non-negative, in N m s/rad"),
+            )?
+            .unwrap_or(0.0);
+        let angle = f.optional("angle", number)?.unwrap_or(0.0);
+        f.finish(&[
+            "name",
+            "type",
+            "bodies",
+            "axes",
+            "axis",
+            "stiffness",
+            "damping",
+            "angle",
+        ])?;
+        self.builder.rotational_spring(
+            name,
+            sides.map(Side::attach),
+            axes,
+            [stiffness, damping, angle],
+        );
         Ok(())
     }
 
