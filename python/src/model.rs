@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use mstar::System;
-use mstar::model::file::{FileError, Format, Mechanism, MechanismFile, Simulation};
+use mstar::file::{FileError, Format, Mechanism, MechanismFile, Simulation};
 use mstar::run::{CheckReport, RunError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;

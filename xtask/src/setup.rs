@@ -244,7 +244,7 @@ mod tests {
     #[test]
     fn the_spatial_chain_file_is_the_chain_command_s_model() {
         use mstar::System as _;
-        use mstar::model::file::{Format, Mechanism, MechanismFile};
+        use mstar::file::{Format, Mechanism, MechanismFile};
         use mstar::model::spatial::{RotationalMass, spatial_bar_chain};
         let file = MechanismFile::parse(&spatial_chain(3), "c.toml", Format::Toml)
             .unwrap_or_else(|e| panic!("{e}"));

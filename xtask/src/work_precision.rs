@@ -18,7 +18,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Context as _, Result};
-use mstar::model::file::ModelFile;
+use mstar::file::ModelFile;
 use mstar::{
     ChainOracle, Config, ErrorControl, Integrator, Link, PendulumChain, SampleRef, Scheme,
     StepMode, System,

@@ -24,6 +24,7 @@ use serde_json::{Value, json};
 /// The library crates: what a user of mstar links.
 const LIBRARIES: &[&str] = &[
     "mstar-model",
+    "mstar-file",
     "mstar-linearize",
     "mstar-kkt",
     "mstar-newmark",
@@ -39,10 +40,11 @@ const FORBIDDEN_IN_LIBRARIES: &[&str] = &["clap", "plotters", "indicatif", "anyh
 /// dependencies are in earlier layers. `mstar-model` and `mstar-kkt` are
 /// independent (the KKT solvers know nothing of mechanics); `mstar-linearize`
 /// fills the KKT matrix on `mstar-kkt`'s types; `mstar-rk4` sits beside
-/// `mstar-linearize`, so it may depend on `mstar-model` only.
+/// `mstar-linearize`, so it may depend on `mstar-model` only; `mstar-file`
+/// reads files into `mstar-model`'s systems and needs nothing else.
 const LAYERS: &[&[&str]] = &[
     &["mstar-model", "mstar-kkt"],
-    &["mstar-linearize", "mstar-rk4"],
+    &["mstar-linearize", "mstar-rk4", "mstar-file"],
     &["mstar-newmark"],
     &["mstar"],
     &["mstar-cli"],

@@ -13,7 +13,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use mstar::model::file::{Format, Mechanism, MechanismFile};
+use mstar::file::{Format, Mechanism, MechanismFile};
 use mstar::{SampleRef, System};
 
 fn models() -> PathBuf {

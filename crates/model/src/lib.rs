@@ -21,7 +21,6 @@
 #![deny(missing_docs)]
 
 mod fd;
-pub mod file;
 mod fn_system;
 mod parallel;
 mod pattern;

@@ -702,7 +702,7 @@ mod tests {
     /// driver: joints' reactions and the driver's effort).
     #[test]
     fn counts_are_those_of_the_names() {
-        use mstar_model::file::{Format, MechanismFile};
+        use mstar_file::{Format, MechanismFile};
         let text = include_str!("../../../models/slider-crank.toml");
         let file = MechanismFile::parse(text, "slider-crank.toml", Format::Toml).expect("valid");
         let sys = crate::run::lookup(&file.mechanism);

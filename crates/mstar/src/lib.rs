@@ -46,6 +46,7 @@ pub mod redundant;
 pub mod run;
 pub mod sweep;
 
+pub use mstar_file as file;
 pub use mstar_kkt as kkt;
 pub use mstar_linearize as linearize;
 pub use mstar_model as model;

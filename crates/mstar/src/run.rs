@@ -3,11 +3,9 @@
 //! before a run (degrees of freedom, redundant constraints by name, how far
 //! the initial state is from the constraints).
 
+use mstar_file::Mechanism;
+use mstar_file::{ErrorControlChoice, IntegratorChoice, NewtonChoice, RedundantChoice, Simulation};
 use mstar_kkt::{Backend, MaxAbs, argmax_abs};
-use mstar_model::file::Mechanism;
-use mstar_model::file::{
-    ErrorControlChoice, IntegratorChoice, NewtonChoice, RedundantChoice, Simulation,
-};
 use mstar_model::planar::PlanarSystem;
 use mstar_model::spatial::SpatialSystem;
 use mstar_model::{RowSubset, System};

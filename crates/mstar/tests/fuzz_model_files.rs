@@ -9,7 +9,7 @@
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::{Path, PathBuf};
 
-use mstar::model::file::{Format, MechanismFile};
+use mstar::file::{Format, MechanismFile};
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 

@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-use mstar::model::file::{Format, ModelFile, RedundantChoice};
+use mstar::file::{Format, ModelFile, RedundantChoice};
 use mstar::{SampleRef, System};
 
 fn models() -> PathBuf {

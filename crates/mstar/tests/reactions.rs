@@ -2,7 +2,7 @@
 //! closed forms: the sign of `λ` (eq. 1: `M ü + Bᵀλ = g`, constraint force
 //! `−Bᵀλ`) must come out as the force the joint really applies.
 
-use mstar::model::file::ModelFile;
+use mstar::file::ModelFile;
 use mstar::planar::{At, Coordinate, PlanarBuilder, PlanarSystem, RigidBody, TimeFunction};
 use mstar::{Config, Integrator, SampleRef, Scheme, System};
 

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Result, bail};
-use mstar::model::file::{Mechanism, MechanismFile};
+use mstar::file::{Mechanism, MechanismFile};
 use mstar::newmark::Short;
 
 use crate::animate::figure::{Figure, PlanarFigure};

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use mstar::model::file::MechanismFile;
+use mstar::file::MechanismFile;
 
 /// Arguments of `mstar check`.
 #[derive(clap::Args, Debug)]

@@ -7,8 +7,8 @@ use std::time::Instant;
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use mstar::csv::Columns;
+use mstar::file::{MAX_MAGNITUDE, Mechanism, MechanismFile, Simulation};
 use mstar::model::RowSubset;
-use mstar::model::file::{MAX_MAGNITUDE, Mechanism, MechanismFile, Simulation};
 use mstar::newmark::Short;
 use mstar::pendulum::PendulumRun;
 use mstar::redundant::Expanded;
@@ -157,7 +157,7 @@ fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
         e.downcast_ref::<mstar::run::RunError>(),
         Some(mstar::run::RunError::Settings(_))
     );
-    if settings || e.downcast_ref::<mstar::model::file::FileError>().is_some() {
+    if settings || e.downcast_ref::<mstar::file::FileError>().is_some() {
         return ExitCode::from(2);
     }
     if let Some(e) = e.downcast_ref::<IntegrationError>() {
@@ -501,9 +501,9 @@ fn builtin_setting(simulation: &mut Simulation, assignment: &str) -> Result<()> 
     let (key, value) = assignment.split_once('=').unwrap_or((assignment, ""));
     if key == "simulation.error_control" {
         simulation.error_control = Some(match value {
-            "adaptive" => mstar::model::file::ErrorControlChoice::Adaptive,
-            "strict" => mstar::model::file::ErrorControlChoice::Strict,
-            "monitor" => mstar::model::file::ErrorControlChoice::Monitor,
+            "adaptive" => mstar::file::ErrorControlChoice::Adaptive,
+            "strict" => mstar::file::ErrorControlChoice::Strict,
+            "monitor" => mstar::file::ErrorControlChoice::Monitor,
             _ => bail!("{key}: expected monitor, strict or adaptive, got '{value}'"),
         });
         return Ok(());

@@ -37,7 +37,7 @@ mod spec;
 
 use std::path::{Path, PathBuf};
 
-use mstar_model::file::{FileError, Format, MechanismFile};
+use mstar_file::{FileError, Format, MechanismFile};
 
 pub use files::{Merged, merge, summary_header};
 pub use spec::Param;

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use mstar_model::file::MechanismFile;
+use mstar_file::MechanismFile;
 
 use super::files::{Dir, Row};
 use super::{Plan, SweepError};

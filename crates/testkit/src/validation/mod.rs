@@ -22,8 +22,8 @@ mod top;
 
 use std::path::Path;
 
+use mstar::file::{Mechanism, MechanismFile, ModelFile};
 use mstar::model::SampleRef;
-use mstar::model::file::{Mechanism, MechanismFile, ModelFile};
 use mstar::model::spatial::SpatialSystem;
 
 /// One line of the validation table.

@@ -97,7 +97,7 @@ pub struct Simulation {
     /// `rotational_mass`, how a spatial model's rigid bodies form their
     /// rotational mass block (`"singular"`, the default, or
     /// `"regularized"`); spatial models only.
-    pub rotational_mass: Option<crate::spatial::RotationalMass>,
+    pub rotational_mass: Option<mstar_model::spatial::RotationalMass>,
 }
 
 /// `[output]`.
@@ -234,8 +234,8 @@ fn simulation(mut f: Fields<'_>, spatial: bool) -> Result<Simulation, FileError>
         rotational_mass: f
             .optional("rotational_mass", choice(&["singular", "regularized"]))?
             .map(|c| match c {
-                "regularized" => crate::spatial::RotationalMass::Regularized,
-                _ => crate::spatial::RotationalMass::Singular,
+                "regularized" => mstar_model::spatial::RotationalMass::Regularized,
+                _ => mstar_model::spatial::RotationalMass::Singular,
             }),
     };
     if !spatial && let Some(e) = f.entry("rotational_mass") {

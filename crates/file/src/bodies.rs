@@ -7,7 +7,7 @@ use std::ops::Range;
 use super::FileError;
 use super::fields::{Doc, Fields, list, string, two_names};
 use super::node::Node;
-use crate::planar::ModelError;
+use mstar_model::planar::ModelError;
 
 /// The fixed frame's name.
 pub(crate) const GROUND: &str = "ground";
@@ -157,6 +157,9 @@ impl Names {
         let (element, message) = match e {
             ModelError::Invalid { element, what } => (element.clone(), what.clone()),
             ModelError::DuplicateName(name) => (name.clone(), e.to_string()),
+            // (ModelError is #[non_exhaustive]: a kind added later is
+            // reported without a place.)
+            _ => (String::new(), e.to_string()),
         };
         match self.by_name.get(&element) {
             Some((what, span)) => doc.error(span.as_ref(), format!("{what}: {message}")),

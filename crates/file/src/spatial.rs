@@ -9,8 +9,8 @@ use super::FileError;
 use super::bodies::{self, Bodies, Names};
 use super::fields::{Doc, Fields, choice, list, number, number_in, numbers, string};
 use super::node::{Node, Value};
-use crate::planar::{ModelError, TimeFunction};
-use crate::spatial::{
+use mstar_model::planar::{ModelError, TimeFunction};
+use mstar_model::spatial::{
     Attach, DriverKind, JointSpec, JointType, RotationalMass, SpatialBody, SpatialBodyId,
     SpatialBuilder, SpatialInertia, SpatialPointMass, SpatialSystem, SpringSpec, rotation_matrix,
 };

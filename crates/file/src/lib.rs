@@ -2,7 +2,7 @@
 //! or JSON with the same keys (`docs/model-format.md`).
 //!
 //! ```
-//! use mstar_model::file::ModelFile;
+//! use mstar_file::ModelFile;
 //! use mstar_model::System;
 //!
 //! let text = r#"
@@ -23,10 +23,10 @@
 //! [simulation]
 //! t_end = 2.0
 //! "#;
-//! let model = ModelFile::parse(text, "bar.toml", mstar_model::file::Format::Toml)?;
+//! let model = ModelFile::parse(text, "bar.toml", mstar_file::Format::Toml)?;
 //! assert_eq!(model.system.n_coords(), 3);
 //! assert_eq!(model.simulation.t_end, Some(2.0));
-//! # Ok::<(), mstar_model::file::FileError>(())
+//! # Ok::<(), mstar_file::FileError>(())
 //! ```
 //!
 //! Every error names the file, the key and the element, with the line and
@@ -50,9 +50,9 @@ pub use settings::{
 };
 pub use spatial::FORMAT as SPATIAL_FORMAT;
 
-use crate::planar::PlanarSystem;
-use crate::spatial::SpatialSystem;
 use fields::Doc;
+use mstar_model::planar::PlanarSystem;
+use mstar_model::spatial::SpatialSystem;
 use node::Node;
 
 /// An error in a model file: where (when known) and what.
@@ -216,9 +216,9 @@ pub enum Mechanism {
 }
 
 impl Mechanism {
-    /// The mechanism as a [`System`](crate::System).
+    /// The mechanism as a [`System`](mstar_model::System).
     #[must_use]
-    pub fn system(&self) -> &(dyn crate::System + 'static) {
+    pub fn system(&self) -> &(dyn mstar_model::System + 'static) {
         match self {
             Self::Planar(s) => s,
             Self::Spatial(s) => s,
@@ -230,7 +230,7 @@ impl Mechanism {
 /// settings and the warnings about it.
 ///
 /// ```
-/// use mstar_model::file::{Format, Mechanism, MechanismFile};
+/// use mstar_file::{Format, Mechanism, MechanismFile};
 ///
 /// let text = r#"
 /// format = "mstar.spatial/1"
@@ -253,7 +253,7 @@ impl Mechanism {
 /// assert_eq!(file.mechanism.system().n_coords(), 7);
 /// // The orientation was normalized, with a warning that says where.
 /// assert!(file.warnings[0].starts_with("top.toml:9:15: body 'top': orientation"));
-/// # Ok::<(), mstar_model::file::FileError>(())
+/// # Ok::<(), mstar_file::FileError>(())
 /// ```
 #[derive(Clone, Debug)]
 pub struct MechanismFile {

@@ -5,7 +5,7 @@
 
 use std::path::PathBuf;
 
-use mstar_model::file::MechanismFile;
+use mstar_file::MechanismFile;
 
 fn conserves(file: &str) -> bool {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -59,7 +59,7 @@ fn a_spring_conserves_energy_until_it_is_damped() {
         )
     };
     let load = |damping| {
-        MechanismFile::parse(&text(damping), "s.toml", mstar_model::file::Format::Toml)
+        MechanismFile::parse(&text(damping), "s.toml", mstar_file::Format::Toml)
             .unwrap_or_else(|e| panic!("{e}"))
     };
     assert!(load(0.0).mechanism.system().conserves_energy());

@@ -5,7 +5,7 @@
 use super::FileError;
 use super::fields::{Doc, Fields, list, number, numbers};
 use super::node::{Node, Value};
-use crate::planar::TimeFunction;
+use mstar_model::planar::TimeFunction;
 
 /// The kinds of functions, the key of the one-entry table that gives one.
 const KINDS: [&str; 4] = ["constant", "linear", "harmonic", "table"];

@@ -351,7 +351,7 @@ mod tests {
     /// Documents whose parts give the whole document's tree, places included.
     #[test]
     fn parts_give_the_whole_tree() {
-        let n_four_bar = include_str!("../../../../models/n-four-bar.toml");
+        let n_four_bar = include_str!("../../../models/n-four-bar.toml");
         let docs = [
             n_four_bar,
             "format = \"x\"\n[[body]]\nname = \"a\"\n[[joint]]\nname = \"j\"\n\n[[body]]\nname = \"b\"\n[simulation]\nh = 1\n",

@@ -6,7 +6,7 @@ use super::FileError;
 use super::bodies::{self, Bodies, Names};
 use super::fields::{Doc, Fields, choice, number_in, numbers, string, two_points};
 use super::node::Node;
-use crate::planar::{
+use mstar_model::planar::{
     At, BodyId, Coordinate, PlanarBuilder, PlanarSystem, PointMass, RigidBody,
     RotationalSpringDamper, SpringDamper, TimeFunction,
 };
@@ -411,7 +411,7 @@ impl<'a> Model<'a> {
     }
 
     /// A builder error, placed at the element it names when it can be.
-    fn located(&self, e: crate::planar::ModelError) -> FileError {
+    fn located(&self, e: mstar_model::planar::ModelError) -> FileError {
         self.names.located(self.doc, &e)
     }
 }
