@@ -231,8 +231,7 @@ pub enum Newton {
     /// exact, unsymmetric tangent: one iteration a step, 1.5–1.8× faster
     /// than modified Newton on the spatial chain), modified Newton with the
     /// others (on the N-four-bar with `schur` at 10⁴ bodies modified Newton
-    /// is the faster; docs/performance.md, "Model files at the chain
-    /// command's speed"). The default.
+    /// is the faster; docs/performance.md, "Newton variant"). The default.
     #[default]
     Automatic,
 }
