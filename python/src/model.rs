@@ -208,7 +208,7 @@ impl NativeModel {
                 samples.set_item("stats", stats_dict(py, Some(&stats), wall)?)?;
                 return Ok(samples);
             }
-            Err(RunError::Settings(message)) => return Err(ModelError::new_err(message)),
+            Err(RunError::Settings(e)) => return Err(ModelError::new_err(e.to_string())),
             Err(RunError::Stopped { .. }) => raised.unwrap_or_else(|| {
                 pyo3::exceptions::PyKeyboardInterrupt::new_err("the run was stopped")
             }),

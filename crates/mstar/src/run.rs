@@ -39,8 +39,9 @@ pub mod defaults {
 /// `[simulation]`, its defaults applied.
 ///
 /// # Errors
-/// A message for a KKT solver name that no backend has.
-pub fn config(sim: &Simulation) -> Result<(Config, f64), String> {
+/// [`SettingsError`] for a KKT solver name that no backend has, or settings
+/// the integrator refuses.
+pub fn config(sim: &Simulation) -> Result<(Config, f64), SettingsError> {
     let mut c = Config {
         h: sim.h.unwrap_or(defaults::H),
         h_min: sim.h_min,
@@ -83,28 +84,53 @@ pub fn config(sim: &Simulation) -> Result<(Config, f64), String> {
         _ => Newton::Automatic,
     };
     if let Some(name) = &sim.kkt {
-        c.kkt.backend = Backend::named(name).ok_or_else(|| {
-            let names: Vec<_> = mstar_kkt::backends()
+        c.kkt.backend = Backend::named(name).ok_or_else(|| SettingsError::UnknownKkt {
+            name: name.clone(),
+            known: mstar_kkt::backends()
                 .iter()
                 .map(|r| r.backend.name())
-                .collect();
-            format!(
-                "[simulation] kkt: no KKT solver is called '{name}'; the solvers are: auto, {}",
-                names.join(", ")
-            )
+                .collect(),
         })?;
     }
-    c.validate().map_err(|e| e.to_string())?;
+    c.validate().map_err(SettingsError::Refused)?;
     Ok((c, sim.t_end.unwrap_or(defaults::T_END)))
+}
+
+/// What is wrong with a model's `[simulation]` settings.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum SettingsError {
+    /// `kkt` names no registered backend.
+    #[error("[simulation] kkt: no KKT solver is called '{name}'; the solvers are: auto, {}", .known.join(", "))]
+    UnknownKkt {
+        /// The name given.
+        name: String,
+        /// The registered backends' names.
+        known: Vec<&'static str>,
+    },
+    /// The integrator refuses the settings (a value out of range).
+    #[error("{0}")]
+    Refused(IntegrationError),
+    /// `redundant = "minimum-norm"` on a model too large for the dense
+    /// minimum-norm multipliers.
+    #[error("[simulation] redundant = \"minimum-norm\" computes the multipliers densely, for n·m up to {limit}, and this model has n·m = {nm}: remove its redundant constraints ({}) and the setting", .joints.join(", "))]
+    MinimumNormTooLarge {
+        /// The largest `n · m` it takes.
+        limit: usize,
+        /// This model's `n · m`.
+        nm: usize,
+        /// The joints of the redundant rows.
+        joints: Vec<String>,
+    },
 }
 
 /// Why a model file does not run.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum RunError {
-    /// `[simulation]` names something that does not exist.
-    #[error("{0}")]
-    Settings(String),
+    /// `[simulation]` asks for something that does not exist or does not fit.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
     /// Redundant constraints in a model that does not ask for minimum-norm
     /// multipliers: the joints, by name.
     #[error(
@@ -214,12 +240,11 @@ fn minimum_norm_fits<S: ModelLookup + ?Sized>(sys: &S, rows: &Rows) -> Result<()
     if n * m <= crate::redundant::DENSE_LIMIT {
         return Ok(());
     }
-    Err(RunError::Settings(format!(
-        "[simulation] redundant = \"minimum-norm\" computes the multipliers densely, for n·m up to {}, and this model has n·m = {}: remove its redundant constraints ({}) and the setting",
-        crate::redundant::DENSE_LIMIT,
-        n * m,
-        owners(sys, &rows.dependent).join(", ")
-    )))
+    Err(RunError::Settings(SettingsError::MinimumNormTooLarge {
+        limit: crate::redundant::DENSE_LIMIT,
+        nm: n * m,
+        joints: owners(sys, &rows.dependent),
+    }))
 }
 
 /// Checks that the rows left out of a minimum-norm solve hold at the start
@@ -292,7 +317,7 @@ pub fn simulate_until<S: ModelLookup + ?Sized>(
     observer: &mut dyn Observer,
     stop: &mut dyn FnMut() -> bool,
 ) -> Result<RunStats, RunError> {
-    let (config, t_end) = config(sim).map_err(RunError::Settings)?;
+    let (config, t_end) = config(sim)?;
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
     match solve_rows(sys, &u0, sim.redundant.unwrap_or_default())? {
         Some(rows) => {

@@ -202,7 +202,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         None => (model.every, model.every_time),
     };
     let (config, t_end) =
-        mstar::run::config(&model.simulation).map_err(mstar::run::RunError::Settings)?;
+        mstar::run::config(&model.simulation).map_err(mstar::run::RunError::from)?;
     check_tolerances(&config.error, &model.u0)?;
     let sys = model.system.system();
     say!(
