@@ -1,7 +1,7 @@
 //! Finite-difference checks of every derivative a [`System`] provides.
 
 use mstar_kkt::MaxAbs;
-use mstar_model::{Pattern, System};
+use mstar_model::{Pattern, StateRef, System};
 
 /// Largest relative errors of a system's analytic derivatives against central
 /// finite differences, each `max|analytic − fd| / max(1, max|fd|)`; NaN (or
@@ -140,14 +140,8 @@ fn negated(a: Dense) -> Dense {
 /// Compares every analytic derivative of `sys` at the given state with central
 /// finite differences. Expect errors of order 1e-8 for a correct system.
 #[must_use]
-pub fn check_derivatives<S: System + ?Sized>(
-    sys: &S,
-    t: f64,
-    u: &[f64],
-    v: &[f64],
-    a: &[f64],
-    lambda: &[f64],
-) -> DerivativeErrors {
+pub fn check_derivatives<S: System + ?Sized>(sys: &S, x: &StateRef<'_>) -> DerivativeErrors {
+    let StateRef { t, u, v, a, lambda } = *x;
     DerivativeErrors {
         b: rel_err(
             &dense(sys.b_pattern(), |b| sys.b_into(t, u, b)),

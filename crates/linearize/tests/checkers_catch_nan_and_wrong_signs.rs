@@ -8,7 +8,7 @@
 
 use mstar_linearize::{DerivativeErrors, check_derivatives};
 use mstar_model::planar::{At, Coordinate, PlanarBuilder, RigidBody, SpringDamper, TimeFunction};
-use mstar_model::{FnSystem, Pattern, System};
+use mstar_model::{FnSystem, Pattern, StateRef, System};
 
 /// A correct system's errors are below this (central differences: see
 /// `derivatives_match_finite_differences.rs`).
@@ -217,12 +217,30 @@ fn each_corruption_is_caught(inner: &dyn System, u: &[f64], targets: &[Target]) 
     let v: Vec<f64> = (0..n).map(|i| 0.8 + 0.3 * (i as f64).sin()).collect();
     let a: Vec<f64> = (0..n).map(|i| 1.0 - 0.5 * (i as f64).cos()).collect();
     let lambda: Vec<f64> = (0..m).map(|i| 3.0 + i as f64).collect();
-    let clean = check_derivatives(inner, 0.3, u, &v, &a, &lambda);
+    let clean = check_derivatives(
+        inner,
+        &StateRef {
+            t: 0.3,
+            u,
+            v: &v,
+            a: &a,
+            lambda: &lambda,
+        },
+    );
     assert!(clean.max() < FD_TOL, "the uncorrupted system: {clean:?}");
     for &target in targets {
         for how in [How::Nan, How::WrongSign] {
             let sys = Corrupt { inner, target, how };
-            let e = check_derivatives(&sys, 0.3, u, &v, &a, &lambda);
+            let e = check_derivatives(
+                &sys,
+                &StateRef {
+                    t: 0.3,
+                    u,
+                    v: &v,
+                    a: &a,
+                    lambda: &lambda,
+                },
+            );
             assert!(fails(field(&e, target)), "{target:?} {how:?} passed: {e:?}");
             assert!(fails(e.max()), "{target:?} {how:?} passed max(): {e:?}");
         }

@@ -42,7 +42,7 @@ proptest! {
         let v = &seed[nc..2 * nc];
         let a = &seed[2 * nc..3 * nc];
         let lambda = &seed[3 * nc..3 * nc + m];
-        let e = check_derivatives(&sys, 0.3, u, v, a, lambda);
+        let e = check_derivatives(&sys, &StateRef { t: 0.3, u, v, a, lambda });
         prop_assert!(e.max() < FD_TOL, "{e:?}");
     }
 }
@@ -96,11 +96,13 @@ fn wrong_hessian_sign_is_caught() {
     let sys = Flipped(PendulumChain::paper(1.0, 1.0, 10.0));
     let e = check_derivatives(
         &sys,
-        0.0,
-        &[0.7, -0.7, 0.8],
-        &[0.1; 3],
-        &[0.0; 3],
-        &[3.0, -4.0],
+        &StateRef {
+            t: 0.0,
+            u: &[0.7, -0.7, 0.8],
+            v: &[0.1; 3],
+            a: &[0.0; 3],
+            lambda: &[3.0, -4.0],
+        },
     );
     assert!(e.k_t > 0.1, "{e:?}");
 }
@@ -328,7 +330,7 @@ proptest! {
         let v = &state[n..2 * n];
         let a = &state[2 * n..3 * n];
         let lambda = &state[3 * n..3 * n + m];
-        let e = check_derivatives(&sys, t, u, v, a, lambda);
+        let e = check_derivatives(&sys, &StateRef { t, u, v, a, lambda });
         prop_assert!(e.max() < FD_TOL, "{e:?}");
     }
 }
@@ -351,7 +353,7 @@ proptest! {
             let (n, m) = (sys.n_coords(), sys.n_constraints());
             let (u, v, a) = (&state[..n], &state[6..6 + n], &state[12..12 + n]);
             let lambda = &state[18..18 + m];
-            let e = check_derivatives(&sys, t, u, v, a, lambda);
+            let e = check_derivatives(&sys, &StateRef { t, u, v, a, lambda });
             prop_assert!(e.max() < FD_TOL, "{what}: {e:?}");
         }
     }

@@ -4,6 +4,7 @@
 //! random states, with the singular and the regularized rotational mass.
 
 use mstar_linearize::check_derivatives;
+use mstar_model::StateRef;
 use mstar_model::System;
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
@@ -33,7 +34,7 @@ proptest! {
             let u: Vec<f64> = u0.iter().zip(&state).map(|(x, d)| x + 0.1 * d).collect();
             let (v, a) = (&state[14..14 + n], &state[28..28 + n]);
             let lambda = &state[42..42 + m];
-            let e = check_derivatives(&sys, t, &u, v, a, lambda);
+            let e = check_derivatives(&sys, &StateRef { t, u: &u, v, a, lambda });
             prop_assert!(e.max() < FD_TOL, "{what}: {e:?}");
         }
     }

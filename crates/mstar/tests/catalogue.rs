@@ -16,7 +16,7 @@
 //!   backends that factor without pivoting cannot). Never a different answer.
 
 use mstar::kkt::{Backend, KktOptions, backends};
-use mstar::{Config, IntegrationError, Integrator, Newton, SampleRef, Scheme, System};
+use mstar::{Config, IntegrationError, Integrator, Newton, SampleRef, Scheme, StateRef, System};
 use mstar_testkit::catalogue::{Case, cases};
 use mstar_testkit::testing::check_derivatives;
 
@@ -203,7 +203,16 @@ fn every_case_has_consistent_derivatives() {
             .map(|(i, x)| x + 0.3 * (i as f64).cos())
             .collect();
         for t in [0.0, 0.37] {
-            let e = check_derivatives(sys, t, &case.u0, &v, &a, &lambda);
+            let e = check_derivatives(
+                sys,
+                &StateRef {
+                    t,
+                    u: &case.u0,
+                    v: &v,
+                    a: &a,
+                    lambda: &lambda,
+                },
+            );
             assert!(e.max() < 1e-6, "{} at t = {t}: {e:?}", case.name);
         }
     }

@@ -6,7 +6,7 @@
 
 use mstar::linearize::check_derivatives;
 use mstar::planar::{Bar, PlanarSystem, bar_chain_of};
-use mstar::{Config, Integrator, SampleRef, System};
+use mstar::{Config, Integrator, SampleRef, StateRef, System};
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
 
@@ -112,7 +112,7 @@ proptest! {
         let v = &seed[..n];
         let a = &seed[60..60 + n];
         let lambda = &seed[120..120 + m];
-        let e = check_derivatives(&sys, 0.0, &u, v, a, lambda);
+        let e = check_derivatives(&sys, &StateRef { t: 0.0, u: &u, v, a, lambda });
         prop_assert!(e.max() < 1e-6, "{e:?}");
     }
 }
