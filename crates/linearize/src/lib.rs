@@ -9,13 +9,15 @@
 //!
 //! ```
 //! use mstar_linearize::{Coefficients, Linearization};
-//! use mstar_model::PendulumChain;
+//! use mstar_model::{PendulumChain, StateRef};
 //!
 //! let sys = PendulumChain::paper(1.0, 1.0, 10.0);
 //! let mut lin = Linearization::new(&sys).expect("valid patterns");
 //! let u = sys.position(&[0.3]);
-//! lin.eval_residual(&sys, &StateRef { t: 0.0, u: &u, v: &[0.0; 3], a: &[0.0; 3], lambda: &[0.0; 2] });
-//! lin.eval_jacobians(&sys, &StateRef { t: 0.0, u: &u, v: &[0.0; 3], a: &[0.0; 3], lambda: &[0.0; 2] });
+//! let (zeros, lambda) = ([0.0; 3], [0.0; 2]);
+//! let x = StateRef { t: 0.0, u: &u, v: &zeros, a: &zeros, lambda: &lambda };
+//! lin.eval_residual(&sys, &x);
+//! lin.eval_jacobians(&sys, &x);
 //! let (beta, gamma, h) = (0.25, 0.5, 0.01);
 //! lin.assemble(&Coefficients {
 //!     c_u: 1.0,
