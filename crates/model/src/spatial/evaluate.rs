@@ -3,6 +3,10 @@
 //! coordinates at 0..7, side B's at 7..14, time at 14; for loads, the rates
 //! at 14..28), and the structural patterns found by probing.
 
+use std::collections::HashMap;
+
+use rayon::prelude::*;
+
 use super::data::{BodyData, JointData, LoadData};
 use super::frame::{D15, D28, Frame};
 use super::real::{Dual, Jet, Real, TIME, VARS};
@@ -129,6 +133,48 @@ pub(crate) fn joint_patterns(
         .filter(|&(a, b)| hess[a][b] && exists(a) && exists(b))
         .collect();
     (b, h)
+}
+
+/// Which side of an element a body is: the ground, a rigid body or a point
+/// mass (what a joint's pattern depends on besides its own geometry).
+type SideKinds = [u8; 2];
+
+/// What a plain spherical joint's pattern depends on: its two points (as
+/// bits) and its sides' kinds.
+type SphericalShape = ([[u64; 3]; 2], SideKinds);
+
+/// [`joint_patterns`] of every joint, in order. A plain spherical joint's
+/// entries depend only on its two points and on what its sides are (the
+/// ground, a rigid body, a point mass), so joints alike in these are probed
+/// once and share the result: the 10⁵ joints of a bar chain are one probe
+/// instead of 10⁵ (probing evaluates the joint with derivative-carrying
+/// numbers at three states). The other joints are probed in parallel.
+pub(crate) fn all_joint_patterns(
+    bodies: &[BodyData],
+    joints: &[JointData],
+    states: &[ProbeState],
+) -> Vec<(Entries, Entries)> {
+    let kind = |s: Option<usize>| s.map_or(0, |i| if bodies[i].is_rigid() { 1 } else { 2 });
+    let shape = |j: &JointData| -> Option<SphericalShape> {
+        let points = j.element.spherical_points()?;
+        Some((points.map(|p| p.map(f64::to_bits)), j.sides.map(kind)))
+    };
+    let mut first: HashMap<SphericalShape, usize> = HashMap::new();
+    for (k, j) in joints.iter().enumerate() {
+        if let Some(s) = shape(j) {
+            first.entry(s).or_insert(k);
+        }
+    }
+    // The joint whose probe joint `k` takes.
+    let source = |k: usize| shape(&joints[k]).map_or(k, |s| first[&s]);
+    let probed: Vec<Option<(Entries, Entries)>> = joints
+        .par_iter()
+        .enumerate()
+        .map(|(k, j)| (source(k) == k).then(|| joint_patterns(bodies, j, states)))
+        .collect();
+    (0..joints.len())
+        .map(|k| probed[source(k)].clone().unwrap_or_default())
+        .collect()
 }
 
 /// The structural entries of a load's `∂g/∂u` and `∂g/∂u̇` (output local

@@ -2,7 +2,7 @@
 
 use super::data::{BodyData, JointData, LoadData};
 use super::evaluate::{
-    SIDE, d15, d28, frames, global, jet, joint_patterns, load_patterns, probe_states,
+    SIDE, all_joint_patterns, d15, d28, frames, global, jet, load_patterns, probe_states,
 };
 use super::frame::D28;
 use super::kernel::{JointLayout, SphericalKernel};
@@ -286,8 +286,8 @@ impl SpatialSystem {
             push_block(&mut p.g_v, x);
         }
         let states = probe_states(n);
-        for j in &mut self.joints {
-            let (bl, hl) = joint_patterns(&self.bodies, j, &states);
+        let probed = all_joint_patterns(&self.bodies, &self.joints, &states);
+        for (j, (bl, hl)) in self.joints.iter_mut().zip(probed) {
             (j.b_off, j.h_off) = (p.b.len(), p.hessian.len());
             for &(r, a) in &bl {
                 p.b.push(j.row0 + r, global(&self.bodies, j.sides, a).unwrap_or(0));
@@ -811,5 +811,73 @@ impl SpatialSystem {
                 out[off + k] = g[r / SIDE][r % SIDE].g[shift + a];
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::evaluate::{joint_patterns, probe_states};
+    use super::super::{
+        Attach, JointSpec, JointType, RotationalMass, SpatialBody, SpatialBuilder, SpatialInertia,
+        SpatialPointMass, SpatialSystem, spatial_bar_chain,
+    };
+
+    /// Every joint's entries are those its own probe finds.
+    fn each_own(sys: &SpatialSystem) {
+        let states = probe_states(sys.n);
+        for j in &sys.joints {
+            let (b, h) = joint_patterns(&sys.bodies, j, &states);
+            assert_eq!(b, j.b_local, "{}: B", j.name);
+            assert_eq!(h, j.h_local, "{}: Hessian", j.name);
+        }
+    }
+
+    fn spherical(bodies: [Attach; 2], points: [[f64; 3]; 2]) -> JointSpec {
+        JointSpec {
+            kind: JointType::Spherical,
+            bodies,
+            points,
+            axes: [[0.0, 0.0, 1.0]; 2],
+            length: None,
+        }
+    }
+
+    #[test]
+    fn shared_probes_of_spherical_joints_equal_each_joint_s_own() {
+        // A chain: every joint but the first alike (one probe shared).
+        each_own(&spatial_bar_chain(12, RotationalMass::Regularized));
+        // Joints alike in points but not in sides (the ground, a rigid body,
+        // a point mass), and points at a body's centre.
+        let mut b = SpatialBuilder::new();
+        let bar = |x: f64| SpatialBody {
+            mass: 1.0,
+            inertia: SpatialInertia::Principal([0.1, 0.2, 0.3]),
+            position: [x, 0.0, 0.0],
+            orientation: [1.0, 0.0, 0.0, 0.0],
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+        };
+        let (r1, r2) = (b.body("r1", bar(1.0)), b.body("r2", bar(2.0)));
+        let pm = b.point_mass(
+            "pm",
+            SpatialPointMass {
+                mass: 1.0,
+                position: [2.5, 0.0, 0.0],
+                velocity: [0.0; 3],
+            },
+        );
+        let half = [[0.5, 0.0, 0.0], [-0.5, 0.0, 0.0]];
+        let (g, a1, a2, ap) = (
+            Attach::Ground,
+            Attach::Body(r1),
+            Attach::Body(r2),
+            Attach::Body(pm),
+        );
+        b.joint("g1", spherical([g, a1], half));
+        b.joint("j12", spherical([a1, a2], half));
+        b.joint("j2p", spherical([a2, ap], [[0.5, 0.0, 0.0], [0.0; 3]]));
+        b.joint("j1p", spherical([a1, ap], [[0.0; 3], [0.0; 3]]));
+        let sys = b.build().expect("a valid model");
+        each_own(&sys);
     }
 }
