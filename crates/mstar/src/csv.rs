@@ -175,31 +175,55 @@ pub fn target(path: &Path) -> io::Result<Target> {
 /// permission (mode 444, even for root, who could), or one the user may not
 /// write (access(2)); the rename would replace it all the same.
 fn check_writable(path: &Path, target: &Path) -> io::Result<()> {
-    use std::os::unix::fs::PermissionsExt as _;
     let Ok(m) = std::fs::metadata(target) else {
         return Ok(());
     };
-    let c = std::ffi::CString::new(target.as_os_str().as_encoded_bytes()).ok();
-    // SAFETY: `c` is a NUL-terminated path.
-    let denied = c.is_some_and(|c| unsafe { libc::access(c.as_ptr(), libc::W_OK) } != 0);
-    if !m.permissions().readonly() && !denied {
+    if !m.permissions().readonly() && !access_denied(target) {
         return Ok(());
     }
     Err(io::Error::new(
         io::ErrorKind::PermissionDenied,
         format!(
-            "could not write {}: it is read-only (mode {:o}); make it writable (chmod u+w {}) or name another file",
+            "could not write {}: it is read-only{}; make it writable (chmod u+w {}) or name another file",
             display(path),
-            m.permissions().mode() & 0o7777,
+            mode(&m),
             target.display()
         ),
     ))
+}
+
+/// Whether access(2) denies the user writing `target`.
+#[cfg(unix)]
+fn access_denied(target: &Path) -> bool {
+    let c = std::ffi::CString::new(target.as_os_str().as_encoded_bytes()).ok();
+    // SAFETY: `c` is a NUL-terminated path.
+    c.is_some_and(|c| unsafe { libc::access(c.as_ptr(), libc::W_OK) } != 0)
+}
+
+/// Outside Unix, the read-only attribute alone says it.
+#[cfg(not(unix))]
+fn access_denied(_: &Path) -> bool {
+    false
+}
+
+/// ` (mode 444)`: the file's permission bits, for the message.
+#[cfg(unix)]
+fn mode(m: &std::fs::Metadata) -> String {
+    use std::os::unix::fs::PermissionsExt as _;
+    format!(" (mode {:o})", m.permissions().mode() & 0o7777)
+}
+
+/// Nothing outside Unix (no permission bits).
+#[cfg(not(unix))]
+fn mode(_: &std::fs::Metadata) -> String {
+    String::new()
 }
 
 /// Refuses standard output when it was closed (`>&-`): Rust's start-up
 /// code then opens `/dev/null` in its place, read-write, and the rows would
 /// be lost with a report of success. (A shell's `>/dev/null` opens it
 /// write-only, and is written.)
+#[cfg(unix)]
 fn check_stdout() -> io::Result<()> {
     use std::os::unix::fs::MetadataExt as _;
     // SAFETY: fcntl(F_GETFL) only reads the descriptor's flags.
@@ -214,6 +238,14 @@ fn check_stdout() -> io::Result<()> {
             "could not write standard output: it was closed when mstar started",
         ));
     }
+    Ok(())
+}
+
+/// Outside Unix a closed standard output is not told from an open one: a
+/// failed write reports it.
+#[cfg(not(unix))]
+#[allow(clippy::unnecessary_wraps)]
+fn check_stdout() -> io::Result<()> {
     Ok(())
 }
 
