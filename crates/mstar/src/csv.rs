@@ -51,17 +51,20 @@ pub fn header_line<S: System + ?Sized>(sys: &S) -> String {
     join_fields(&header(sys))
 }
 
+/// `names` as one CSV line, without the newline: the `csv` crate's writer,
+/// quoting a field only where it holds a comma, a quote or a line break.
 fn join_fields(names: &[String]) -> String {
-    names.iter().map(|f| field(f)).collect::<Vec<_>>().join(",")
-}
-
-/// One CSV field, quoted when it holds a comma, a quote or a line break.
-fn field(s: &str) -> std::borrow::Cow<'_, str> {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\"")).into()
-    } else {
-        s.into()
-    }
+    let mut w = ::csv::WriterBuilder::new()
+        .terminator(::csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
+    // Writing to memory does not fail, and UTF-8 fields make a UTF-8 line.
+    let line = w
+        .write_record(names)
+        .ok()
+        .and_then(|()| w.into_inner().ok())
+        .and_then(|bytes| String::from_utf8(bytes).ok())
+        .unwrap_or_default();
+    line.strip_suffix('\n').unwrap_or(&line).to_string()
 }
 
 /// A number in shortest round-trip form: plain for `1e-4 ≤ |x| < 1e15` (and 0),
