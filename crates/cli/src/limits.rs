@@ -190,6 +190,13 @@ pub fn free_space_of(dir: &Path) -> Option<f64> {
             }
         })
         .find(|d| d.exists())?;
+    statvfs_available(dir)
+}
+
+/// The bytes an unprivileged user may still write on `dir`'s file system
+/// (statvfs(3): available blocks × fragment size).
+#[cfg(unix)]
+fn statvfs_available(dir: &Path) -> Option<f64> {
     let c = std::ffi::CString::new(dir.as_os_str().as_encoded_bytes()).ok()?;
     let mut stat = std::mem::MaybeUninit::<libc::statvfs>::zeroed();
     // SAFETY: `c` is a NUL-terminated path, `stat` a buffer of the right type.
@@ -200,6 +207,12 @@ pub fn free_space_of(dir: &Path) -> Option<f64> {
     // SAFETY: statvfs filled it in.
     let stat = unsafe { stat.assume_init() };
     Some(stat.f_bavail as f64 * stat.f_frsize as f64)
+}
+
+/// Unknown outside Unix: the checks that need it are skipped.
+#[cfg(not(unix))]
+fn statvfs_available(_: &Path) -> Option<f64> {
+    None
 }
 
 /// An output's size, rows and fields a row, and the options that shrink it.
@@ -342,15 +355,7 @@ pub fn available_memory() -> Option<f64> {
             .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<f64>().ok())
             .map(|kb| kb * 1024.0)
     });
-    let mut limit = std::mem::MaybeUninit::<libc::rlimit>::zeroed();
-    // SAFETY: `limit` is a buffer of the right type.
-    let address_space = (unsafe { libc::getrlimit(libc::RLIMIT_AS, limit.as_mut_ptr()) } == 0)
-        .then(|| {
-            // SAFETY: getrlimit filled it in.
-            let l = unsafe { limit.assume_init() };
-            (l.rlim_cur != libc::RLIM_INFINITY).then_some(l.rlim_cur as f64)
-        })
-        .flatten();
+    let address_space = address_space_limit();
     let cgroup = std::fs::read_to_string("/sys/fs/cgroup/memory.max")
         .ok()
         .and_then(|max| max.trim().parse::<f64>().ok())
@@ -365,6 +370,26 @@ pub fn available_memory() -> Option<f64> {
         .into_iter()
         .flatten()
         .reduce(f64::min)
+}
+
+/// The soft limit of the address space (`ulimit -v`, getrlimit(2)), bytes;
+/// `None` when unlimited.
+#[cfg(unix)]
+fn address_space_limit() -> Option<f64> {
+    let mut limit = std::mem::MaybeUninit::<libc::rlimit>::zeroed();
+    // SAFETY: `limit` is a buffer of the right type.
+    if unsafe { libc::getrlimit(libc::RLIMIT_AS, limit.as_mut_ptr()) } != 0 {
+        return None;
+    }
+    // SAFETY: getrlimit filled it in.
+    let l = unsafe { limit.assume_init() };
+    (l.rlim_cur != libc::RLIM_INFINITY).then_some(l.rlim_cur as f64)
+}
+
+/// No such limit outside Unix.
+#[cfg(not(unix))]
+fn address_space_limit() -> Option<f64> {
+    None
 }
 
 /// Refuses a chain of `links` links that will not fit in `available` bytes.

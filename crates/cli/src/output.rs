@@ -133,7 +133,7 @@ pub fn conclude(
     let why = cause(stop, error, t);
     let quiet = why
         .downcast_ref::<Interrupted>()
-        .is_some_and(|i| i.signal == libc::SIGPIPE);
+        .is_some_and(|i| i.signal == signals::SIGPIPE);
     let kept = stream.keep_partial(&partial_path(out));
     if !quiet {
         tell_kept(out, &kept);
@@ -148,7 +148,7 @@ fn cause(stop: Stop, write: Option<std::io::Error>, t: f64) -> anyhow::Error {
         (Stop::Failed(e), _) => e.into(),
         (Stop::Signal(signal), _) => Interrupted { signal, t }.into(),
         (Stop::Write, Some(e)) if e.kind() == std::io::ErrorKind::BrokenPipe => Interrupted {
-            signal: libc::SIGPIPE,
+            signal: signals::SIGPIPE,
             t,
         }
         .into(),
@@ -197,7 +197,7 @@ pub fn exit_code(result: anyhow::Result<()>, files: bool, failure: u8) -> u8 {
         return 2;
     }
     if let Some(i) = e.downcast_ref::<Interrupted>() {
-        if i.signal != libc::SIGPIPE {
+        if i.signal != signals::SIGPIPE {
             note(format_args!("mstar: {i}"));
         }
         return i.code();
@@ -238,18 +238,18 @@ pub fn usage(message: String) -> anyhow::Error {
 /// `None` for what is written directly and never replaced (a device, a FIFO).
 #[derive(Debug, PartialEq, Eq)]
 enum Identity {
+    #[cfg(unix)]
     Inode(u64, u64),
     New(PathBuf),
     Stdout,
 }
 
 fn identity(path: &Path) -> Option<Identity> {
-    use std::os::unix::fs::MetadataExt as _;
     if is_stdout(Some(path)) {
         return Some(Identity::Stdout);
     }
     match std::fs::metadata(path) {
-        Ok(m) if m.is_file() => Some(Identity::Inode(m.dev(), m.ino())),
+        Ok(m) if m.is_file() => file_identity(path, &m),
         Ok(_) => None,
         Err(_) => {
             let dir = match path.parent() {
@@ -260,6 +260,20 @@ fn identity(path: &Path) -> Option<Identity> {
             Some(Identity::New(std::fs::canonicalize(dir).ok()?.join(name)))
         }
     }
+}
+
+/// An existing regular file: its device and inode.
+#[cfg(unix)]
+fn file_identity(_: &Path, m: &std::fs::Metadata) -> Option<Identity> {
+    use std::os::unix::fs::MetadataExt as _;
+    Some(Identity::Inode(m.dev(), m.ino()))
+}
+
+/// An existing regular file outside Unix: its canonical path (hard links to
+/// one file are then two files).
+#[cfg(not(unix))]
+fn file_identity(path: &Path, _: &std::fs::Metadata) -> Option<Identity> {
+    std::fs::canonicalize(path).ok().map(Identity::New)
 }
 
 /// Refuses an output that names one of the inputs or another output, by

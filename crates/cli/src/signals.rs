@@ -2,49 +2,68 @@
 //! the samples so far are kept and no temporary file outlives the program;
 //! a file-size limit (SIGXFSZ) becomes a write error with a message.
 
-use std::sync::atomic::{AtomicI32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 
-/// The first stop signal received (0: none).
-static RECEIVED: AtomicI32 = AtomicI32::new(0);
+#[cfg(unix)]
+use signal_hook::consts::{SIGHUP, SIGXFSZ};
+use signal_hook::consts::{SIGINT, SIGTERM};
 
-/// Records the signal for the integration loop; a second one while the first
-/// is being handled (the user insists) takes the default action: the program
-/// ends at once.
-extern "C" fn on_stop(signal: libc::c_int) {
-    if RECEIVED.swap(signal, Ordering::SeqCst) != 0 {
-        // SAFETY: signal and raise are async-signal-safe.
-        unsafe {
-            libc::signal(signal, libc::SIG_DFL);
-            libc::raise(signal);
-        }
-    }
-}
+/// The signal a write to a closed pipe raises (the run's end is quiet, and
+/// its exit status 141, as on Unix).
+#[cfg(unix)]
+pub const SIGPIPE: i32 = signal_hook::consts::SIGPIPE;
+/// The signal a write to a closed pipe raises on Unix (the exit status of a
+/// closed pipe is 141 everywhere).
+#[cfg(not(unix))]
+pub const SIGPIPE: i32 = 13;
+
+/// The last stop signal received (0: none).
+static RECEIVED: AtomicUsize = AtomicUsize::new(0);
+/// Whether a stop signal has arrived: a second one then takes the default
+/// action.
+static STOPPING: AtomicBool = AtomicBool::new(false);
 
 /// For the commands that integrate: SIGINT, SIGTERM and SIGHUP set the flag
-/// [`received`] reads. For every command: a write beyond the file-size limit
-/// (`ulimit -f`) returns an error (EFBIG) instead of killing the program
-/// without a word. (SIGPIPE is already ignored by Rust's start-up code: a
-/// closed pipe is an error, see `output::say`.)
+/// [`received`] reads; a second one while the first is being handled (the
+/// user insists) takes the default action: the program ends at once. For
+/// every command: a write beyond the file-size limit (`ulimit -f`) returns an
+/// error (EFBIG) instead of killing the program without a word. (SIGPIPE is
+/// already ignored by Rust's start-up code: a closed pipe is an error, see
+/// `output::say`.)
 pub fn install(stop: bool) {
-    // SAFETY: the handler only touches an atomic and calls async-signal-safe
-    // functions; SIG_IGN needs no handler.
-    unsafe {
-        libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
-        if stop {
-            let handler = on_stop as extern "C" fn(libc::c_int) as libc::sighandler_t;
-            libc::signal(libc::SIGINT, handler);
-            libc::signal(libc::SIGTERM, handler);
-            // A closed terminal: the run is kept as for SIGTERM.
-            libc::signal(libc::SIGHUP, handler);
+    // A handler that does nothing: the write fails with EFBIG instead. (A
+    // handler cannot fail to install for a signal that is not forbidden.)
+    #[cfg(unix)]
+    let _ = signal_hook::flag::register(SIGXFSZ, &IGNORED);
+    if stop {
+        // A closed terminal (SIGHUP): the run is kept as for SIGTERM.
+        #[cfg(unix)]
+        let signals = [SIGINT, SIGTERM, SIGHUP];
+        #[cfg(not(unix))]
+        let signals = [SIGINT, SIGTERM];
+        for signal in signals {
+            // The order matters: the default action is armed by the first
+            // signal, and taken by the next.
+            let _ = signal_hook::flag::register_conditional_default(signal, &STOPPING);
+            let _ = signal_hook::flag::register_usize(
+                signal,
+                &RECEIVED,
+                usize::try_from(signal).unwrap_or(0),
+            );
+            let _ = signal_hook::flag::register(signal, &STOPPING);
         }
     }
 }
+
+/// Set by SIGXFSZ, and never read.
+#[cfg(unix)]
+static IGNORED: AtomicBool = AtomicBool::new(false);
 
 /// The stop signal received, if any.
 pub fn received() -> Option<i32> {
     match RECEIVED.load(Ordering::SeqCst) {
         0 => None,
-        s => Some(s),
+        s => i32::try_from(s).ok(),
     }
 }
 
@@ -68,10 +87,11 @@ impl Interrupted {
 impl std::fmt::Display for Interrupted {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         let name = match self.signal {
-            libc::SIGINT => "SIGINT (Ctrl-C)".to_string(),
-            libc::SIGTERM => "SIGTERM".to_string(),
-            libc::SIGHUP => "SIGHUP (the terminal closed)".to_string(),
-            libc::SIGPIPE => "a closed pipe".to_string(),
+            SIGINT => "SIGINT (Ctrl-C)".to_string(),
+            SIGTERM => "SIGTERM".to_string(),
+            #[cfg(unix)]
+            SIGHUP => "SIGHUP (the terminal closed)".to_string(),
+            SIGPIPE => "a closed pipe".to_string(),
             s => format!("signal {s}"),
         };
         write!(

@@ -3,6 +3,8 @@
 //! ones too) with exit 2, absurd requests refused with advice that works,
 //! numbers of at most 6 significant digits, a thread pool under `ulimit -v`,
 //! a closed standard output, a read-only output file, and SIGHUP.
+// Signals (kill), symbolic links and permission bits by Unix calls: Unix only.
+#![cfg(unix)]
 
 #[allow(dead_code)] // (not every helper is used here)
 mod common;

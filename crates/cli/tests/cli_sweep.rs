@@ -7,6 +7,8 @@
 //! The model is the double pendulum of `models/` over 0.05 s: with a fixed
 //! step h every run takes t_end / h steps (50 for h = 1e-3, 100 for
 //! h = 5e-4), a figure the summary must show independently of the masses.
+// Signals (kill), inodes and process setup by Unix calls: Unix only.
+#![cfg(unix)]
 
 mod common;
 

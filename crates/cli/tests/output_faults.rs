@@ -3,6 +3,8 @@
 //! run keeps its samples in `<name>.partial.csv` and leaves no temporary
 //! file; a full disk and a file-size limit are errors with a message; a
 //! closed pipe ends quietly; absurd runs are refused before they start.
+// Signals, devices, FIFOs, tmpfs and resource limits by Unix calls: Unix only.
+#![cfg(unix)]
 
 #[allow(dead_code)] // (not every helper is used here)
 mod common;

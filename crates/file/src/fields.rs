@@ -158,32 +158,17 @@ impl<'a> Fields<'a> {
     }
 }
 
-/// The known key closest to `key` by edit distance, if it is a likely typo.
+/// The known key closest to `key` by edit distance (Levenshtein, in
+/// characters), if it is a likely typo.
 fn closest<'k>(key: &str, known: &[&'k str]) -> Option<&'k str> {
     known
         .iter()
-        .map(|&k| (edit_distance(key, k), k))
+        .map(|&k| (strsim::levenshtein(key, k), k))
         // One edit for a short key (`foo` is not a typo of `rho`), a third
         // of a longer one.
         .filter(|&(d, k)| d <= 1.max(k.len() / 3))
         .min()
         .map(|(_, k)| k)
-}
-
-/// Levenshtein distance (characters).
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut diagonal = row[0];
-        row[0] = i + 1;
-        for (j, &cb) in b.iter().enumerate() {
-            let substitution = diagonal + usize::from(ca != cb);
-            diagonal = row[j + 1];
-            row[j + 1] = substitution.min(row[j] + 1).min(row[j + 1] + 1);
-        }
-    }
-    row[b.len()]
 }
 
 /// `x` as written in a message: exponent form outside [1e-4, 1e6), so that
@@ -328,8 +313,8 @@ mod tests {
 
     #[test]
     fn a_typo_suggests_the_closest_key() {
-        assert_eq!(edit_distance("mas", "mass"), 1);
-        assert_eq!(edit_distance("intertia", "inertia"), 1);
+        assert_eq!(strsim::levenshtein("mas", "mass"), 1);
+        assert_eq!(strsim::levenshtein("intertia", "inertia"), 1);
         assert_eq!(closest("mas", &["name", "mass", "inertia"]), Some("mass"));
         assert_eq!(closest("colour", &["name", "mass"]), None);
     }

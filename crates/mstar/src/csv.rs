@@ -51,17 +51,20 @@ pub fn header_line<S: System + ?Sized>(sys: &S) -> String {
     join_fields(&header(sys))
 }
 
+/// `names` as one CSV line, without the newline: the `csv` crate's writer,
+/// quoting a field only where it holds a comma, a quote or a line break.
 fn join_fields(names: &[String]) -> String {
-    names.iter().map(|f| field(f)).collect::<Vec<_>>().join(",")
-}
-
-/// One CSV field, quoted when it holds a comma, a quote or a line break.
-fn field(s: &str) -> std::borrow::Cow<'_, str> {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\"")).into()
-    } else {
-        s.into()
-    }
+    let mut w = ::csv::WriterBuilder::new()
+        .terminator(::csv::Terminator::Any(b'\n'))
+        .from_writer(Vec::new());
+    // Writing to memory does not fail, and UTF-8 fields make a UTF-8 line.
+    let line = w
+        .write_record(names)
+        .ok()
+        .and_then(|()| w.into_inner().ok())
+        .and_then(|bytes| String::from_utf8(bytes).ok())
+        .unwrap_or_default();
+    line.strip_suffix('\n').unwrap_or(&line).to_string()
 }
 
 /// A number in shortest round-trip form: plain for `1e-4 ≤ |x| < 1e15` (and 0),
@@ -175,31 +178,55 @@ pub fn target(path: &Path) -> io::Result<Target> {
 /// permission (mode 444, even for root, who could), or one the user may not
 /// write (access(2)); the rename would replace it all the same.
 fn check_writable(path: &Path, target: &Path) -> io::Result<()> {
-    use std::os::unix::fs::PermissionsExt as _;
     let Ok(m) = std::fs::metadata(target) else {
         return Ok(());
     };
-    let c = std::ffi::CString::new(target.as_os_str().as_encoded_bytes()).ok();
-    // SAFETY: `c` is a NUL-terminated path.
-    let denied = c.is_some_and(|c| unsafe { libc::access(c.as_ptr(), libc::W_OK) } != 0);
-    if !m.permissions().readonly() && !denied {
+    if !m.permissions().readonly() && !access_denied(target) {
         return Ok(());
     }
     Err(io::Error::new(
         io::ErrorKind::PermissionDenied,
         format!(
-            "could not write {}: it is read-only (mode {:o}); make it writable (chmod u+w {}) or name another file",
+            "could not write {}: it is read-only{}; make it writable (chmod u+w {}) or name another file",
             display(path),
-            m.permissions().mode() & 0o7777,
+            mode(&m),
             target.display()
         ),
     ))
+}
+
+/// Whether access(2) denies the user writing `target`.
+#[cfg(unix)]
+fn access_denied(target: &Path) -> bool {
+    let c = std::ffi::CString::new(target.as_os_str().as_encoded_bytes()).ok();
+    // SAFETY: `c` is a NUL-terminated path.
+    c.is_some_and(|c| unsafe { libc::access(c.as_ptr(), libc::W_OK) } != 0)
+}
+
+/// Outside Unix, the read-only attribute alone says it.
+#[cfg(not(unix))]
+fn access_denied(_: &Path) -> bool {
+    false
+}
+
+/// ` (mode 444)`: the file's permission bits, for the message.
+#[cfg(unix)]
+fn mode(m: &std::fs::Metadata) -> String {
+    use std::os::unix::fs::PermissionsExt as _;
+    format!(" (mode {:o})", m.permissions().mode() & 0o7777)
+}
+
+/// Nothing outside Unix (no permission bits).
+#[cfg(not(unix))]
+fn mode(_: &std::fs::Metadata) -> String {
+    String::new()
 }
 
 /// Refuses standard output when it was closed (`>&-`): Rust's start-up
 /// code then opens `/dev/null` in its place, read-write, and the rows would
 /// be lost with a report of success. (A shell's `>/dev/null` opens it
 /// write-only, and is written.)
+#[cfg(unix)]
 fn check_stdout() -> io::Result<()> {
     use std::os::unix::fs::MetadataExt as _;
     // SAFETY: fcntl(F_GETFL) only reads the descriptor's flags.
@@ -214,6 +241,14 @@ fn check_stdout() -> io::Result<()> {
             "could not write standard output: it was closed when mstar started",
         ));
     }
+    Ok(())
+}
+
+/// Outside Unix a closed standard output is not told from an open one: a
+/// failed write reports it.
+#[cfg(not(unix))]
+#[allow(clippy::unnecessary_wraps)]
+fn check_stdout() -> io::Result<()> {
     Ok(())
 }
 

@@ -150,8 +150,8 @@ fn run(args: &SweepArgs) -> Result<Ended, SweepError> {
 /// SIGINT or SIGTERM as messages name them.
 fn signal_name(signal: i32) -> String {
     match signal {
-        libc::SIGINT => "SIGINT (Ctrl-C)".to_string(),
-        libc::SIGTERM => "SIGTERM".to_string(),
+        signal_hook::consts::SIGINT => "SIGINT (Ctrl-C)".to_string(),
+        signal_hook::consts::SIGTERM => "SIGTERM".to_string(),
         s => format!("signal {s}"),
     }
 }
