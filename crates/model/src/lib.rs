@@ -20,6 +20,7 @@
 //! ```
 #![deny(missing_docs)]
 
+mod dims;
 mod fd;
 pub mod file;
 mod fn_system;

@@ -8,6 +8,7 @@ use super::geometry::Anchor;
 use super::joints::{Constraint, Distance, Driver, JointElement, Prismatic, Revolute, Weld};
 use super::loads::{Force, LoadElement, PointForce, RotationalSpring, Spring, Torque};
 use super::{At, Body, BodyId, Coordinate, ModelError, PlanarSystem, TimeFunction};
+use crate::dims;
 
 /// A rigid body: mass, inertia about the centre of mass, initial pose and
 /// velocity.
@@ -377,15 +378,7 @@ impl PlanarBuilder {
     /// torque or a rotational spring on a point mass, or an element attached
     /// to the ground twice.
     pub fn build(&self) -> Result<PlanarSystem, ModelError> {
-        if let Some(problem) = self.problems.first() {
-            return Err(problem.clone());
-        }
-        if self.bodies.is_empty() {
-            return Err(ModelError::Invalid {
-                element: "the model".to_string(),
-                what: "no body or point mass: add a [[body]] or [[point_mass]]".to_string(),
-            });
-        }
+        dims::check_start(&self.problems, self.bodies.len())?;
         self.check_names()?;
         self.check_bodies()?;
         let mut constraints = Vec::new();
@@ -419,7 +412,6 @@ impl PlanarBuilder {
     /// Every body and element has its own name.
     fn check_names(&self) -> Result<(), ModelError> {
         let count = self.bodies.len() + self.joints.len() + self.drivers.len() + self.forces.len();
-        let mut names = std::collections::HashSet::with_capacity(count);
         let all_names = self
             .bodies
             .iter()
@@ -427,12 +419,7 @@ impl PlanarBuilder {
             .chain(self.joints.iter().map(|j| &j.0))
             .chain(self.drivers.iter().map(|d| &d.0))
             .chain(self.forces.iter().map(|f| &f.0));
-        for name in all_names {
-            if !names.insert(name.as_str()) {
-                return Err(ModelError::DuplicateName(name.clone()));
-            }
-        }
-        Ok(())
+        dims::check_names(all_names, count, None)
     }
 
     /// Positive masses, inertias ≥ 0, finite poses and velocities, no angular

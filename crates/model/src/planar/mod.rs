@@ -30,6 +30,8 @@ use loads::Force;
 
 use rayon::prelude::*;
 
+pub use crate::dims::ModelError;
+use crate::dims::{self, Initial, Placed, Planar};
 use crate::{Pattern, System};
 
 /// Handle of a body in the [`PlanarBuilder`] that made it.
@@ -60,23 +62,6 @@ pub enum Coordinate {
     Theta,
 }
 
-/// Errors in a planar model.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum ModelError {
-    /// Two bodies or two elements share a name.
-    #[error("the name '{0}' is used twice")]
-    DuplicateName(String),
-    /// A parameter is out of range.
-    #[error("{element}: {what}")]
-    Invalid {
-        /// The element's name.
-        element: String,
-        /// What is wrong.
-        what: String,
-    },
-}
-
 /// What a name of [`PlanarSystem`] stands for.
 #[derive(Clone, Copy, Debug)]
 enum Named {
@@ -96,10 +81,22 @@ struct Body {
     velocity: [f64; 3],
 }
 
-impl Body {
-    /// Its number of coordinates: 3 for a rigid body, 2 for a point mass.
-    fn count(&self) -> usize {
-        if self.inertia.is_some() { 3 } else { 2 }
+impl Placed<3> for Body {
+    type Dim = Planar;
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn first(&self) -> usize {
+        self.x
+    }
+    fn is_rigid(&self) -> bool {
+        self.inertia.is_some()
+    }
+    fn u0(&self) -> [f64; 3] {
+        self.pose
+    }
+    fn v0(&self) -> [f64; 3] {
+        self.velocity
     }
 }
 
@@ -264,21 +261,13 @@ impl PlanarSystem {
     /// Initial coordinates `u₀` (the poses given to the builder).
     #[must_use]
     pub fn initial_position(&self) -> Vec<f64> {
-        self.initial(|b| b.pose)
+        dims::initial(self.n, &self.bodies, Initial::Position)
     }
 
     /// Initial velocities `u̇₀` (given to the builder, zero by default).
     #[must_use]
     pub fn initial_velocity(&self) -> Vec<f64> {
-        self.initial(|b| b.velocity)
-    }
-
-    fn initial(&self, f: impl Fn(&Body) -> [f64; 3]) -> Vec<f64> {
-        let mut u = vec![0.0; self.n];
-        for b in &self.bodies {
-            u[b.x..b.x + b.count()].copy_from_slice(&f(b)[..b.count()]);
-        }
-        u
+        dims::initial(self.n, &self.bodies, Initial::Velocity)
     }
 
     /// Number of bodies.

@@ -14,7 +14,8 @@ use super::loads::{PointForce, RotationalSpring, SpatialLoad, Spring, Torque};
 use super::rotation::rotates_to_body;
 use super::rotation::{normalized, rates_of_omega};
 use super::system::SpatialSystem;
-use crate::planar::{ModelError, TimeFunction};
+use crate::dims::{self, ModelError};
+use crate::planar::TimeFunction;
 
 /// How a rigid body's rotational mass block is formed (`docs/theory.md`,
 /// "Spatial bodies").
@@ -466,15 +467,7 @@ impl SpatialBuilder {
     /// axis, an axis joint on a point mass, or a driver of a joint that has
     /// no such motion.
     pub fn build(&self) -> Result<SpatialSystem, ModelError> {
-        if let Some(e) = self.errors.first() {
-            return Err(e.clone());
-        }
-        if self.bodies.is_empty() {
-            return Err(ModelError::Invalid {
-                element: "the model".to_string(),
-                what: "no body or point mass: add a [[body]] or [[point_mass]]".to_string(),
-            });
-        }
+        dims::check_start(&self.errors, self.bodies.len())?;
         self.check_names()?;
         let bodies = self.bodies_data()?;
         let mut joints = Vec::new();
@@ -497,18 +490,14 @@ impl SpatialBuilder {
         Ok(SpatialSystem::assemble(self.gravity, bodies, joints, loads))
     }
 
+    /// Every body and element has its own name, and none is `ground`.
     fn check_names(&self) -> Result<(), ModelError> {
-        let mut seen = std::collections::HashSet::new();
+        let count = self.bodies.len() + self.joints.len() + self.loads.len();
         let names = self.bodies.iter().map(|b| &b.0);
         let names = names
             .chain(self.joints.iter().map(|j| &j.0))
             .chain(self.loads.iter().map(|l| &l.0));
-        for n in names {
-            if n == "ground" || !seen.insert(n.as_str()) {
-                return Err(ModelError::DuplicateName(n.clone()));
-            }
-        }
-        Ok(())
+        dims::check_names(names, count, Some("ground"))
     }
 
     fn bodies_data(&self) -> Result<Vec<BodyData>, ModelError> {

@@ -9,6 +9,7 @@ use std::sync::Arc;
 use super::body::Inertia;
 use super::joints::SpatialJoint;
 use super::loads::SpatialLoad;
+use crate::dims::{Dimension, Placed, Spatial};
 
 /// A body as assembled.
 #[derive(Clone, Debug)]
@@ -26,11 +27,30 @@ pub(crate) struct BodyData {
 impl BodyData {
     /// Its number of coordinates: 7 for a rigid body, 3 for a point mass.
     pub(crate) fn count(&self) -> usize {
-        if self.inertia.is_some() { 7 } else { 3 }
+        Spatial::count(self.inertia.is_some())
     }
 
     pub(crate) fn is_rigid(&self) -> bool {
         self.inertia.is_some()
+    }
+}
+
+impl Placed<7> for BodyData {
+    type Dim = Spatial;
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn first(&self) -> usize {
+        self.x
+    }
+    fn is_rigid(&self) -> bool {
+        self.inertia.is_some()
+    }
+    fn u0(&self) -> [f64; 7] {
+        self.u0
+    }
+    fn v0(&self) -> [f64; 7] {
+        self.v0
     }
 }
 

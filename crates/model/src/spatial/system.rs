@@ -8,6 +8,7 @@ use super::frame::D28;
 use super::kernel::{JointLayout, SphericalKernel};
 use super::real::{Jet, Real, TIME};
 use super::spherical;
+use crate::dims::{self, Initial, Placed};
 use crate::planar::split_at_bases;
 use crate::{Pattern, System};
 use rayon::prelude::*;
@@ -125,16 +126,8 @@ impl SpatialSystem {
             }
         }
         let m = names.len();
-        let body_by_name = bodies
-            .iter()
-            .enumerate()
-            .map(|(i, b)| (b.name.clone(), i))
-            .collect();
-        let joint_by_name = joints
-            .iter()
-            .enumerate()
-            .map(|(i, j)| (j.name.clone(), i))
-            .collect();
+        let body_by_name = dims::index_by_name(bodies.iter().map(Placed::name));
+        let joint_by_name = dims::index_by_name(joints.iter().map(|j| j.name.as_str()));
         let mut sys = Self {
             body_by_name,
             joint_by_name,
@@ -350,21 +343,13 @@ impl SpatialSystem {
     /// Initial coordinates `u₀` (unit Euler parameters).
     #[must_use]
     pub fn initial_position(&self) -> Vec<f64> {
-        self.initial(|b| b.u0)
+        dims::initial(self.n, &self.bodies, Initial::Position)
     }
 
     /// Initial velocities `u̇₀` (`ṗ = ½ Eᵀ ω`).
     #[must_use]
     pub fn initial_velocity(&self) -> Vec<f64> {
-        self.initial(|b| b.v0)
-    }
-
-    fn initial(&self, f: impl Fn(&BodyData) -> [f64; 7]) -> Vec<f64> {
-        let mut u = vec![0.0; self.n];
-        for b in &self.bodies {
-            u[b.x..b.x + b.count()].copy_from_slice(&f(b)[..b.count()]);
-        }
-        u
+        dims::initial(self.n, &self.bodies, Initial::Velocity)
     }
 
     /// The loads as assembled.
