@@ -26,13 +26,17 @@ pub enum ModelError {
     },
 }
 
-/// A dimension: how many coordinates a body has in it.
-pub(crate) trait Dimension {
+/// A dimension: how many coordinates a body has in it ([`Planar`],
+/// [`Spatial`]).
+pub(crate) trait Dimension: Clone + std::fmt::Debug {
     /// A rigid body's coordinates: `(x, y, θ)` in the plane, `(x, y, z, e0,
     /// e1, e2, e3)` in space.
     const RIGID: usize;
     /// A point mass's coordinates: `(x, y)` or `(x, y, z)`.
     const POINT: usize;
+    /// A body's coordinates or velocities, with room for a rigid body's
+    /// (a point mass uses the first [`POINT`](Self::POINT)).
+    type Coords: Copy + std::fmt::Debug + AsRef<[f64]>;
 
     /// The coordinates of a rigid body (`rigid`) or a point mass.
     fn count(rigid: bool) -> usize {
@@ -40,43 +44,53 @@ pub(crate) trait Dimension {
     }
 }
 
-/// The plane.
+/// The plane: rigid bodies in `(x, y, θ)`, point masses in `(x, y)`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Planar;
 
-/// Space.
+/// Space: rigid bodies in `(x, y, z, e0, e1, e2, e3)`, point masses in
+/// `(x, y, z)`.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Spatial;
 
 impl Dimension for Planar {
     const RIGID: usize = 3;
     const POINT: usize = 2;
+    type Coords = [f64; 3];
 }
 
 impl Dimension for Spatial {
     const RIGID: usize = 7;
     const POINT: usize = 3;
+    type Coords = [f64; 7];
 }
 
-/// A body as an assembled system holds it: its name, its place in `u` and
-/// its initial state (`N` values, of which the body's count are used).
-pub(crate) trait Placed<const N: usize> {
-    /// The dimension it moves in.
-    type Dim: Dimension;
-    /// Its name.
-    fn name(&self) -> &str;
+/// A body as an assembled system holds it, in either dimension; `I` is a
+/// rigid body's rotational inertia as assembled.
+#[derive(Clone, Debug)]
+pub(crate) struct Body<D: Dimension, I> {
+    pub(crate) name: String,
+    pub(crate) mass: f64,
+    /// `None` for a point mass.
+    pub(crate) inertia: Option<I>,
     /// Its first coordinate.
-    fn first(&self) -> usize;
-    /// Whether it is a rigid body (not a point mass).
-    fn is_rigid(&self) -> bool;
+    pub(crate) x: usize,
     /// Its initial coordinates.
-    fn u0(&self) -> [f64; N];
+    pub(crate) u0: D::Coords,
     /// Its initial velocities.
-    fn v0(&self) -> [f64; N];
+    pub(crate) v0: D::Coords,
+}
 
-    /// Its number of coordinates.
-    fn count(&self) -> usize {
-        Self::Dim::count(self.is_rigid())
+impl<D: Dimension, I> Body<D, I> {
+    /// Its number of coordinates: [`Dimension::RIGID`] for a rigid body,
+    /// [`Dimension::POINT`] for a point mass.
+    pub(crate) fn count(&self) -> usize {
+        D::count(self.inertia.is_some())
+    }
+
+    /// Whether it is a rigid body (not a point mass).
+    pub(crate) fn is_rigid(&self) -> bool {
+        self.inertia.is_some()
     }
 }
 
@@ -90,19 +104,19 @@ pub(crate) enum Initial {
 }
 
 /// The initial coordinates or velocities of `n` coordinates, body by body.
-pub(crate) fn initial<B: Placed<N>, const N: usize>(
+pub(crate) fn initial<D: Dimension, I>(
     n: usize,
-    bodies: &[B],
+    bodies: &[Body<D, I>],
     which: Initial,
 ) -> Vec<f64> {
     let mut u = vec![0.0; n];
     for b in bodies {
         let values = match which {
-            Initial::Position => b.u0(),
-            Initial::Velocity => b.v0(),
+            Initial::Position => b.u0,
+            Initial::Velocity => b.v0,
         };
-        let (x, count) = (b.first(), b.count());
-        u[x..x + count].copy_from_slice(&values[..count]);
+        let (x, count) = (b.x, b.count());
+        u[x..x + count].copy_from_slice(&values.as_ref()[..count]);
     }
     u
 }
@@ -142,3 +156,50 @@ pub(crate) fn check_names<'a>(
     }
     Ok(())
 }
+
+/// The [`System`](crate::System) methods that only read the sizes and the
+/// row names, the same in every assembled system: `n_coords` (`self.n`),
+/// `n_constraints` (`self.m`) and `constraint_name`
+/// (`self.constraint_names[i]`).
+macro_rules! sizes_and_row_names {
+    () => {
+        fn n_coords(&self) -> usize {
+            self.n
+        }
+
+        fn n_constraints(&self) -> usize {
+            self.m
+        }
+
+        fn constraint_name(&self, i: usize) -> String {
+            self.constraint_names[i].clone()
+        }
+    };
+}
+pub(crate) use sizes_and_row_names;
+
+/// The inherent methods of an assembled system that read its bodies' initial
+/// state ([`initial`]) and count them, documented per dimension: where the
+/// system's module has `dims` and `dims::Initial` in scope.
+macro_rules! initial_state {
+    (position: $position:literal, velocity: $velocity:literal) => {
+        #[doc = $position]
+        #[must_use]
+        pub fn initial_position(&self) -> Vec<f64> {
+            dims::initial(self.n, &self.bodies, Initial::Position)
+        }
+
+        #[doc = $velocity]
+        #[must_use]
+        pub fn initial_velocity(&self) -> Vec<f64> {
+            dims::initial(self.n, &self.bodies, Initial::Velocity)
+        }
+
+        /// Number of bodies.
+        #[must_use]
+        pub fn n_bodies(&self) -> usize {
+            self.bodies.len()
+        }
+    };
+}
+pub(crate) use initial_state;

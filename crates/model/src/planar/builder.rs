@@ -8,7 +8,7 @@ use super::geometry::Anchor;
 use super::joints::{Constraint, Distance, Driver, JointElement, Prismatic, Revolute, Weld};
 use super::loads::{Force, LoadElement, PointForce, RotationalSpring, Spring, Torque};
 use super::{At, Body, BodyId, Coordinate, ModelError, PlanarSystem, TimeFunction};
-use crate::dims;
+use crate::dims::{self, Dimension, Planar};
 
 /// A rigid body: mass, inertia about the centre of mass, initial pose and
 /// velocity.
@@ -148,14 +148,14 @@ impl PlanarBuilder {
         velocity: [f64; 3],
     ) -> BodyId {
         let x = self.n;
-        self.n += if inertia.is_some() { 3 } else { 2 };
+        self.n += Planar::count(inertia.is_some());
         self.bodies.push(Body {
             name: name.to_string(),
             mass,
             inertia,
             x,
-            pose,
-            velocity,
+            u0: pose,
+            v0: velocity,
         });
         BodyId {
             builder: self.id,
@@ -167,7 +167,7 @@ impl PlanarBuilder {
     /// must be 0).
     pub fn velocity(&mut self, body: BodyId, velocity: [f64; 3]) -> &mut Self {
         match self.own(body) {
-            Some(i) => self.bodies[i].velocity = velocity,
+            Some(i) => self.bodies[i].v0 = velocity,
             None => self.problems.push(self.foreign(body, "a velocity")),
         }
         self
@@ -333,7 +333,7 @@ impl PlanarBuilder {
                 .own(id)
                 .map(|i| &self.bodies[i])
                 .filter(|b| b.inertia.is_some())
-                .map_or(0.0, |b| b.pose[2]),
+                .map_or(0.0, |b| b.u0[2]),
             At::Ground(_) => 0.0,
         }
     }
@@ -440,10 +440,10 @@ impl PlanarBuilder {
                     "the inertia must be positive (or 0, see PlanarBuilder::rigid_body)",
                 ));
             }
-            if !b.pose.iter().chain(&b.velocity).all(|x| x.is_finite()) {
+            if !b.u0.iter().chain(&b.v0).all(|x| x.is_finite()) {
                 return Err(invalid("the initial pose and velocity must be finite"));
             }
-            if b.inertia.is_none() && b.velocity[2] != 0.0 {
+            if b.inertia.is_none() && b.v0[2] != 0.0 {
                 return Err(invalid("a point mass has no angle: its θ̇ must be 0"));
             }
         }

@@ -10,7 +10,6 @@ use std::ops::Range;
 
 use super::PlanarSystem;
 use super::geometry::Anchor;
-use crate::dims::Placed;
 
 /// Global coordinate indices of a body: `u[x]`, `u[y]` and, for a rigid
 /// body, `u[theta]`.

@@ -9,50 +9,10 @@ use std::sync::Arc;
 use super::body::Inertia;
 use super::joints::SpatialJoint;
 use super::loads::SpatialLoad;
-use crate::dims::{Dimension, Placed, Spatial};
+use crate::dims::Spatial;
 
 /// A body as assembled.
-#[derive(Clone, Debug)]
-pub(crate) struct BodyData {
-    pub(crate) name: String,
-    pub(crate) mass: f64,
-    /// `None` for a point mass.
-    pub(crate) inertia: Option<Inertia>,
-    /// Its first coordinate.
-    pub(crate) x: usize,
-    pub(crate) u0: [f64; 7],
-    pub(crate) v0: [f64; 7],
-}
-
-impl BodyData {
-    /// Its number of coordinates: 7 for a rigid body, 3 for a point mass.
-    pub(crate) fn count(&self) -> usize {
-        Spatial::count(self.inertia.is_some())
-    }
-
-    pub(crate) fn is_rigid(&self) -> bool {
-        self.inertia.is_some()
-    }
-}
-
-impl Placed<7> for BodyData {
-    type Dim = Spatial;
-    fn name(&self) -> &str {
-        &self.name
-    }
-    fn first(&self) -> usize {
-        self.x
-    }
-    fn is_rigid(&self) -> bool {
-        self.inertia.is_some()
-    }
-    fn u0(&self) -> [f64; 7] {
-        self.u0
-    }
-    fn v0(&self) -> [f64; 7] {
-        self.v0
-    }
-}
+pub(crate) type BodyData = crate::dims::Body<Spatial, Inertia>;
 
 /// A joint or driver as assembled: its rows, its structural entries and where
 /// its values go.
