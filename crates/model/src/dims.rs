@@ -26,6 +26,20 @@ pub enum ModelError {
     },
 }
 
+/// A point mass in `D` dimensions: mass, initial position and velocity
+/// ([`planar::PointMass`](crate::planar::PointMass) in the plane,
+/// [`spatial::SpatialPointMass`](crate::spatial::SpatialPointMass) in
+/// space).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointMass<const D: usize> {
+    /// Mass, kg (> 0).
+    pub mass: f64,
+    /// Position, global, m: `[x, y]` or `[x, y, z]`.
+    pub position: [f64; D],
+    /// Velocity, global, m/s (default: at rest).
+    pub velocity: [f64; D],
+}
+
 /// A dimension: how many coordinates a body has in it ([`Planar`],
 /// [`Spatial`]).
 pub(crate) trait Dimension: Clone + std::fmt::Debug {

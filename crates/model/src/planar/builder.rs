@@ -25,16 +25,8 @@ pub struct RigidBody {
     pub velocity: [f64; 3],
 }
 
-/// A point mass: mass, initial position and velocity.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PointMass {
-    /// Mass, kg (> 0).
-    pub mass: f64,
-    /// `x`, `y`, m.
-    pub position: [f64; 2],
-    /// `ẋ`, `ẏ`, m/s (default: at rest).
-    pub velocity: [f64; 2],
-}
+/// A point mass in `(x, y)`: mass, initial position and velocity.
+pub type PointMass = crate::dims::PointMass<2>;
 
 /// A linear spring-damper: tension `stiffness (ℓ − rest_length) + damping ℓ̇`.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -71,16 +71,8 @@ pub struct SpatialBody {
     pub angular_velocity: [f64; 3],
 }
 
-/// A point mass in `(x, y, z)`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpatialPointMass {
-    /// Mass, kg.
-    pub mass: f64,
-    /// Position, m.
-    pub position: [f64; 3],
-    /// Velocity, m/s.
-    pub velocity: [f64; 3],
-}
+/// A point mass in `(x, y, z)`: mass, initial position and velocity.
+pub type SpatialPointMass = crate::dims::PointMass<3>;
 
 /// What an element attaches to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
