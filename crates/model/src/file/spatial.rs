@@ -11,8 +11,9 @@ use super::fields::{Doc, Fields, choice, list, number, number_in, numbers, strin
 use super::node::{Node, Value};
 use crate::planar::TimeFunction;
 use crate::spatial::{
-    Attach, DriverKind, JointSpec, JointType, RotationalMass, SpatialBody, SpatialBodyId,
-    SpatialBuilder, SpatialInertia, SpatialSystem, SpringSpec, rotation_matrix,
+    Attach, Axes, DriverKind, JointSpec, JointType, RotationalMass, RotationalSpringDamper,
+    SpatialBody, SpatialBodyId, SpatialBuilder, SpatialInertia, SpatialSystem, SpringDamper,
+    rotation_matrix,
 };
 
 /// The format version of spatial model files.
@@ -467,10 +468,15 @@ impl<'a> Model<'a> {
             known.push("point");
         }
         f.finish(&known)?;
-        if torque {
-            self.builder.torque(name, body.id, c, axes == "body");
+        let axes = if axes == "body" {
+            Axes::Body
         } else {
-            self.builder.force(name, body.id, point, c, axes == "body");
+            Axes::Global
+        };
+        if torque {
+            self.builder.torque(name, body.id, c, axes);
+        } else {
+            self.builder.force(name, body.id, point, c, axes);
         }
         Ok(())
     }
@@ -497,10 +503,10 @@ impl<'a> Model<'a> {
             name,
             sides.map(Side::attach),
             points,
-            SpringSpec {
+            SpringDamper {
                 stiffness,
                 damping,
-                length,
+                rest_length: length,
                 preload,
             },
         );
@@ -542,7 +548,11 @@ impl<'a> Model<'a> {
             name,
             sides.map(Side::attach),
             axes,
-            [stiffness, damping, angle],
+            RotationalSpringDamper {
+                stiffness,
+                damping,
+                angle,
+            },
         );
         Ok(())
     }

@@ -163,17 +163,43 @@ pub enum DriverKind {
     Translation,
 }
 
-/// A translational spring-damper.
+/// A linear spring-damper: tension `stiffness (ℓ − rest_length) + damping ℓ̇
+/// + preload` (the planar [`SpringDamper`](crate::planar::SpringDamper)
+/// with a preload, and a rest length that defaults to the initial one).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpringSpec {
-    /// Stiffness, N/m.
+pub struct SpringDamper {
+    /// N/m (≥ 0).
     pub stiffness: f64,
-    /// Damping, N s/m.
+    /// N s/m (≥ 0).
     pub damping: f64,
-    /// Free length, m (`None`: the initial length).
-    pub length: Option<f64>,
-    /// Tension at the free length, N.
+    /// m (≥ 0; `None`: the initial length).
+    pub rest_length: Option<f64>,
+    /// Tension at the rest length, N (default: 0).
     pub preload: f64,
+}
+
+/// A rotational spring-damper about a joint axis: torque `−stiffness (θ −
+/// angle) − damping θ̇`, `θ` the rotation from the initial pose (the planar
+/// [`RotationalSpringDamper`](crate::planar::RotationalSpringDamper) with a
+/// rest angle).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RotationalSpringDamper {
+    /// N m/rad (≥ 0).
+    pub stiffness: f64,
+    /// N m s/rad (≥ 0).
+    pub damping: f64,
+    /// The rest angle from the initial pose, rad (default: 0).
+    pub angle: f64,
+}
+
+/// The axes in which a force's or torque's components are given.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Axes {
+    /// The global axes: the load keeps its direction (the default).
+    #[default]
+    Global,
+    /// The body's axes: the load turns with the body (rigid bodies only).
+    Body,
 }
 
 #[derive(Clone, Debug)]
@@ -295,20 +321,20 @@ impl SpatialBuilder {
         self
     }
 
-    /// Adds a force on the point `point` of `body` (`body_axes`: `f` turns
-    /// with the body).
+    /// Adds a force `f` on the point `point` of `body`, its components in
+    /// `axes` ([`Axes::Body`]: it turns with the body).
     pub fn force(
         &mut self,
         name: &str,
         body: SpatialBodyId,
         point: [f64; 3],
         f: [TimeFunction; 3],
-        body_axes: bool,
+        axes: Axes,
     ) -> &mut Self {
         let load = PointForce {
             point,
             f,
-            body_axes,
+            body_axes: axes == Axes::Body,
         };
         self.loads.push((
             name.to_string(),
@@ -318,15 +344,18 @@ impl SpatialBuilder {
         self
     }
 
-    /// Adds a torque on `body`.
+    /// Adds a torque `n` on `body`, its components in `axes`.
     pub fn torque(
         &mut self,
         name: &str,
         body: SpatialBodyId,
         n: [TimeFunction; 3],
-        body_axes: bool,
+        axes: Axes,
     ) -> &mut Self {
-        let load = Torque { n, body_axes };
+        let load = Torque {
+            n,
+            body_axes: axes == Axes::Body,
+        };
         self.loads.push((
             name.to_string(),
             [Attach::Body(body), Attach::Ground],
@@ -341,32 +370,36 @@ impl SpatialBuilder {
         name: &str,
         bodies: [Attach; 2],
         points: [[f64; 3]; 2],
-        spec: SpringSpec,
+        spring: SpringDamper,
     ) -> &mut Self {
-        let length = spec
-            .length
+        let length = spring
+            .rest_length
             .unwrap_or_else(|| self.initial_distance(bodies, points));
         let load = Spring {
             points,
-            stiffness: spec.stiffness,
-            damping: spec.damping,
+            stiffness: spring.stiffness,
+            damping: spring.damping,
             length,
-            preload: spec.preload,
+            preload: spring.preload,
         };
         self.loads.push((name.to_string(), bodies, Arc::new(load)));
         self
     }
 
     /// Adds a rotational spring-damper about the axis `axes[0]` of A (B's
-    /// `axes[1]` is the same physical axis): torque `−k (θ − angle) − c θ̇`,
-    /// `θ` from the initial pose.
+    /// `axes[1]` is the same physical axis), see [`RotationalSpringDamper`].
     pub fn rotational_spring(
         &mut self,
         name: &str,
         bodies: [Attach; 2],
         axes: [[f64; 3]; 2],
-        [stiffness, damping, angle]: [f64; 3],
+        spring: RotationalSpringDamper,
     ) -> &mut Self {
+        let RotationalSpringDamper {
+            stiffness,
+            damping,
+            angle,
+        } = spring;
         match self.geometry(name, bodies, [[0.0; 3]; 2], axes) {
             Ok((geometry, a_in_b)) => {
                 let load = RotationalSpring {
