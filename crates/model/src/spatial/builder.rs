@@ -163,9 +163,9 @@ pub enum DriverKind {
     Translation,
 }
 
-/// A linear spring-damper: tension `stiffness (ℓ − rest_length) + damping ℓ̇
-/// + preload` (the planar [`SpringDamper`](crate::planar::SpringDamper)
-/// with a preload, and a rest length that defaults to the initial one).
+/// A linear spring-damper: tension `stiffness (ℓ − rest_length) + damping ℓ̇ +
+/// preload` (the planar [`SpringDamper`](crate::planar::SpringDamper) with a
+/// preload, and a rest length that defaults to the initial one).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SpringDamper {
     /// N/m (≥ 0).
