@@ -331,17 +331,16 @@ impl SpatialBuilder {
         f: [TimeFunction; 3],
         axes: Axes,
     ) -> &mut Self {
-        let load = PointForce {
-            point,
-            f,
-            body_axes: axes == Axes::Body,
-        };
-        self.loads.push((
-            name.to_string(),
-            [Attach::Body(body), Attach::Ground],
-            Arc::new(load),
-        ));
-        self
+        let body_axes = axes == Axes::Body;
+        self.body_load(
+            name,
+            body,
+            Arc::new(PointForce {
+                point,
+                f,
+                body_axes,
+            }),
+        )
     }
 
     /// Adds a torque `n` on `body`, its components in `axes`.
@@ -352,15 +351,19 @@ impl SpatialBuilder {
         n: [TimeFunction; 3],
         axes: Axes,
     ) -> &mut Self {
-        let load = Torque {
-            n,
-            body_axes: axes == Axes::Body,
-        };
-        self.loads.push((
-            name.to_string(),
-            [Attach::Body(body), Attach::Ground],
-            Arc::new(load),
-        ));
+        let body_axes = axes == Axes::Body;
+        self.body_load(name, body, Arc::new(Torque { n, body_axes }))
+    }
+
+    /// Adds a load that acts on `body` alone.
+    fn body_load(
+        &mut self,
+        name: &str,
+        body: SpatialBodyId,
+        load: Arc<dyn SpatialLoad>,
+    ) -> &mut Self {
+        let sides = [Attach::Body(body), Attach::Ground];
+        self.loads.push((name.to_string(), sides, load));
         self
     }
 
