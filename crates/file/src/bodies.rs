@@ -5,9 +5,10 @@ use std::collections::HashMap;
 use std::ops::Range;
 
 use super::FileError;
-use super::fields::{Doc, Fields, list, string, two_names};
+use super::fields::{Doc, Fields, choice, list, number_in, numbers, string, two_names};
 use super::node::Node;
-use mstar_model::planar::ModelError;
+use mstar_model::PointMass;
+use mstar_model::planar::{ModelError, TimeFunction};
 
 /// The fixed frame's name.
 pub(crate) const GROUND: &str = "ground";
@@ -186,12 +187,230 @@ fn described(kind: &str, name: &str) -> String {
     what
 }
 
-/// Reads one element of the arrays of tables into a model `M`.
-pub(crate) type Adder<'a, M> = fn(&mut M, &'a Node, String) -> Result<(), FileError>;
+/// A named body of a model file, as joints and forces refer to it: its
+/// handle `I`, whether it is rigid, and its initial pose `P`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Placed<I, P> {
+    pub(crate) id: I,
+    pub(crate) rigid: bool,
+    pub(crate) pose: P,
+}
+
+impl<I, P> Placed<I, P> {
+    /// A rigid body.
+    pub(crate) fn rigid(id: I, pose: P) -> Self {
+        Self {
+            id,
+            rigid: true,
+            pose,
+        }
+    }
+
+    /// A point mass.
+    pub(crate) fn point(id: I, pose: P) -> Self {
+        Self {
+            id,
+            rigid: false,
+            pose,
+        }
+    }
+}
+
+/// Where an element's points are given: `points`, one local point per
+/// side, or `at`, one global point at the initial pose.
+pub(crate) enum Given<const D: usize> {
+    /// `points = [[..], [..]]`.
+    Points([[f64; D]; 2]),
+    /// `at = [..]`.
+    At([f64; D]),
+}
+
+/// What the reader of either dimension holds beside its builder: the
+/// document, the bodies read so far (placed as `P`) and every name given.
+pub(crate) struct Reader<'a, P> {
+    pub(crate) doc: Doc<'a>,
+    pub(crate) bodies: Bodies<P>,
+    names: Names,
+}
+
+impl<'a, P: Copy> Reader<'a, P> {
+    /// Opens the document `root`: its `format` must be `format` (`known`
+    /// says, in the message, which formats this version reads); its
+    /// `gravity` defaults to `gravity`. Returns the reader, sized for the
+    /// element arrays, the top-level fields and the gravity.
+    pub(crate) fn open<const D: usize>(
+        doc: Doc<'a>,
+        root: &'a Node,
+        format: &str,
+        known: &str,
+        gravity: [f64; D],
+    ) -> Result<(Self, Fields<'a>, [f64; D]), FileError> {
+        let mut top = Fields::of(doc, root, "the model".to_string())?;
+        let found = top.required("format", string)?;
+        if found != format {
+            let e = top.entry("format").map(|e| e.node.span.clone());
+            return Err(doc.error(
+                e.flatten().as_ref(),
+                format!("unknown format '{found}': this version of mstar reads {known}"),
+            ));
+        }
+        let gravity = top.optional("gravity", numbers::<D>)?.unwrap_or(gravity);
+        let (elements, bodies) = element_counts(&top);
+        let reader = Self {
+            doc,
+            bodies: Bodies::with_capacity(bodies),
+            names: Names::with_capacity(elements),
+        };
+        Ok((reader, top, gravity))
+    }
+
+    /// The element's fields and its name, the name claimed
+    /// ([`Names::named`]).
+    pub(crate) fn named(
+        &mut self,
+        node: &'a Node,
+        what: String,
+        kind: &str,
+    ) -> Result<(Fields<'a>, String), FileError> {
+        self.names.named(self.doc, node, what, kind)
+    }
+
+    /// The element's fields, its name (claimed, as [`named`](Self::named))
+    /// and its `type`, one of `types`.
+    pub(crate) fn typed<'c>(
+        &mut self,
+        node: &'a Node,
+        what: String,
+        kind: &str,
+        types: &'c [&'c str],
+    ) -> Result<(Fields<'a>, String, &'c str), FileError> {
+        let (mut f, name) = self.named(node, what, kind)?;
+        let found = f.required("type", choice(types))?;
+        Ok((f, name, found))
+    }
+
+    /// A `[[point_mass]]`: its name, mass, position and velocity (at rest
+    /// by default), no other key, added by `add` (to the builder, which
+    /// says where the point mass is placed).
+    pub(crate) fn point_mass<const D: usize>(
+        &mut self,
+        node: &'a Node,
+        what: String,
+        add: impl FnOnce(&str, PointMass<D>) -> P,
+    ) -> Result<(), FileError> {
+        let (mut f, name) = self.named(node, what, "point mass")?;
+        let mass = mass(&mut f)?;
+        let position = f.required("position", numbers::<D>)?;
+        let velocity = f.optional("velocity", numbers::<D>)?.unwrap_or([0.0; D]);
+        f.finish(&["name", "mass", "position", "velocity"])?;
+        let point = PointMass {
+            mass,
+            position,
+            velocity,
+        };
+        let placed = add(&name, point);
+        self.place(name, placed)
+    }
+
+    /// Adds the body `name` (the reader has checked that it is new): the
+    /// last step of reading a body, which cannot fail.
+    #[allow(clippy::unnecessary_wraps)]
+    pub(crate) fn place(&mut self, name: String, placed: P) -> Result<(), FileError> {
+        self.bodies.insert(name, placed);
+        Ok(())
+    }
+
+    /// The attachment points as given: `points` (`two` reads them, one per
+    /// side, local) or `at` (one global point), exactly one of them.
+    pub(crate) fn given<const D: usize>(
+        &self,
+        f: &mut Fields<'a>,
+        two: fn(&Node) -> Result<[[f64; D]; 2], String>,
+    ) -> Result<Given<D>, FileError> {
+        let points = f.optional("points", two)?;
+        let at = f.optional("at", numbers::<D>)?;
+        match (points, at) {
+            (Some(p), None) => Ok(Given::Points(p)),
+            (None, Some(g)) => Ok(Given::At(g)),
+            (Some(_), Some(_)) => Err(self.doc.error(
+                f.span(),
+                format!("{}: give 'points' or 'at', not both", f.what),
+            )),
+            (None, None) => Err(self.doc.error(
+                f.span(),
+                format!("{}: the key 'points' (or 'at') is missing", f.what),
+            )),
+        }
+    }
+
+    /// The time function of `key`, if present.
+    pub(crate) fn function(
+        &self,
+        f: &mut Fields<'a>,
+        key: &str,
+    ) -> Result<Option<TimeFunction>, FileError> {
+        let Some(e) = f.entry(key) else {
+            return Ok(None);
+        };
+        let what = format!("{}: {key}", f.what);
+        super::functions::read(self.doc, &e.node, what).map(Some)
+    }
+
+    /// A builder error, placed at the element it names when it can be.
+    pub(crate) fn located(&self, e: &ModelError) -> FileError {
+        self.names.located(self.doc, e)
+    }
+}
+
+/// The key `mass`: positive, in kg.
+pub(crate) fn mass(f: &mut Fields<'_>) -> Result<f64, FileError> {
+    f.required("mass", number_in(|x| x > 0.0, "positive, in kg"))
+}
+
+/// What a spring-damper resists: a change of length or of angle.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Spring {
+    /// N/m and N s/m.
+    Linear,
+    /// N m/rad and N m s/rad.
+    Rotational,
+}
+
+/// The keys `stiffness` (required) and `damping` (0 by default) of a
+/// spring-damper, both non-negative.
+pub(crate) fn stiffness_damping(
+    f: &mut Fields<'_>,
+    spring: Spring,
+) -> Result<(f64, f64), FileError> {
+    let (k, c) = match spring {
+        Spring::Linear => ("non-negative, in N/m", "non-negative, in N s/m"),
+        Spring::Rotational => ("non-negative, in N m/rad", "non-negative, in N m s/rad"),
+    };
+    let stiffness = f.required("stiffness", number_in(|x| x >= 0.0, k))?;
+    let damping = f
+        .optional("damping", number_in(|x| x >= 0.0, c))?
+        .unwrap_or(0.0);
+    Ok((stiffness, damping))
+}
+
+/// The element arrays of a model file, read in this order (a joint names
+/// the bodies before it).
+pub(crate) trait Elements<'a> {
+    /// A `[[body]]`.
+    fn body(&mut self, node: &'a Node, what: String) -> Result<(), FileError>;
+    /// A `[[point_mass]]`.
+    fn point_mass(&mut self, node: &'a Node, what: String) -> Result<(), FileError>;
+    /// A `[[joint]]`.
+    fn joint(&mut self, node: &'a Node, what: String) -> Result<(), FileError>;
+    /// A `[[driver]]`.
+    fn driver(&mut self, node: &'a Node, what: String) -> Result<(), FileError>;
+    /// A `[[force]]`.
+    fn force(&mut self, node: &'a Node, what: String) -> Result<(), FileError>;
+}
 
 /// How many elements the arrays of [`read_elements`] hold, and how many of
 /// them are bodies and point masses (to size the maps by name at once).
-pub(crate) fn element_counts(top: &Fields<'_>) -> (usize, usize) {
+fn element_counts(top: &Fields<'_>) -> (usize, usize) {
     let count = |kind: &str| {
         top.peek(kind)
             .and_then(|n| list(n).ok())
@@ -205,19 +424,24 @@ pub(crate) fn element_counts(top: &Fields<'_>) -> (usize, usize) {
 }
 
 /// Reads the element arrays `body`, `point_mass`, `joint`, `driver` and
-/// `force` of the document `top`, in that order (a joint names the bodies
-/// before it), with `adders` in the same order, then checks that `top` has
-/// no other keys than these, `format`, `gravity` and the caller's
-/// `simulation` and `output`.
-pub(crate) fn read_elements<'a, M>(
+/// `force` of the document `top` into `m`, in that order (a joint names the
+/// bodies before it), then checks that `top` has no other keys than these,
+/// `format`, `gravity` and the caller's `simulation` and `output`.
+pub(crate) fn read_elements<'a, M: Elements<'a>>(
     top: &mut Fields<'a>,
     m: &mut M,
-    adders: [Adder<'a, M>; 5],
 ) -> Result<(), FileError> {
     const ELEMENTS: [&str; 5] = ["body", "point_mass", "joint", "driver", "force"];
-    for (kind, add) in ELEMENTS.into_iter().zip(adders) {
+    for kind in ELEMENTS {
         for (k, node) in top.optional(kind, list)?.unwrap_or(&[]).iter().enumerate() {
-            add(m, node, format!("{kind} #{}", k + 1))?;
+            let what = format!("{kind} #{}", k + 1);
+            match kind {
+                "body" => m.body(node, what),
+                "point_mass" => m.point_mass(node, what),
+                "joint" => m.joint(node, what),
+                "driver" => m.driver(node, what),
+                _ => m.force(node, what),
+            }?;
         }
     }
     let mut keys = vec!["format", "gravity", "simulation", "output"];

@@ -3,93 +3,60 @@
 //! written (`docs/model-format.md`).
 
 use super::FileError;
-use super::bodies::{self, Bodies, Names};
-use super::fields::{Doc, Fields, choice, number_in, numbers, string, two_points};
+use super::bodies::{self, Given, Reader, Spring};
+use super::fields::{Doc, Fields, choice, number_in, numbers, two_points};
 use super::node::Node;
 use mstar_model::planar::{
-    At, BodyId, Coordinate, PlanarBuilder, PlanarSystem, PointMass, RigidBody,
-    RotationalSpringDamper, SpringDamper, TimeFunction,
+    At, BodyId, Coordinate, PlanarBuilder, PlanarSystem, RigidBody, RotationalSpringDamper,
+    SpringDamper, TimeFunction,
 };
 
 /// The one format version this reader knows.
 pub const FORMAT: &str = "mstar.planar/1";
 
-/// A named body of the model, as joints and forces refer to it.
-#[derive(Clone, Copy, Debug)]
-struct Placed {
-    id: BodyId,
-    rigid: bool,
-    pose: [f64; 3],
-}
+/// The joint types of the format.
+const JOINTS: [&str; 4] = ["revolute", "prismatic", "distance", "weld"];
+
+/// The force types of the format.
+const FORCES: [&str; 4] = [
+    "spring-damper",
+    "rotational-spring-damper",
+    "torque",
+    "force",
+];
+
+/// A named body of the model, as joints and forces refer to it (its pose
+/// `[x, y, θ]`).
+type Placed = bodies::Placed<BodyId, [f64; 3]>;
 
 /// One side of a joint or force: the ground or a body.
 type Side = bodies::Side<Placed>;
 
 /// The model being read.
 struct Model<'a> {
-    doc: Doc<'a>,
     builder: PlanarBuilder,
-    bodies: Bodies<Placed>,
-    /// Every name with what carries it and where, for duplicates.
-    names: Names,
+    r: Reader<'a, Placed>,
 }
 
 /// Reads a whole document.
 pub(crate) fn read<'a>(doc: Doc<'a>, root: &'a Node) -> Result<PlanarSystem, FileError> {
-    let mut top = Fields::of(doc, root, "the model".to_string())?;
-    let format = top.required("format", string)?;
-    if format != FORMAT {
-        let e = top.entry("format").map(|e| e.node.span.clone());
-        return Err(doc.error(
-            e.flatten().as_ref(),
-            format!(
-                "unknown format '{format}': this version of mstar reads '{FORMAT}' and '{}'",
-                super::spatial::FORMAT
-            ),
-        ));
-    }
-    let gravity = top
-        .optional("gravity", numbers::<2>)?
-        .unwrap_or([0.0, -9.81]);
-    let counts = bodies::element_counts(&top);
+    let known = format!("'{FORMAT}' and '{}'", super::spatial::FORMAT);
+    let (r, mut top, gravity) = Reader::open(doc, root, FORMAT, &known, [0.0, -9.81])?;
     let mut m = Model {
-        doc,
         builder: PlanarBuilder::new(),
-        bodies: Bodies::with_capacity(counts.1),
-        names: Names::with_capacity(counts.0),
+        r,
     };
     m.builder.gravity(gravity[0], gravity[1]);
     // ([simulation] and [output] are the caller's: settings, not the mechanism.)
-    bodies::read_elements(
-        &mut top,
-        &mut m,
-        [
-            Model::body,
-            Model::point_mass,
-            Model::joint,
-            Model::driver,
-            Model::force,
-        ],
-    )?;
-    m.builder.build().map_err(|e| m.located(e))
+    bodies::read_elements(&mut top, &mut m)?;
+    m.builder.build().map_err(|e| m.r.located(&e))
 }
 
-impl<'a> Model<'a> {
-    /// The element's fields and its name, the name claimed
-    /// ([`Names::named`]).
-    fn named(
-        &mut self,
-        node: &'a Node,
-        what: String,
-        kind: &str,
-    ) -> Result<(Fields<'a>, String), FileError> {
-        self.names.named(self.doc, node, what, kind)
-    }
-
+impl<'a> bodies::Elements<'a> for Model<'a> {
     /// A `[[body]]`: a rigid body.
     fn body(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
-        let (mut f, name) = self.named(node, what, "body")?;
-        let mass = f.required("mass", number_in(|x| x > 0.0, "positive, in kg"))?;
+        let (mut f, name) = self.r.named(node, what, "body")?;
+        let mass = bodies::mass(&mut f)?;
         let inertia = f.required(
             "inertia",
             number_in(
@@ -109,52 +76,21 @@ impl<'a> Model<'a> {
                 velocity,
             },
         );
-        self.bodies.insert(
-            name,
-            Placed {
-                id,
-                rigid: true,
-                pose,
-            },
-        );
-        Ok(())
+        self.r.place(name, Placed::rigid(id, pose))
     }
 
     /// A `[[point_mass]]`.
     fn point_mass(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
-        let (mut f, name) = self.named(node, what, "point mass")?;
-        let mass = f.required("mass", number_in(|x| x > 0.0, "positive, in kg"))?;
-        let p = f.required("position", numbers::<2>)?;
-        let v = f.optional("velocity", numbers::<2>)?.unwrap_or([0.0; 2]);
-        f.finish(&["name", "mass", "position", "velocity"])?;
-        let id = self.builder.point_mass(
-            &name,
-            PointMass {
-                mass,
-                position: p,
-                velocity: v,
-            },
-        );
-        let pose = [p[0], p[1], 0.0];
-        self.bodies.insert(
-            name,
-            Placed {
-                id,
-                rigid: false,
-                pose,
-            },
-        );
-        Ok(())
+        self.r.point_mass(node, what, |name, point| {
+            let [x, y] = point.position;
+            Placed::point(self.builder.point_mass(name, point), [x, y, 0.0])
+        })
     }
 
     /// A `[[joint]]`: revolute, prismatic, distance or weld.
     fn joint(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
-        let (mut f, name) = self.named(node, what, "joint")?;
-        let kind = f.required(
-            "type",
-            choice(&["revolute", "prismatic", "distance", "weld"]),
-        )?;
-        let sides = self.bodies.sides(&mut f)?;
+        let (mut f, name, kind) = self.r.typed(node, what, "joint", &JOINTS)?;
+        let sides = self.r.bodies.sides(&mut f)?;
         let at = self.anchors(&mut f, sides)?;
         match kind {
             "revolute" => {
@@ -171,7 +107,7 @@ impl<'a> Model<'a> {
                 f.finish(&["name", "type", "bodies", "points", "at", "length"])?;
                 let length = length.unwrap_or(initial);
                 if length.is_nan() || length <= 0.0 {
-                    return Err(self.doc.error(
+                    return Err(self.r.doc.error(
                         f.span(),
                         format!(
                             "{}: the two points coincide at the initial pose: give 'length'",
@@ -188,7 +124,7 @@ impl<'a> Model<'a> {
                     return Err(f.bad(e, "must not be zero: it is the sliding direction"));
                 }
                 if matches!(sides[1], Side::Ground) {
-                    return Err(self.doc.error(
+                    return Err(self.r.doc.error(
                         f.span(),
                         format!(
                             "{}: the sliding side (the second of 'bodies') must be a body",
@@ -205,14 +141,15 @@ impl<'a> Model<'a> {
 
     /// A `[[driver]]`: a coordinate of a body prescribed in time.
     fn driver(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
-        let (mut f, name) = self.named(node, what, "driver")?;
-        let body = self.bodies.body_of(&mut f, "body")?;
+        let (mut f, name) = self.r.named(node, what, "driver")?;
+        let body = self.r.bodies.body_of(&mut f, "body")?;
         let coordinate = f.required("coordinate", choice(&["x", "y", "theta"]))?;
         if coordinate == "theta" && !body.rigid {
             let e = f.read_entry("coordinate")?;
             return Err(f.bad(e, "a point mass has no angle: drive x or y"));
         }
         let function = self
+            .r
             .function(&mut f, "function")?
             .ok_or_else(|| f.missing("function"))?;
         f.finish(&["name", "body", "coordinate", "function"])?;
@@ -227,40 +164,34 @@ impl<'a> Model<'a> {
 
     /// A `[[force]]`: spring-damper, rotational spring-damper, torque or force.
     fn force(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
-        let (mut f, name) = self.named(node, what, "force")?;
-        let kind = f.required(
-            "type",
-            choice(&[
-                "spring-damper",
-                "rotational-spring-damper",
-                "torque",
-                "force",
-            ]),
-        )?;
+        let (mut f, name, kind) = self.r.typed(node, what, "force", &FORCES)?;
         match kind {
             "spring-damper" => self.spring(&mut f, &name)?,
             "rotational-spring-damper" => self.rotational_spring(&mut f, &name)?,
             "torque" => {
-                let body = self.bodies.body_of(&mut f, "body")?;
+                let body = self.r.bodies.body_of(&mut f, "body")?;
                 if !body.rigid {
-                    return Err(self.doc.error(
+                    return Err(self.r.doc.error(
                         f.span(),
                         format!("{}: a torque needs a rigid body, not a point mass", f.what),
                     ));
                 }
                 let tau = self
+                    .r
                     .function(&mut f, "function")?
                     .ok_or_else(|| f.missing("function"))?;
                 f.finish(&["name", "type", "body", "function"])?;
                 self.builder.torque(&name, body.id, tau);
             }
             _ => {
-                let body = self.bodies.body_of(&mut f, "body")?;
+                let body = self.r.bodies.body_of(&mut f, "body")?;
                 let point = f.optional("point", numbers::<2>)?.unwrap_or([0.0; 2]);
                 let fx = self
+                    .r
                     .function(&mut f, "fx")?
                     .unwrap_or(TimeFunction::Constant(0.0));
                 let fy = self
+                    .r
                     .function(&mut f, "fy")?
                     .unwrap_or(TimeFunction::Constant(0.0));
                 f.finish(&["name", "type", "body", "point", "fx", "fy"])?;
@@ -270,19 +201,18 @@ impl<'a> Model<'a> {
         }
         Ok(())
     }
+}
 
+impl<'a> Model<'a> {
     /// A linear spring-damper between two points.
     fn spring(&mut self, f: &mut Fields<'a>, name: &str) -> Result<(), FileError> {
-        let sides = self.bodies.sides(f)?;
+        let sides = self.r.bodies.sides(f)?;
         let points = f.required("points", two_points)?;
         let at = [
             self.side_at(f, sides[0], points[0])?,
             self.side_at(f, sides[1], points[1])?,
         ];
-        let stiffness = f.required("stiffness", number_in(|x| x >= 0.0, "non-negative, in N/m"))?;
-        let damping = f
-            .optional("damping", number_in(|x| x >= 0.0, "non-negative, in N s/m"))?
-            .unwrap_or(0.0);
+        let (stiffness, damping) = bodies::stiffness_damping(f, Spring::Linear)?;
         let rest = f.optional("rest_length", number_in(|x| x >= 0.0, "non-negative, in m"))?;
         f.finish(&[
             "name",
@@ -312,17 +242,8 @@ impl<'a> Model<'a> {
     /// A rotational spring-damper between two bodies (or the ground and a
     /// body), at rest at the initial relative angle.
     fn rotational_spring(&mut self, f: &mut Fields<'a>, name: &str) -> Result<(), FileError> {
-        let sides = self.bodies.sides(f)?;
-        let stiffness = f.required(
-            "stiffness",
-            number_in(|x| x >= 0.0, "non-negative, in N m/rad"),
-        )?;
-        let damping = f
-            .optional(
-                "damping",
-                number_in(|x| x >= 0.0, "non-negative, in N m s/rad"),
-            )?
-            .unwrap_or(0.0);
+        let sides = self.r.bodies.sides(f)?;
+        let (stiffness, damping) = bodies::stiffness_damping(f, Spring::Rotational)?;
         f.finish(&["name", "type", "bodies", "stiffness", "damping"])?;
         let rigid = |s: Side| match s {
             Side::Ground => Ok(None),
@@ -335,7 +256,7 @@ impl<'a> Model<'a> {
                 self.builder.rotational_spring(name, a, b, spring);
                 Ok(())
             }
-            _ => Err(self.doc.error(
+            _ => Err(self.r.doc.error(
                 f.span(),
                 format!("{}: a rotational spring joins two rigid bodies (the first may be 'ground'); point masses have no angle", f.what),
             )),
@@ -345,23 +266,13 @@ impl<'a> Model<'a> {
     /// The attachment points from `points` (local) or `at` (one global point
     /// at the initial pose).
     fn anchors(&self, f: &mut Fields<'a>, sides: [Side; 2]) -> Result<[At; 2], FileError> {
-        let points = f.optional("points", two_points)?;
-        let at = f.optional("at", numbers::<2>)?;
-        match (points, at) {
-            (Some(p), None) => Ok([
+        Ok(match self.r.given(f, two_points)? {
+            Given::Points(p) => [
                 self.side_at(f, sides[0], p[0])?,
                 self.side_at(f, sides[1], p[1])?,
-            ]),
-            (None, Some(g)) => Ok([local_at(sides[0], g), local_at(sides[1], g)]),
-            (Some(_), Some(_)) => Err(self.doc.error(
-                f.span(),
-                format!("{}: give 'points' or 'at', not both", f.what),
-            )),
-            (None, None) => Err(self.doc.error(
-                f.span(),
-                format!("{}: the key 'points' (or 'at') is missing", f.what),
-            )),
-        }
+            ],
+            Given::At(g) => [local_at(sides[0], g), local_at(sides[1], g)],
+        })
     }
 
     /// The point `local` of a side (global for the ground).
@@ -376,7 +287,7 @@ impl<'a> Model<'a> {
     /// A point mass has no extent: its point is `[0, 0]`.
     fn check_point(&self, f: &Fields<'a>, side: Side, local: [f64; 2]) -> Result<(), FileError> {
         match side {
-            Side::Body(b) if !b.rigid && local != [0.0, 0.0] => Err(self.doc.error(
+            Side::Body(b) if !b.rigid && local != [0.0, 0.0] => Err(self.r.doc.error(
                 f.span(),
                 format!(
                     "{}: a point mass has no extent: its point must be [0, 0], not {local:?}",
@@ -399,20 +310,6 @@ impl<'a> Model<'a> {
             }
             (_, At::Ground(p)) | (Side::Ground, At::Body(_, p)) => p,
         }
-    }
-
-    /// The time function of `key`, if present.
-    fn function(&self, f: &mut Fields<'a>, key: &str) -> Result<Option<TimeFunction>, FileError> {
-        let Some(e) = f.entry(key) else {
-            return Ok(None);
-        };
-        let what = format!("{}: {key}", f.what);
-        super::functions::read(self.doc, &e.node, what).map(Some)
-    }
-
-    /// A builder error, placed at the element it names when it can be.
-    fn located(&self, e: mstar_model::planar::ModelError) -> FileError {
-        self.names.located(self.doc, &e)
     }
 }
 

@@ -6,13 +6,14 @@
 use std::collections::HashMap;
 
 use super::FileError;
-use super::bodies::{self, Bodies, Names};
+use super::bodies::{self, Given, Reader, Spring};
 use super::fields::{Doc, Fields, choice, list, number, number_in, numbers, string};
 use super::node::{Node, Value};
-use mstar_model::planar::{ModelError, TimeFunction};
+use mstar_model::planar::TimeFunction;
 use mstar_model::spatial::{
-    Attach, DriverKind, JointSpec, JointType, RotationalMass, SpatialBody, SpatialBodyId,
-    SpatialBuilder, SpatialInertia, SpatialPointMass, SpatialSystem, SpringSpec, rotation_matrix,
+    Attach, Axes, DriverKind, JointSpec, JointType, RotationalMass, RotationalSpringDamper,
+    SpatialBody, SpatialBodyId, SpatialBuilder, SpatialInertia, SpatialSystem, SpringDamper,
+    rotation_matrix,
 };
 
 /// The format version of spatial model files.
@@ -21,15 +22,24 @@ pub const FORMAT: &str = "mstar.spatial/1";
 /// How far from 1 the norm of a given orientation may be without a warning.
 const NORM_WARNING: f64 = 1e-12;
 
-/// A named body of the model, as joints and forces refer to it.
+/// Where a body is at the start.
 #[derive(Clone, Copy, Debug)]
-struct Placed {
-    id: SpatialBodyId,
-    rigid: bool,
+struct Pose {
     position: [f64; 3],
     /// Unit Euler parameters (identity for a point mass).
     orientation: [f64; 4],
 }
+
+/// The force types of the format.
+const FORCES: [&str; 4] = [
+    "force",
+    "torque",
+    "spring-damper",
+    "rotational-spring-damper",
+];
+
+/// A named body of the model, as joints and forces refer to it.
+type Placed = bodies::Placed<SpatialBodyId, Pose>;
 
 /// One side of a joint or force: the ground or a body.
 type Side = bodies::Side<Placed>;
@@ -46,7 +56,10 @@ impl Side {
     fn global(self, s: [f64; 3]) -> [f64; 3] {
         match self {
             Self::Ground => s,
-            Self::Body(b) => add(b.position, mul(&rotation_matrix(b.orientation), s)),
+            Self::Body(b) => add(
+                b.pose.position,
+                mul(&rotation_matrix(b.pose.orientation), s),
+            ),
         }
     }
 
@@ -55,7 +68,10 @@ impl Side {
         match self {
             Self::Ground => g,
             Self::Body(b) if !b.rigid => [0.0; 3],
-            Self::Body(b) => mul_t(&rotation_matrix(b.orientation), sub(g, b.position)),
+            Self::Body(b) => mul_t(
+                &rotation_matrix(b.pose.orientation),
+                sub(g, b.pose.position),
+            ),
         }
     }
 
@@ -63,20 +79,17 @@ impl Side {
     fn local_axis(self, g: [f64; 3]) -> [f64; 3] {
         match self {
             Self::Ground => g,
-            Self::Body(b) => mul_t(&rotation_matrix(b.orientation), g),
+            Self::Body(b) => mul_t(&rotation_matrix(b.pose.orientation), g),
         }
     }
 }
 
 /// The model being read.
 struct Model<'a> {
-    doc: Doc<'a>,
     builder: SpatialBuilder,
-    bodies: Bodies<Placed>,
+    r: Reader<'a, Placed>,
     /// The joints (not drivers) by name, with their type.
     joints: HashMap<String, JointType>,
-    /// Every name with what carries it and where, for duplicates.
-    names: Names,
     warnings: Vec<String>,
 }
 
@@ -87,61 +100,27 @@ pub(crate) fn read<'a>(
     root: &'a Node,
     rotational_mass: RotationalMass,
 ) -> Result<(SpatialSystem, Vec<String>), FileError> {
-    let mut top = Fields::of(doc, root, "the model".to_string())?;
-    let format = top.required("format", string)?;
-    if format != FORMAT {
-        let e = top.entry("format").map(|e| e.node.span.clone());
-        return Err(doc.error(
-            e.flatten().as_ref(),
-            format!("unknown format '{format}': this version of mstar reads '{FORMAT}'"),
-        ));
-    }
-    let gravity = top
-        .optional("gravity", numbers::<3>)?
-        .unwrap_or([0.0, 0.0, -9.81]);
-    let counts = bodies::element_counts(&top);
+    let known = format!("'{FORMAT}'");
+    let (r, mut top, gravity) = Reader::open(doc, root, FORMAT, &known, [0.0, 0.0, -9.81])?;
     let mut m = Model {
-        doc,
         builder: SpatialBuilder::new(),
-        bodies: Bodies::with_capacity(counts.1),
+        r,
         joints: HashMap::new(),
-        names: Names::with_capacity(counts.0),
         warnings: Vec::new(),
     };
     m.builder.gravity(gravity);
     m.builder.rotational_mass(rotational_mass);
     // ([simulation] and [output] are the caller's: settings, not the mechanism.)
-    bodies::read_elements(
-        &mut top,
-        &mut m,
-        [
-            Model::body,
-            Model::point_mass,
-            Model::joint,
-            Model::driver,
-            Model::force,
-        ],
-    )?;
-    let system = m.builder.build().map_err(|e| m.located(e))?;
+    bodies::read_elements(&mut top, &mut m)?;
+    let system = m.builder.build().map_err(|e| m.r.located(&e))?;
     Ok((system, m.warnings))
 }
 
-impl<'a> Model<'a> {
-    /// The element's fields and its name, the name claimed
-    /// ([`Names::named`]).
-    fn named(
-        &mut self,
-        node: &'a Node,
-        what: String,
-        kind: &str,
-    ) -> Result<(Fields<'a>, String), FileError> {
-        self.names.named(self.doc, node, what, kind)
-    }
-
+impl<'a> bodies::Elements<'a> for Model<'a> {
     /// A `[[body]]`: a rigid body.
     fn body(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
-        let (mut f, name) = self.named(node, what, "body")?;
-        let mass = f.required("mass", number_in(|x| x > 0.0, "positive, in kg"))?;
+        let (mut f, name) = self.r.named(node, what, "body")?;
+        let mass = bodies::mass(&mut f)?;
         let inertia = f.required("inertia", inertia)?;
         let position = f.required("position", numbers::<3>)?;
         let given = f.required("orientation", numbers::<4>)?;
@@ -180,7 +159,7 @@ impl<'a> Model<'a> {
             );
             let span = e.node.span.as_ref().or(e.key_span.as_ref());
             self.warnings
-                .push(self.doc.error(span, message).to_string());
+                .push(self.r.doc.error(span, message).to_string());
         }
         let orientation = given.map(|x| x / norm);
         let id = self.builder.body(
@@ -194,53 +173,30 @@ impl<'a> Model<'a> {
                 angular_velocity,
             },
         );
-        self.bodies.insert(
-            name,
-            Placed {
-                id,
-                rigid: true,
-                position,
-                orientation,
-            },
-        );
-        Ok(())
+        let pose = Pose {
+            position,
+            orientation,
+        };
+        self.r.place(name, Placed::rigid(id, pose))
     }
 
     /// A `[[point_mass]]`.
     fn point_mass(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
-        let (mut f, name) = self.named(node, what, "point mass")?;
-        let mass = f.required("mass", number_in(|x| x > 0.0, "positive, in kg"))?;
-        let position = f.required("position", numbers::<3>)?;
-        let velocity = f.optional("velocity", numbers::<3>)?.unwrap_or([0.0; 3]);
-        f.finish(&["name", "mass", "position", "velocity"])?;
-        let id = self.builder.point_mass(
-            &name,
-            SpatialPointMass {
-                mass,
-                position,
-                velocity,
-            },
-        );
-        self.bodies.insert(
-            name,
-            Placed {
-                id,
-                rigid: false,
-                position,
+        self.r.point_mass(node, what, |name, point| {
+            let pose = Pose {
+                position: point.position,
                 orientation: [1.0, 0.0, 0.0, 0.0],
-            },
-        );
-        Ok(())
+            };
+            Placed::point(self.builder.point_mass(name, point), pose)
+        })
     }
 
     /// A `[[joint]]`.
     fn joint(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
-        let (mut f, name) = self.named(node, what, "joint")?;
-        let kinds = JointType::ALL;
-        let names = kinds.map(JointType::name);
-        let kind = f.required("type", choice(&names))?;
-        let kind = kinds[names.iter().position(|n| *n == kind).expect("a choice")];
-        let sides = self.bodies.sides(&mut f)?;
+        let names = JointType::ALL.map(JointType::name);
+        let (mut f, name, kind) = self.r.typed(node, what, "joint", &names)?;
+        let kind = JointType::ALL[names.iter().position(|n| *n == kind).expect("a choice")];
+        let sides = self.r.bodies.sides(&mut f)?;
         let points = self.anchors(&mut f, sides)?;
         let mut known = vec!["name", "type", "bodies", "points", "at"];
         for s in sides {
@@ -281,7 +237,7 @@ impl<'a> Model<'a> {
             length = f.optional("length", number_in(|x| x > 0.0, "positive, in m"))?;
             let initial = distance(sides[0].global(points[0]), sides[1].global(points[1]));
             if length.is_none() && (initial.is_nan() || initial <= 0.0) {
-                return Err(self.doc.error(
+                return Err(self.r.doc.error(
                     f.span(),
                     format!(
                         "{}: the two points coincide at the initial pose: give 'length'",
@@ -305,6 +261,71 @@ impl<'a> Model<'a> {
         Ok(())
     }
 
+    /// A `[[driver]]`: a joint's angle or translation prescribed in time.
+    fn driver(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let (mut f, name) = self.r.named(node, what, "driver")?;
+        let joint = f.required("joint", string)?;
+        let e = f.read_entry("joint")?;
+        let Some(&kind) = self.joints.get(joint) else {
+            let mut known: Vec<&str> = self.joints.keys().map(String::as_str).collect();
+            known.sort_unstable();
+            return Err(f.bad(
+                e,
+                format!(
+                    "no joint is called '{}' (known: {})",
+                    joint.escape_debug(),
+                    if known.is_empty() {
+                        "none".to_string()
+                    } else {
+                        known.join(", ")
+                    }
+                ),
+            ));
+        };
+        let motion = f.required("motion", choice(&["angle", "translation"]))?;
+        let motion_kind = if motion == "angle" {
+            DriverKind::Angle
+        } else {
+            DriverKind::Translation
+        };
+        let fits = match motion_kind {
+            DriverKind::Angle => matches!(kind, JointType::Revolute | JointType::Cylindrical),
+            DriverKind::Translation => {
+                matches!(kind, JointType::Prismatic | JointType::Cylindrical)
+            }
+        };
+        if !fits {
+            let e = f.read_entry("motion")?;
+            return Err(f.bad(
+                e,
+                format!(
+                    "joint '{}' is {}, which has no free {motion} (angle: revolute, cylindrical; translation: prismatic, cylindrical)",
+                    joint.escape_debug(),
+                    kind.name()
+                ),
+            ));
+        }
+        let function = self
+            .r
+            .function(&mut f, "function")?
+            .ok_or_else(|| f.missing("function"))?;
+        f.finish(&["name", "joint", "motion", "function"])?;
+        self.builder.driver(&name, joint, motion_kind, function);
+        Ok(())
+    }
+
+    /// A `[[force]]`.
+    fn force(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let (mut f, name, kind) = self.r.typed(node, what, "force", &FORCES)?;
+        match kind {
+            "force" | "torque" => self.point_load(&mut f, &name, kind == "torque"),
+            "spring-damper" => self.spring_damper(&mut f, &name),
+            _ => self.rotational_spring_damper(&mut f, &name),
+        }
+    }
+}
+
+impl<'a> Model<'a> {
     /// The axes of a joint: `axes = [[..], [..]]` in each body's axes, or
     /// `axis = [..]` global at the initial pose (not for universal joints).
     fn joint_axes(
@@ -328,13 +349,13 @@ impl<'a> Model<'a> {
                 ));
             }
             (Some(_), Some(_)) => {
-                return Err(self.doc.error(
+                return Err(self.r.doc.error(
                     f.span(),
                     format!("{}: give 'axes' or 'axis', not both", f.what),
                 ));
             }
             (None, None) => {
-                return Err(self.doc.error(
+                return Err(self.r.doc.error(
                     f.span(),
                     format!(
                         "{}: the key 'axes' is missing: a {} joint needs {} (or 'axis = [x, y, z]', global{})",
@@ -402,77 +423,6 @@ impl<'a> Model<'a> {
         Ok(axes)
     }
 
-    /// A `[[driver]]`: a joint's angle or translation prescribed in time.
-    fn driver(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
-        let (mut f, name) = self.named(node, what, "driver")?;
-        let joint = f.required("joint", string)?;
-        let e = f.read_entry("joint")?;
-        let Some(&kind) = self.joints.get(joint) else {
-            let mut known: Vec<&str> = self.joints.keys().map(String::as_str).collect();
-            known.sort_unstable();
-            return Err(f.bad(
-                e,
-                format!(
-                    "no joint is called '{}' (known: {})",
-                    joint.escape_debug(),
-                    if known.is_empty() {
-                        "none".to_string()
-                    } else {
-                        known.join(", ")
-                    }
-                ),
-            ));
-        };
-        let motion = f.required("motion", choice(&["angle", "translation"]))?;
-        let motion_kind = if motion == "angle" {
-            DriverKind::Angle
-        } else {
-            DriverKind::Translation
-        };
-        let fits = match motion_kind {
-            DriverKind::Angle => matches!(kind, JointType::Revolute | JointType::Cylindrical),
-            DriverKind::Translation => {
-                matches!(kind, JointType::Prismatic | JointType::Cylindrical)
-            }
-        };
-        if !fits {
-            let e = f.read_entry("motion")?;
-            return Err(f.bad(
-                e,
-                format!(
-                    "joint '{}' is {}, which has no free {motion} (angle: revolute, cylindrical; translation: prismatic, cylindrical)",
-                    joint.escape_debug(),
-                    kind.name()
-                ),
-            ));
-        }
-        let function = self
-            .function(&mut f, "function")?
-            .ok_or_else(|| f.missing("function"))?;
-        f.finish(&["name", "joint", "motion", "function"])?;
-        self.builder.driver(&name, joint, motion_kind, function);
-        Ok(())
-    }
-
-    /// A `[[force]]`.
-    fn force(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
-        let (mut f, name) = self.named(node, what, "force")?;
-        let kind = f.required(
-            "type",
-            choice(&[
-                "force",
-                "torque",
-                "spring-damper",
-                "rotational-spring-damper",
-            ]),
-        )?;
-        match kind {
-            "force" | "torque" => self.point_load(&mut f, &name, kind == "torque"),
-            "spring-damper" => self.spring_damper(&mut f, &name),
-            _ => self.rotational_spring_damper(&mut f, &name),
-        }
-    }
-
     /// A `[[force]]` of type `force` (at a point) or `torque`.
     fn point_load(
         &mut self,
@@ -480,7 +430,7 @@ impl<'a> Model<'a> {
         name: &str,
         torque: bool,
     ) -> Result<(), FileError> {
-        let body = self.bodies.body_of(f, "body")?;
+        let body = self.r.bodies.body_of(f, "body")?;
         if torque && !body.rigid {
             let e = f.read_entry("body")?;
             return Err(f.bad(e, "a torque needs a rigid body, not a point mass"));
@@ -501,7 +451,7 @@ impl<'a> Model<'a> {
         };
         let mut c: [TimeFunction; 3] = std::array::from_fn(|_| TimeFunction::Constant(0.0));
         for (c, key) in c.iter_mut().zip(keys) {
-            if let Some(function) = self.function(f, key)? {
+            if let Some(function) = self.r.function(f, key)? {
                 *c = function;
             }
         }
@@ -518,22 +468,24 @@ impl<'a> Model<'a> {
             known.push("point");
         }
         f.finish(&known)?;
-        if torque {
-            self.builder.torque(name, body.id, c, axes == "body");
+        let axes = if axes == "body" {
+            Axes::Body
         } else {
-            self.builder.force(name, body.id, point, c, axes == "body");
+            Axes::Global
+        };
+        if torque {
+            self.builder.torque(name, body.id, c, axes);
+        } else {
+            self.builder.force(name, body.id, point, c, axes);
         }
         Ok(())
     }
 
     /// A `[[force]]` of type `spring-damper`.
     fn spring_damper(&mut self, f: &mut Fields<'a>, name: &str) -> Result<(), FileError> {
-        let sides = self.bodies.sides(f)?;
+        let sides = self.r.bodies.sides(f)?;
         let points = self.anchors(f, sides)?;
-        let stiffness = f.required("stiffness", number_in(|x| x >= 0.0, "non-negative, in N/m"))?;
-        let damping = f
-            .optional("damping", number_in(|x| x >= 0.0, "non-negative, in N s/m"))?
-            .unwrap_or(0.0);
+        let (stiffness, damping) = bodies::stiffness_damping(f, Spring::Linear)?;
         let length = f.optional("length", number_in(|x| x >= 0.0, "non-negative, in m"))?;
         let preload = f.optional("preload", number)?.unwrap_or(0.0);
         f.finish(&[
@@ -551,10 +503,10 @@ impl<'a> Model<'a> {
             name,
             sides.map(Side::attach),
             points,
-            SpringSpec {
+            SpringDamper {
                 stiffness,
                 damping,
-                length,
+                rest_length: length,
                 preload,
             },
         );
@@ -567,7 +519,7 @@ impl<'a> Model<'a> {
         f: &mut Fields<'a>,
         name: &str,
     ) -> Result<(), FileError> {
-        let sides = self.bodies.sides(f)?;
+        let sides = self.r.bodies.sides(f)?;
         for s in sides {
             if let Side::Body(b) = s
                 && !b.rigid
@@ -580,16 +532,7 @@ impl<'a> Model<'a> {
             }
         }
         let axes = self.joint_axes(f, JointType::Revolute, sides)?;
-        let stiffness = f.required(
-            "stiffness",
-            number_in(|x| x >= 0.0, "non-negative, in N m/rad"),
-        )?;
-        let damping = f
-            .optional(
-                "damping",
-                number_in(|x| x >= 0.0, "non-negative, in N m s/rad"),
-            )?
-            .unwrap_or(0.0);
+        let (stiffness, damping) = bodies::stiffness_damping(f, Spring::Rotational)?;
         let angle = f.optional("angle", number)?.unwrap_or(0.0);
         f.finish(&[
             "name",
@@ -605,7 +548,11 @@ impl<'a> Model<'a> {
             name,
             sides.map(Side::attach),
             axes,
-            [stiffness, damping, angle],
+            RotationalSpringDamper {
+                stiffness,
+                damping,
+                angle,
+            },
         );
         Ok(())
     }
@@ -613,23 +560,9 @@ impl<'a> Model<'a> {
     /// The attachment points from `points` (local) or `at` (one global point
     /// at the initial pose).
     fn anchors(&self, f: &mut Fields<'a>, sides: [Side; 2]) -> Result<[[f64; 3]; 2], FileError> {
-        let points = f.optional("points", two_vectors)?;
-        let at = f.optional("at", numbers::<3>)?;
-        let points = match (points, at) {
-            (Some(p), None) => p,
-            (None, Some(g)) => [sides[0].local(g), sides[1].local(g)],
-            (Some(_), Some(_)) => {
-                return Err(self.doc.error(
-                    f.span(),
-                    format!("{}: give 'points' or 'at', not both", f.what),
-                ));
-            }
-            (None, None) => {
-                return Err(self.doc.error(
-                    f.span(),
-                    format!("{}: the key 'points' (or 'at') is missing", f.what),
-                ));
-            }
+        let points = match self.r.given(f, two_vectors)? {
+            Given::Points(p) => p,
+            Given::At(g) => [sides[0].local(g), sides[1].local(g)],
         };
         for (side, p) in sides.iter().zip(points) {
             if let Side::Body(b) = side
@@ -644,20 +577,6 @@ impl<'a> Model<'a> {
             }
         }
         Ok(points)
-    }
-
-    /// The time function of `key`, if present.
-    fn function(&self, f: &mut Fields<'a>, key: &str) -> Result<Option<TimeFunction>, FileError> {
-        let Some(e) = f.entry(key) else {
-            return Ok(None);
-        };
-        let what = format!("{}: {key}", f.what);
-        super::functions::read(self.doc, &e.node, what).map(Some)
-    }
-
-    /// A builder error, placed at the element it names when it can be.
-    fn located(&self, e: ModelError) -> FileError {
-        self.names.located(self.doc, &e)
     }
 }
 

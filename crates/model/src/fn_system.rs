@@ -1,5 +1,6 @@
 //! [`FnSystem`]: a small system written as closures.
 
+use crate::dims;
 use crate::{Pattern, System};
 
 /// `f(t, u, out)`.
@@ -181,20 +182,10 @@ impl FnSystem {
 }
 
 impl System for FnSystem {
-    fn n_coords(&self) -> usize {
-        self.n
-    }
-
-    fn n_constraints(&self) -> usize {
-        self.m
-    }
+    dims::sizes_and_row_names!();
 
     fn coord_name(&self, i: usize) -> String {
         self.coord_names[i].clone()
-    }
-
-    fn constraint_name(&self, i: usize) -> String {
-        self.constraint_names[i].clone()
     }
 
     fn mass_pattern(&self) -> Pattern {

@@ -20,6 +20,7 @@
 //! ```
 #![deny(missing_docs)]
 
+mod dims;
 mod fd;
 mod fn_system;
 mod parallel;
@@ -31,6 +32,7 @@ pub mod spatial;
 mod subset;
 mod system;
 
+pub use dims::PointMass;
 pub use fn_system::{FnSystem, NamesError};
 pub use pattern::Pattern;
 pub use pendulum::{Link, PendulumChain};

@@ -8,6 +8,7 @@ use super::geometry::Anchor;
 use super::joints::{Constraint, Distance, Driver, JointElement, Prismatic, Revolute, Weld};
 use super::loads::{Force, LoadElement, PointForce, RotationalSpring, Spring, Torque};
 use super::{At, Body, BodyId, Coordinate, ModelError, PlanarSystem, TimeFunction};
+use crate::dims::{self, Dimension, Planar};
 
 /// A rigid body: mass, inertia about the centre of mass, initial pose and
 /// velocity.
@@ -24,16 +25,8 @@ pub struct RigidBody {
     pub velocity: [f64; 3],
 }
 
-/// A point mass: mass, initial position and velocity.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PointMass {
-    /// Mass, kg (> 0).
-    pub mass: f64,
-    /// `x`, `y`, m.
-    pub position: [f64; 2],
-    /// `ẋ`, `ẏ`, m/s (default: at rest).
-    pub velocity: [f64; 2],
-}
+/// A point mass in `(x, y)`: mass, initial position and velocity.
+pub type PointMass = crate::dims::PointMass<2>;
 
 /// A linear spring-damper: tension `stiffness (ℓ − rest_length) + damping ℓ̇`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -147,14 +140,14 @@ impl PlanarBuilder {
         velocity: [f64; 3],
     ) -> BodyId {
         let x = self.n;
-        self.n += if inertia.is_some() { 3 } else { 2 };
+        self.n += Planar::count(inertia.is_some());
         self.bodies.push(Body {
             name: name.to_string(),
             mass,
             inertia,
             x,
-            pose,
-            velocity,
+            u0: pose,
+            v0: velocity,
         });
         BodyId {
             builder: self.id,
@@ -166,7 +159,7 @@ impl PlanarBuilder {
     /// must be 0).
     pub fn velocity(&mut self, body: BodyId, velocity: [f64; 3]) -> &mut Self {
         match self.own(body) {
-            Some(i) => self.bodies[i].velocity = velocity,
+            Some(i) => self.bodies[i].v0 = velocity,
             None => self.problems.push(self.foreign(body, "a velocity")),
         }
         self
@@ -332,7 +325,7 @@ impl PlanarBuilder {
                 .own(id)
                 .map(|i| &self.bodies[i])
                 .filter(|b| b.inertia.is_some())
-                .map_or(0.0, |b| b.pose[2]),
+                .map_or(0.0, |b| b.u0[2]),
             At::Ground(_) => 0.0,
         }
     }
@@ -377,15 +370,7 @@ impl PlanarBuilder {
     /// torque or a rotational spring on a point mass, or an element attached
     /// to the ground twice.
     pub fn build(&self) -> Result<PlanarSystem, ModelError> {
-        if let Some(problem) = self.problems.first() {
-            return Err(problem.clone());
-        }
-        if self.bodies.is_empty() {
-            return Err(ModelError::Invalid {
-                element: "the model".to_string(),
-                what: "no body or point mass: add a [[body]] or [[point_mass]]".to_string(),
-            });
-        }
+        dims::check_start(&self.problems, self.bodies.len())?;
         self.check_names()?;
         self.check_bodies()?;
         let mut constraints = Vec::new();
@@ -419,7 +404,6 @@ impl PlanarBuilder {
     /// Every body and element has its own name.
     fn check_names(&self) -> Result<(), ModelError> {
         let count = self.bodies.len() + self.joints.len() + self.drivers.len() + self.forces.len();
-        let mut names = std::collections::HashSet::with_capacity(count);
         let all_names = self
             .bodies
             .iter()
@@ -427,12 +411,7 @@ impl PlanarBuilder {
             .chain(self.joints.iter().map(|j| &j.0))
             .chain(self.drivers.iter().map(|d| &d.0))
             .chain(self.forces.iter().map(|f| &f.0));
-        for name in all_names {
-            if !names.insert(name.as_str()) {
-                return Err(ModelError::DuplicateName(name.clone()));
-            }
-        }
-        Ok(())
+        dims::check_names(all_names, count, None)
     }
 
     /// Positive masses, inertias ≥ 0, finite poses and velocities, no angular
@@ -453,10 +432,10 @@ impl PlanarBuilder {
                     "the inertia must be positive (or 0, see PlanarBuilder::rigid_body)",
                 ));
             }
-            if !b.pose.iter().chain(&b.velocity).all(|x| x.is_finite()) {
+            if !b.u0.iter().chain(&b.v0).all(|x| x.is_finite()) {
                 return Err(invalid("the initial pose and velocity must be finite"));
             }
-            if b.inertia.is_none() && b.velocity[2] != 0.0 {
+            if b.inertia.is_none() && b.v0[2] != 0.0 {
                 return Err(invalid("a point mass has no angle: its θ̇ must be 0"));
             }
         }

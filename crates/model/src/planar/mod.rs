@@ -28,8 +28,8 @@ use geometry::Slots;
 use joints::{Constraint, MAX_HESSIAN, RevoluteKernel};
 use loads::Force;
 
-use rayon::prelude::*;
-
+pub use crate::dims::ModelError;
+use crate::dims::{self, Initial, Planar};
 use crate::{Pattern, System};
 
 /// Handle of a body in the [`PlanarBuilder`] that made it.
@@ -60,23 +60,6 @@ pub enum Coordinate {
     Theta,
 }
 
-/// Errors in a planar model.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum ModelError {
-    /// Two bodies or two elements share a name.
-    #[error("the name '{0}' is used twice")]
-    DuplicateName(String),
-    /// A parameter is out of range.
-    #[error("{element}: {what}")]
-    Invalid {
-        /// The element's name.
-        element: String,
-        /// What is wrong.
-        what: String,
-    },
-}
-
 /// What a name of [`PlanarSystem`] stands for.
 #[derive(Clone, Copy, Debug)]
 enum Named {
@@ -84,24 +67,8 @@ enum Named {
     Constraint(usize),
 }
 
-#[derive(Clone, Debug)]
-struct Body {
-    name: String,
-    mass: f64,
-    /// `None` for a point mass.
-    inertia: Option<f64>,
-    /// Index of the body's `x` coordinate.
-    x: usize,
-    pose: [f64; 3],
-    velocity: [f64; 3],
-}
-
-impl Body {
-    /// Its number of coordinates: 3 for a rigid body, 2 for a point mass.
-    fn count(&self) -> usize {
-        if self.inertia.is_some() { 3 } else { 2 }
-    }
-}
+/// A body as assembled.
+type Body = dims::Body<Planar, f64>;
 
 /// A planar multibody system assembled by [`PlanarBuilder`].
 #[derive(Clone, Debug)]
@@ -144,32 +111,7 @@ fn global_pairs<'a>(
         .map(|&(a, b)| (slots.global[a], slots.global[b]))
 }
 
-/// A chunk of kernels and where its output starts.
-type Part<'a> = crate::parallel::Part<'a, RevoluteKernel>;
-
-/// Splits `x` into consecutive parts starting at `bases` (the first part at 0
-/// whatever the first base says; bases ascending).
-pub(crate) fn split_at_bases(x: &mut [f64], bases: impl Iterator<Item = usize>) -> Vec<&mut [f64]> {
-    let mut parts = Vec::new();
-    let (mut rest, mut at) = (x, 0);
-    for base in bases.skip(1) {
-        let (head, tail) = rest.split_at_mut(base - at);
-        parts.push(head);
-        (rest, at) = (tail, base);
-    }
-    parts.push(rest);
-    parts
-}
-
 impl PlanarSystem {
-    /// The revolute joints in chunks for rayon, each with the global row, B
-    /// value and Hessian value at which its output part starts (0 for the
-    /// first chunk); empty when the work is sequential: fewer than two
-    /// chunks' worth of joints, or one thread in rayon's current pool.
-    fn parallel_parts(&self) -> Vec<Part<'_>> {
-        crate::parallel::parallel_parts(&self.revolutes)
-    }
-
     fn assemble(
         gravity: [f64; 2],
         bodies: &[Body],
@@ -261,48 +203,17 @@ impl PlanarSystem {
         }
     }
 
-    /// Initial coordinates `u₀` (the poses given to the builder).
-    #[must_use]
-    pub fn initial_position(&self) -> Vec<f64> {
-        self.initial(|b| b.pose)
-    }
-
-    /// Initial velocities `u̇₀` (given to the builder, zero by default).
-    #[must_use]
-    pub fn initial_velocity(&self) -> Vec<f64> {
-        self.initial(|b| b.velocity)
-    }
-
-    fn initial(&self, f: impl Fn(&Body) -> [f64; 3]) -> Vec<f64> {
-        let mut u = vec![0.0; self.n];
-        for b in &self.bodies {
-            u[b.x..b.x + b.count()].copy_from_slice(&f(b)[..b.count()]);
-        }
-        u
-    }
-
-    /// Number of bodies.
-    #[must_use]
-    pub fn n_bodies(&self) -> usize {
-        self.bodies.len()
-    }
+    dims::initial_state!(
+        position: "Initial coordinates `u₀` (the poses given to the builder).",
+        velocity: "Initial velocities `u̇₀` (given to the builder, zero by default)."
+    );
 }
 
 impl System for PlanarSystem {
-    fn n_coords(&self) -> usize {
-        self.n
-    }
-
-    fn n_constraints(&self) -> usize {
-        self.m
-    }
+    dims::sizes_and_row_names!();
 
     fn coord_name(&self, i: usize) -> String {
         self.coord_names[i].clone()
-    }
-
-    fn constraint_name(&self, i: usize) -> String {
-        self.constraint_names[i].clone()
     }
 
     fn mass_pattern(&self) -> Pattern {
@@ -404,23 +315,9 @@ impl System for PlanarSystem {
             (t[0], t[1]) = u[x].sin_cos();
         }
         let trig: &[f64] = trig;
-        let revolutes = |ks: &[RevoluteKernel], phi: &mut [f64], b: &mut [f64], base| {
-            for k in ks {
-                k.phi_b(u, trig, phi, b, base);
-            }
-        };
-        let parts = self.parallel_parts();
-        if parts.is_empty() {
-            revolutes(&self.revolutes, phi, b, (0, 0));
-        } else {
-            let phi_parts = split_at_bases(phi, parts.iter().map(|p| p.1.0));
-            let b_parts = split_at_bases(b, parts.iter().map(|p| p.1.1));
-            parts
-                .into_par_iter()
-                .zip(phi_parts)
-                .zip(b_parts)
-                .for_each(|(((ks, base), phi), b)| revolutes(ks, phi, b, (base.0, base.1)));
-        }
+        crate::parallel::phi_b_in_parts(&self.revolutes, phi, b, |k, phi, b, base| {
+            k.phi_b(u, trig, phi, b, base);
+        });
         for &i in &self.others {
             let (c, off) = (&self.constraints[i], self.b_offsets[i]);
             c.phi_grad(
@@ -444,22 +341,9 @@ impl System for PlanarSystem {
     }
 
     fn hessian_into(&self, t: f64, u: &[f64], mu: &[f64], out: &mut [f64]) {
-        let parts = self.parallel_parts();
-        if parts.is_empty() {
-            for k in &self.revolutes {
-                k.hessian(u, mu, out, 0);
-            }
-        } else {
-            let out_parts = split_at_bases(out, parts.iter().map(|p| p.1.2));
-            parts
-                .into_par_iter()
-                .zip(out_parts)
-                .for_each(|((ks, base), out)| {
-                    for k in ks {
-                        k.hessian(u, mu, out, base.2);
-                    }
-                });
-        }
+        crate::parallel::hessian_in_parts(&self.revolutes, out, |k, out, base| {
+            k.hessian(u, mu, out, base);
+        });
         for &i in &self.others {
             let (c, off) = (&self.constraints[i], self.h_offsets[i]);
             let vals = &mut out[off..off + c.hess.len()];

@@ -14,7 +14,8 @@ use super::loads::{PointForce, RotationalSpring, SpatialLoad, Spring, Torque};
 use super::rotation::rotates_to_body;
 use super::rotation::{normalized, rates_of_omega};
 use super::system::SpatialSystem;
-use crate::planar::{ModelError, TimeFunction};
+use crate::dims::{self, ModelError};
+use crate::planar::TimeFunction;
 
 /// How a rigid body's rotational mass block is formed (`docs/theory.md`,
 /// "Spatial bodies").
@@ -70,16 +71,8 @@ pub struct SpatialBody {
     pub angular_velocity: [f64; 3],
 }
 
-/// A point mass in `(x, y, z)`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpatialPointMass {
-    /// Mass, kg.
-    pub mass: f64,
-    /// Position, m.
-    pub position: [f64; 3],
-    /// Velocity, m/s.
-    pub velocity: [f64; 3],
-}
+/// A point mass in `(x, y, z)`: mass, initial position and velocity.
+pub type SpatialPointMass = crate::dims::PointMass<3>;
 
 /// What an element attaches to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -170,17 +163,43 @@ pub enum DriverKind {
     Translation,
 }
 
-/// A translational spring-damper.
+/// A linear spring-damper: tension `stiffness (ℓ − rest_length) + damping ℓ̇ +
+/// preload` (the planar [`SpringDamper`](crate::planar::SpringDamper) with a
+/// preload, and a rest length that defaults to the initial one).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpringSpec {
-    /// Stiffness, N/m.
+pub struct SpringDamper {
+    /// N/m (≥ 0).
     pub stiffness: f64,
-    /// Damping, N s/m.
+    /// N s/m (≥ 0).
     pub damping: f64,
-    /// Free length, m (`None`: the initial length).
-    pub length: Option<f64>,
-    /// Tension at the free length, N.
+    /// m (≥ 0; `None`: the initial length).
+    pub rest_length: Option<f64>,
+    /// Tension at the rest length, N (default: 0).
     pub preload: f64,
+}
+
+/// A rotational spring-damper about a joint axis: torque `−stiffness (θ −
+/// angle) − damping θ̇`, `θ` the rotation from the initial pose (the planar
+/// [`RotationalSpringDamper`](crate::planar::RotationalSpringDamper) with a
+/// rest angle).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RotationalSpringDamper {
+    /// N m/rad (≥ 0).
+    pub stiffness: f64,
+    /// N m s/rad (≥ 0).
+    pub damping: f64,
+    /// The rest angle from the initial pose, rad (default: 0).
+    pub angle: f64,
+}
+
+/// The axes in which a force's or torque's components are given.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Axes {
+    /// The global axes: the load keeps its direction (the default).
+    #[default]
+    Global,
+    /// The body's axes: the load turns with the body (rigid bodies only).
+    Body,
 }
 
 #[derive(Clone, Debug)]
@@ -302,43 +321,49 @@ impl SpatialBuilder {
         self
     }
 
-    /// Adds a force on the point `point` of `body` (`body_axes`: `f` turns
-    /// with the body).
+    /// Adds a force `f` on the point `point` of `body`, its components in
+    /// `axes` ([`Axes::Body`]: it turns with the body).
     pub fn force(
         &mut self,
         name: &str,
         body: SpatialBodyId,
         point: [f64; 3],
         f: [TimeFunction; 3],
-        body_axes: bool,
+        axes: Axes,
     ) -> &mut Self {
-        let load = PointForce {
-            point,
-            f,
-            body_axes,
-        };
-        self.loads.push((
-            name.to_string(),
-            [Attach::Body(body), Attach::Ground],
-            Arc::new(load),
-        ));
-        self
+        let body_axes = axes == Axes::Body;
+        self.body_load(
+            name,
+            body,
+            Arc::new(PointForce {
+                point,
+                f,
+                body_axes,
+            }),
+        )
     }
 
-    /// Adds a torque on `body`.
+    /// Adds a torque `n` on `body`, its components in `axes`.
     pub fn torque(
         &mut self,
         name: &str,
         body: SpatialBodyId,
         n: [TimeFunction; 3],
-        body_axes: bool,
+        axes: Axes,
     ) -> &mut Self {
-        let load = Torque { n, body_axes };
-        self.loads.push((
-            name.to_string(),
-            [Attach::Body(body), Attach::Ground],
-            Arc::new(load),
-        ));
+        let body_axes = axes == Axes::Body;
+        self.body_load(name, body, Arc::new(Torque { n, body_axes }))
+    }
+
+    /// Adds a load that acts on `body` alone.
+    fn body_load(
+        &mut self,
+        name: &str,
+        body: SpatialBodyId,
+        load: Arc<dyn SpatialLoad>,
+    ) -> &mut Self {
+        let sides = [Attach::Body(body), Attach::Ground];
+        self.loads.push((name.to_string(), sides, load));
         self
     }
 
@@ -348,32 +373,36 @@ impl SpatialBuilder {
         name: &str,
         bodies: [Attach; 2],
         points: [[f64; 3]; 2],
-        spec: SpringSpec,
+        spring: SpringDamper,
     ) -> &mut Self {
-        let length = spec
-            .length
+        let length = spring
+            .rest_length
             .unwrap_or_else(|| self.initial_distance(bodies, points));
         let load = Spring {
             points,
-            stiffness: spec.stiffness,
-            damping: spec.damping,
+            stiffness: spring.stiffness,
+            damping: spring.damping,
             length,
-            preload: spec.preload,
+            preload: spring.preload,
         };
         self.loads.push((name.to_string(), bodies, Arc::new(load)));
         self
     }
 
     /// Adds a rotational spring-damper about the axis `axes[0]` of A (B's
-    /// `axes[1]` is the same physical axis): torque `−k (θ − angle) − c θ̇`,
-    /// `θ` from the initial pose.
+    /// `axes[1]` is the same physical axis), see [`RotationalSpringDamper`].
     pub fn rotational_spring(
         &mut self,
         name: &str,
         bodies: [Attach; 2],
         axes: [[f64; 3]; 2],
-        [stiffness, damping, angle]: [f64; 3],
+        spring: RotationalSpringDamper,
     ) -> &mut Self {
+        let RotationalSpringDamper {
+            stiffness,
+            damping,
+            angle,
+        } = spring;
         match self.geometry(name, bodies, [[0.0; 3]; 2], axes) {
             Ok((geometry, a_in_b)) => {
                 let load = RotationalSpring {
@@ -466,15 +495,7 @@ impl SpatialBuilder {
     /// axis, an axis joint on a point mass, or a driver of a joint that has
     /// no such motion.
     pub fn build(&self) -> Result<SpatialSystem, ModelError> {
-        if let Some(e) = self.errors.first() {
-            return Err(e.clone());
-        }
-        if self.bodies.is_empty() {
-            return Err(ModelError::Invalid {
-                element: "the model".to_string(),
-                what: "no body or point mass: add a [[body]] or [[point_mass]]".to_string(),
-            });
-        }
+        dims::check_start(&self.errors, self.bodies.len())?;
         self.check_names()?;
         let bodies = self.bodies_data()?;
         let mut joints = Vec::new();
@@ -497,18 +518,14 @@ impl SpatialBuilder {
         Ok(SpatialSystem::assemble(self.gravity, bodies, joints, loads))
     }
 
+    /// Every body and element has its own name, and none is `ground`.
     fn check_names(&self) -> Result<(), ModelError> {
-        let mut seen = std::collections::HashSet::new();
+        let count = self.bodies.len() + self.joints.len() + self.loads.len();
         let names = self.bodies.iter().map(|b| &b.0);
         let names = names
             .chain(self.joints.iter().map(|j| &j.0))
             .chain(self.loads.iter().map(|l| &l.0));
-        for n in names {
-            if n == "ground" || !seen.insert(n.as_str()) {
-                return Err(ModelError::DuplicateName(n.clone()));
-            }
-        }
-        Ok(())
+        dims::check_names(names, count, Some("ground"))
     }
 
     fn bodies_data(&self) -> Result<Vec<BodyData>, ModelError> {

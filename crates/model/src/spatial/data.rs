@@ -9,30 +9,10 @@ use std::sync::Arc;
 use super::body::Inertia;
 use super::joints::SpatialJoint;
 use super::loads::SpatialLoad;
+use crate::dims::Spatial;
 
 /// A body as assembled.
-#[derive(Clone, Debug)]
-pub(crate) struct BodyData {
-    pub(crate) name: String,
-    pub(crate) mass: f64,
-    /// `None` for a point mass.
-    pub(crate) inertia: Option<Inertia>,
-    /// Its first coordinate.
-    pub(crate) x: usize,
-    pub(crate) u0: [f64; 7],
-    pub(crate) v0: [f64; 7],
-}
-
-impl BodyData {
-    /// Its number of coordinates: 7 for a rigid body, 3 for a point mass.
-    pub(crate) fn count(&self) -> usize {
-        if self.inertia.is_some() { 7 } else { 3 }
-    }
-
-    pub(crate) fn is_rigid(&self) -> bool {
-        self.inertia.is_some()
-    }
-}
+pub(crate) type BodyData = crate::dims::Body<Spatial, Inertia>;
 
 /// A joint or driver as assembled: its rows, its structural entries and where
 /// its values go.

@@ -3,7 +3,8 @@
 //! `mstar-linearize` run them all).
 
 use super::builder::{
-    Attach, DriverKind, JointSpec, JointType, RotationalMass, SpatialBuilder, SpringSpec,
+    Attach, Axes, DriverKind, JointSpec, JointType, RotationalMass, RotationalSpringDamper,
+    SpatialBuilder, SpringDamper,
 };
 use super::{SpatialBody, SpatialInertia, SpatialPointMass, SpatialSystem, euler_parameters};
 use crate::planar::TimeFunction;
@@ -83,10 +84,10 @@ pub fn element_examples(params: &[f64]) -> Vec<(String, SpatialSystem)> {
                     }));
                 }
             }
-            let spring = SpringSpec {
+            let spring = SpringDamper {
                 stiffness: 30.0,
                 damping: 0.7,
-                length: Some(0.4),
+                rest_length: Some(0.4),
                 preload: 2.0,
             };
             out.extend(add("spring", &|b, at| {
@@ -94,7 +95,12 @@ pub fn element_examples(params: &[f64]) -> Vec<(String, SpatialSystem)> {
             }));
             if pair != 2 {
                 out.extend(add("rotational spring", &|b, at| {
-                    _ = b.rotational_spring("r", at, axes, [5.0, 0.3, 0.2]);
+                    let spring = RotationalSpringDamper {
+                        stiffness: 5.0,
+                        damping: 0.3,
+                        angle: 0.2,
+                    };
+                    _ = b.rotational_spring("r", at, axes, spring);
                 }));
             }
             let f = || {
@@ -107,12 +113,12 @@ pub fn element_examples(params: &[f64]) -> Vec<(String, SpatialSystem)> {
                     TimeFunction::Constant(-2.0),
                 ]
             };
-            for body_axes in [false, true] {
+            for axes in [Axes::Global, Axes::Body] {
                 out.extend(add("force", &|b, _| {
-                    _ = b.force("f", super::SpatialBodyId(0), v3(12), f(), body_axes);
+                    _ = b.force("f", super::SpatialBodyId(0), v3(12), f(), axes);
                 }));
                 out.extend(add("torque", &|b, _| {
-                    _ = b.torque("n", super::SpatialBodyId(0), f(), body_axes);
+                    _ = b.torque("n", super::SpatialBodyId(0), f(), axes);
                 }));
             }
         }

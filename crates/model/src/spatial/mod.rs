@@ -33,8 +33,8 @@ mod spherical;
 mod system;
 
 pub use builder::{
-    Attach, DriverKind, JointSpec, JointType, RotationalMass, SpatialBody, SpatialBuilder,
-    SpatialInertia, SpatialPointMass, SpringSpec,
+    Attach, Axes, DriverKind, JointSpec, JointType, RotationalMass, RotationalSpringDamper,
+    SpatialBody, SpatialBuilder, SpatialInertia, SpatialPointMass, SpringDamper,
 };
 pub use chain::spatial_bar_chain;
 pub use examples::element_examples;

@@ -8,12 +8,8 @@ use super::frame::D28;
 use super::kernel::{JointLayout, SphericalKernel};
 use super::real::{Jet, Real, TIME};
 use super::spherical;
-use crate::planar::split_at_bases;
+use crate::dims::{self, Initial};
 use crate::{Pattern, System};
-use rayon::prelude::*;
-
-/// A chunk of kernels and where its output starts.
-type Part<'a> = crate::parallel::Part<'a, SphericalKernel>;
 
 /// A load's structural entries and value offsets.
 #[derive(Clone, Debug)]
@@ -125,16 +121,8 @@ impl SpatialSystem {
             }
         }
         let m = names.len();
-        let body_by_name = bodies
-            .iter()
-            .enumerate()
-            .map(|(i, b)| (b.name.clone(), i))
-            .collect();
-        let joint_by_name = joints
-            .iter()
-            .enumerate()
-            .map(|(i, j)| (j.name.clone(), i))
-            .collect();
+        let body_by_name = dims::index_by_name(bodies.iter().map(|b| b.name.as_str()));
+        let joint_by_name = dims::index_by_name(joints.iter().map(|j| j.name.as_str()));
         let mut sys = Self {
             body_by_name,
             joint_by_name,
@@ -201,58 +189,21 @@ impl SpatialSystem {
         self
     }
 
-    /// The spherical kernels in chunks for rayon, each with the global row,
-    /// `B` value and Hessian value at which its output part starts (0 for the
-    /// first chunk); empty when the work is sequential: fewer than two
-    /// chunks' worth of joints, or one thread in rayon's current pool (as the
-    /// planar chains).
-    fn parallel_parts(&self) -> Vec<Part<'_>> {
-        crate::parallel::parallel_parts(&self.spherical)
-    }
-
-    /// `Φ` and `B` of the spherical kernels, in parallel chunks when
-    /// [`parallel_parts`](Self::parallel_parts) gives them. Each kernel
-    /// writes only its own rows and values, so the parts never overlap.
+    /// `Φ` and `B` of the spherical kernels, in parallel chunks as
+    /// [`phi_b_in_parts`](crate::parallel::phi_b_in_parts) gives them (as
+    /// the planar chains).
     fn kernels_phi_b(&self, u: &[f64], phi: &mut [f64], b: &mut [f64]) {
-        let parts = self.parallel_parts();
-        if parts.is_empty() {
-            for k in &self.spherical {
-                k.phi_b(u, phi, b, (0, 0));
-            }
-            return;
-        }
-        let phi_parts = split_at_bases(phi, parts.iter().map(|p| p.1.0));
-        let b_parts = split_at_bases(b, parts.iter().map(|p| p.1.1));
-        parts
-            .into_par_iter()
-            .zip(phi_parts)
-            .zip(b_parts)
-            .for_each(|(((ks, base), phi), b)| {
-                for k in ks {
-                    k.phi_b(u, phi, b, (base.0, base.1));
-                }
-            });
+        crate::parallel::phi_b_in_parts(&self.spherical, phi, b, |k, phi, b, base| {
+            k.phi_b(u, phi, b, base);
+        });
     }
 
     /// The spherical kernels' Hessian values, in parallel chunks as
     /// [`kernels_phi_b`](Self::kernels_phi_b).
     fn kernels_hessian(&self, mu: &[f64], out: &mut [f64]) {
-        let parts = self.parallel_parts();
-        if parts.is_empty() {
-            for k in &self.spherical {
-                k.hessian(mu, out, 0);
-            }
-            return;
-        }
-        let out_parts = split_at_bases(out, parts.iter().map(|p| p.1.2));
-        parts
-            .into_par_iter()
-            .zip(out_parts)
-            .for_each(|((ks, base), out)| {
-                for k in ks {
-                    k.hessian(mu, out, base.2);
-                }
-            });
+        crate::parallel::hessian_in_parts(&self.spherical, out, |k, out, base| {
+            k.hessian(mu, out, base);
+        });
     }
 
     /// How many joints run through the fast spherical kernel.
@@ -347,35 +298,14 @@ impl SpatialSystem {
         self
     }
 
-    /// Initial coordinates `u₀` (unit Euler parameters).
-    #[must_use]
-    pub fn initial_position(&self) -> Vec<f64> {
-        self.initial(|b| b.u0)
-    }
-
-    /// Initial velocities `u̇₀` (`ṗ = ½ Eᵀ ω`).
-    #[must_use]
-    pub fn initial_velocity(&self) -> Vec<f64> {
-        self.initial(|b| b.v0)
-    }
-
-    fn initial(&self, f: impl Fn(&BodyData) -> [f64; 7]) -> Vec<f64> {
-        let mut u = vec![0.0; self.n];
-        for b in &self.bodies {
-            u[b.x..b.x + b.count()].copy_from_slice(&f(b)[..b.count()]);
-        }
-        u
-    }
+    dims::initial_state!(
+        position: "Initial coordinates `u₀` (unit Euler parameters).",
+        velocity: "Initial velocities `u̇₀` (`ṗ = ½ Eᵀ ω`)."
+    );
 
     /// The loads as assembled.
     pub(crate) fn load_list(&self) -> &[LoadData] {
         &self.loads
-    }
-
-    /// Number of bodies.
-    #[must_use]
-    pub fn n_bodies(&self) -> usize {
-        self.bodies.len()
     }
 
     /// The first coordinate of the body `name` and whether it is rigid.
@@ -500,13 +430,7 @@ fn push_block(p: &mut Pattern, x: usize) {
 }
 
 impl System for SpatialSystem {
-    fn n_coords(&self) -> usize {
-        self.n
-    }
-
-    fn n_constraints(&self) -> usize {
-        self.m
-    }
+    dims::sizes_and_row_names!();
 
     fn coord_name(&self, i: usize) -> String {
         const NAMES: [&str; 7] = ["x", "y", "z", "e0", "e1", "e2", "e3"];
@@ -517,10 +441,6 @@ impl System for SpatialSystem {
             Some(b) if i < self.n => format!("{}.{}", b.name, NAMES[(i - b.x).min(6)]),
             _ => format!("coordinate {i}"),
         }
-    }
-
-    fn constraint_name(&self, i: usize) -> String {
-        self.constraint_names[i].clone()
     }
 
     fn mass_pattern(&self) -> Pattern {
