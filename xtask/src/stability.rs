@@ -460,26 +460,15 @@ fn condition_table() -> Result<Table> {
     let v = sys.velocity(&[0.7], &[2.0]);
     let (a, lambda) = ([-3.0, 2.0, -6.0], [4.0, -9.0]);
     let mut lin = Linearization::new(&sys).context("linearizing the pendulum")?;
-    lin.eval_residual(
-        &sys,
-        &StateRef {
-            t: 0.0,
-            u: &u,
-            v: &v,
-            a: &a,
-            lambda: &lambda,
-        },
-    );
-    lin.eval_jacobians(
-        &sys,
-        &StateRef {
-            t: 0.0,
-            u: &u,
-            v: &v,
-            a: &a,
-            lambda: &lambda,
-        },
-    );
+    let x = StateRef {
+        t: 0.0,
+        u: &u,
+        v: &v,
+        a: &a,
+        lambda: &lambda,
+    };
+    lin.eval_residual(&sys, &x);
+    lin.eval_jacobians(&sys, &x);
     let params = generalized_alpha(0.01, 0.9)
         .scheme
         .params()

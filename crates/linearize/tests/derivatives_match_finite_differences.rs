@@ -116,26 +116,15 @@ fn kkt_matrix_is_eq_16_with_m_star() {
     let u = sys.position(&[th]);
     let lambda = [2.0, -3.0];
     let mut lin = Linearization::new(&sys).expect("valid");
-    lin.eval_residual(
-        &sys,
-        &StateRef {
-            t: 0.0,
-            u: &u,
-            v: &[0.0; 3],
-            a: &[0.0; 3],
-            lambda: &lambda,
-        },
-    );
-    lin.eval_jacobians(
-        &sys,
-        &StateRef {
-            t: 0.0,
-            u: &u,
-            v: &[0.0; 3],
-            a: &[0.0; 3],
-            lambda: &lambda,
-        },
-    );
+    let x = StateRef {
+        t: 0.0,
+        u: &u,
+        v: &[0.0; 3],
+        a: &[0.0; 3],
+        lambda: &lambda,
+    };
+    lin.eval_residual(&sys, &x);
+    lin.eval_jacobians(&sys, &x);
     let (beta, gamma, h) = (0.25, 0.5, 0.01);
     let ca = 1.0 / (beta * h * h);
     lin.assemble(&Coefficients {

@@ -45,26 +45,15 @@ fn the_schur_assembly_equals_the_full_one_outside_the_transpose_block() {
         let a = vec![0.5; n];
         let lambda: Vec<f64> = (0..m).map(|i| 3.0 + (i + k) as f64).collect();
         for lin in [&mut full, &mut lean] {
-            lin.eval_residual(
-                &sys,
-                &StateRef {
-                    t: 0.1,
-                    u: &u,
-                    v: &v,
-                    a: &a,
-                    lambda: &lambda,
-                },
-            );
-            lin.eval_jacobians(
-                &sys,
-                &StateRef {
-                    t: 0.1,
-                    u: &u,
-                    v: &v,
-                    a: &a,
-                    lambda: &lambda,
-                },
-            );
+            let x = StateRef {
+                t: 0.1,
+                u: &u,
+                v: &v,
+                a: &a,
+                lambda: &lambda,
+            };
+            lin.eval_residual(&sys, &x);
+            lin.eval_jacobians(&sys, &x);
             lin.assemble(&c);
         }
         let (f, l) = (full.kkt(), lean.kkt());

@@ -113,26 +113,15 @@ fn condition(h: f64, scaling: bool) -> f64 {
     let v = sys.velocity(&[0.7], &[2.0]);
     let (a, lambda) = ([-3.0, 2.0, -6.0], [4.0, -9.0]);
     let mut lin = Linearization::new(&sys).expect("valid model");
-    lin.eval_residual(
-        &sys,
-        &StateRef {
-            t: 0.0,
-            u: &u,
-            v: &v,
-            a: &a,
-            lambda: &lambda,
-        },
-    );
-    lin.eval_jacobians(
-        &sys,
-        &StateRef {
-            t: 0.0,
-            u: &u,
-            v: &v,
-            a: &a,
-            lambda: &lambda,
-        },
-    );
+    let x = StateRef {
+        t: 0.0,
+        u: &u,
+        v: &v,
+        a: &a,
+        lambda: &lambda,
+    };
+    lin.eval_residual(&sys, &x);
+    lin.eval_jacobians(&sys, &x);
     let params = run.config.scheme.params().expect("valid scheme");
     lin.assemble(&params.coefficients(h, scaling));
     condition_number(lin.kkt())

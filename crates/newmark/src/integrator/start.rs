@@ -3,7 +3,7 @@
 //! accelerations and multipliers, and the start on the discrete solution.
 
 use mstar_kkt::{Backend, KktOptions, KktSolver, argmax_abs};
-use mstar_linearize::{Coefficients, max_abs};
+use mstar_linearize::{Coefficients, Linearization, max_abs};
 use mstar_model::{StateRef, System};
 
 use super::Integrator;
@@ -26,18 +26,8 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     /// The constraint the given positions violate most and by how much,
     /// when that is beyond the tolerance (projection will move them).
     fn initial_violation(&mut self) -> Option<(usize, f64)> {
-        let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
-        let (zeros_n, zeros_m) = (vec![0.0; n], vec![0.0; m]);
-        self.lin.eval_residual(
-            self.sys,
-            &StateRef {
-                t: self.t,
-                u: &self.state.u,
-                v: &zeros_n,
-                a: &zeros_n,
-                lambda: &zeros_m,
-            },
-        );
+        let m = self.sys.n_constraints();
+        at_rest(&mut self.lin, self.sys, self.t, &self.state.u);
         let ctol = self.config.tol * max_abs(&self.state.u).max(1.0);
         let (k, value) = argmax_abs(self.lin.phi());
         (m > 0 && value.abs() > ctol).then_some((k, value))
@@ -98,20 +88,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     /// `Φ(u) = 0` by minimum-norm Newton corrections of `u`.
     fn project_positions(&mut self) -> Result<(), IntegrationError> {
         let t = self.t;
-        let (zeros_n, zeros_m) = (
-            vec![0.0; self.sys.n_coords()],
-            vec![0.0; self.sys.n_constraints()],
-        );
-        self.lin.eval_residual(
-            self.sys,
-            &StateRef {
-                t,
-                u: &self.state.u,
-                v: &zeros_n,
-                a: &zeros_n,
-                lambda: &zeros_m,
-            },
-        );
+        at_rest(&mut self.lin, self.sys, t, &self.state.u);
         self.start.position_violation = self.lin.constraint_norm();
         let mut iterations = 0;
         loop {
@@ -147,16 +124,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 *x += d;
             }
             iterations += 1;
-            self.lin.eval_residual(
-                self.sys,
-                &StateRef {
-                    t,
-                    u: &self.state.u,
-                    v: &zeros_n,
-                    a: &zeros_n,
-                    lambda: &zeros_m,
-                },
-            );
+            at_rest(&mut self.lin, self.sys, t, &self.state.u);
         }
     }
 
@@ -279,18 +247,8 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         jerk: &[f64],
         k: f64,
     ) -> Result<Vec<f64>, IntegrationError> {
-        let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
-        let (zeros_n, zeros_m) = (vec![0.0; n], vec![0.0; m]);
-        self.lin.eval_residual(
-            self.sys,
-            &StateRef {
-                t: self.t,
-                u,
-                v: &zeros_n,
-                a: &zeros_n,
-                lambda: &zeros_m,
-            },
-        );
+        let n = self.sys.n_coords();
+        at_rest(&mut self.lin, self.sys, self.t, u);
         self.rhs.fill(0.0);
         self.lin
             .b_pattern()
@@ -412,4 +370,19 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         self.start.jerk = jerk;
         Ok(())
     }
+}
+
+/// Evaluates the residual's parts (`M`, `B`, `g`, `Φ`) at positions `u` and
+/// time `t` with zero velocities, accelerations and multipliers: what the
+/// start's projections and checks read.
+fn at_rest<S: System + ?Sized>(lin: &mut Linearization, sys: &S, t: f64, u: &[f64]) {
+    let (zeros_n, zeros_m) = (vec![0.0; sys.n_coords()], vec![0.0; sys.n_constraints()]);
+    let x = StateRef {
+        t,
+        u,
+        v: &zeros_n,
+        a: &zeros_n,
+        lambda: &zeros_m,
+    };
+    lin.eval_residual(sys, &x);
 }
