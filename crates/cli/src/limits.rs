@@ -241,7 +241,13 @@ pub struct Output<'a> {
 /// # Errors
 /// With the estimate, the free space, and the values that fit.
 pub fn check_output(o: &Output<'_>, free: Option<f64>) -> Result<()> {
-    let size = o.rows * o.fields as f64 * BYTES_PER_FIELD;
+    // An `.npz` field is one double, 8 bytes exactly.
+    let (per_field, max_per_field) = if mstar::csv::is_npz(o.path) {
+        (8.0, 8.0)
+    } else {
+        (BYTES_PER_FIELD, MAX_BYTES_PER_FIELD)
+    };
+    let size = o.rows * o.fields as f64 * per_field;
     let Some(free) = free else {
         return Ok(());
     };
@@ -254,12 +260,12 @@ pub fn check_output(o: &Output<'_>, free: Option<f64>) -> Result<()> {
         o.path.display(),
         bytes(size),
         o.rows,
-        bytes(o.fields as f64 * BYTES_PER_FIELD),
+        bytes(o.fields as f64 * per_field),
         bytes(free)
     );
     // Rows that fit at the largest size a row can take, less one row's
     // room for the header and two for a grid's first and last states.
-    let grid_rows = (free / (o.fields as f64 * MAX_BYTES_PER_FIELD)).floor() - 3.0;
+    let grid_rows = (free / (o.fields as f64 * max_per_field)).floor() - 3.0;
     if grid_rows < 1.0 {
         bail!("{head}: not even a few rows fit; write to another file system, or no --out");
     }

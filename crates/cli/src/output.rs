@@ -88,13 +88,18 @@ pub fn drive<S: System + ?Sized>(
     }
 }
 
-/// `<stem>.partial.csv` beside `out`.
+/// `<stem>.partial.csv` beside `out` (`.partial.npz` for an `.npz` output).
 pub fn partial_path(out: &Path) -> PathBuf {
     let stem = out
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
-    out.with_file_name(format!("{stem}.partial.csv"))
+    let ext = if mstar::csv::is_npz(out) {
+        "npz"
+    } else {
+        "csv"
+    };
+    out.with_file_name(format!("{stem}.partial.{ext}"))
 }
 
 /// Ends a run: with `Ok`, writes the file into place; with a stop, keeps the

@@ -185,10 +185,8 @@ fn reactions_and_efforts_balance_the_slider() {
     );
     let c = columns(&csv);
     let col = |name: &str| c.get(name).unwrap_or_else(|| panic!("no column {name}"));
-    let last_lambda = (0..)
-        .take_while(|i| c.contains_key(&format!("lambda:{i}")))
-        .last();
-    let lambda_motor = col(&format!("lambda:{}", last_lambda.expect("multipliers")));
+    // The driver's multiplier, named by its row.
+    let lambda_motor = col("lambda:motor");
     let (ax, ay) = (col("a:slider.x"), col("a:slider.y"));
     let (fx, fy) = (col("reaction:wrist-pin.fx"), col("reaction:wrist-pin.fy"));
     let (gx, gy) = (col("reaction:guide.fx"), col("reaction:guide.fy"));

@@ -105,8 +105,16 @@ fn the_documented_top_runs_and_writes_the_documented_columns() {
             expected.push(format!("{prefix}:top.{c}"));
         }
     }
-    // 3 rows of the ball joint and the normalization row.
-    expected.extend((0..4).map(|i| format!("lambda:{i}")));
+    // The normalization row and the 3 rows of the ball joint, by name.
+    expected.extend(
+        [
+            "lambda:top.norm",
+            "lambda:tip.x",
+            "lambda:tip.y",
+            "lambda:tip.z",
+        ]
+        .map(String::from),
+    );
     expected.extend(["energy", "iterations", "residual", "constraint"].map(String::from));
     for c in ["fx", "fy", "fz", "tx", "ty", "tz"] {
         expected.push(format!("reaction:tip.{c}"));

@@ -386,6 +386,31 @@ fn a_full_disk_is_an_error_and_an_oversized_run_is_refused() {
     );
 }
 
+/// On a full disk an `.npz` output ends with the rows that fit: a valid
+/// archive (its end records in place, its row count patched) named
+/// `<stem>.partial.npz`, whose rows are a prefix of the run's.
+#[test]
+#[ignore = "needs root (mknod, mount): cargo test -p mstar-cli --test output_faults -- --ignored"]
+fn a_full_disk_keeps_a_valid_partial_npz() {
+    let dir = scratch("faults-npz");
+    let fs = Tmpfs::mount(&dir, "256k");
+    let out = fs.0.join("run.npz");
+    // 16 doubles a row, 128 B: 2 048 rows are estimated at 256 KiB, the
+    // free space, and start; with the archive's head and end they do not
+    // fit.
+    let full = mstar(&["pendulum", "--t-end", "20.47", "--out", &path(&out)]);
+    let err = text(&full.stderr);
+    assert_eq!(full.status.code(), Some(1), "{err}");
+    assert!(err.contains("No space left on device"), "{err}");
+    let partial = fs.0.join("run.partial.npz");
+    let bytes = std::fs::read(&partial).expect("kept on a full disk");
+    // The end of central directory record, and the ZIP64 locator before it.
+    let eocd = bytes.len() - 22;
+    assert_eq!(&bytes[eocd..eocd + 4], b"PK\x05\x06");
+    assert_eq!(&bytes[eocd - 20..eocd - 16], b"PK\x06\x07");
+    assert!(temporaries(&fs.0).is_empty(), "{:?}", temporaries(&fs.0));
+}
+
 /// The value a message advises for `option`.
 fn advised<'a>(message: &'a str, option: &str) -> &'a str {
     message

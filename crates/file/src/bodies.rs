@@ -81,8 +81,13 @@ impl<P: Copy> Bodies<P> {
             .ok_or_else(|| f.bad(e, self.unknown(name)))
     }
 
+    /// The body or point mass `name`, if the file has one.
+    pub(crate) fn get(&self, name: &str) -> Option<P> {
+        self.by_name.get(name).copied()
+    }
+
     /// The message for an unknown name, listing the known ones.
-    fn unknown(&self, name: &str) -> String {
+    pub(crate) fn unknown(&self, name: &str) -> String {
         let mut known: Vec<&str> = self.by_name.keys().map(String::as_str).collect();
         known.sort_unstable();
         format!(
@@ -98,7 +103,8 @@ impl<P: Copy> Bodies<P> {
 /// name may be used once in a file.
 #[derive(Debug, Default)]
 pub(crate) struct Names {
-    by_name: HashMap<String, (String, Option<Range<usize>>)>,
+    /// What carries the name (`<kind> '<name>'`), where, and its kind.
+    by_name: HashMap<String, (String, Option<Range<usize>>, &'static str)>,
 }
 
 impl Names {
@@ -117,7 +123,7 @@ impl Names {
         doc: Doc<'a>,
         node: &'a Node,
         what: String,
-        kind: &str,
+        kind: &'static str,
     ) -> Result<(Fields<'a>, String), FileError> {
         let mut f = Fields::of(doc, node, what)?;
         let name = f.required("name", string)?.to_string();
@@ -133,7 +139,7 @@ impl Names {
                 ),
             ));
         }
-        if let Some((other, at)) = self.by_name.get(&name) {
+        if let Some((other, at, _)) = self.by_name.get(&name) {
             let line = at
                 .as_ref()
                 .map(|s| format!(" (line {})", super::node::line_column(doc.text, s.start).0))
@@ -149,8 +155,26 @@ impl Names {
                 format!("a {kind} may not be called 'ground': that is the fixed frame"),
             ));
         }
-        self.by_name.insert(name.clone(), (f.what.clone(), span));
+        self.by_name
+            .insert(name.clone(), (f.what.clone(), span, kind));
         Ok((f, name))
+    }
+
+    /// The kind of element (`body`, `joint`, `driver`, …) called `name`.
+    pub(crate) fn kind_of(&self, name: &str) -> Option<&'static str> {
+        self.by_name.get(name).map(|&(_, _, kind)| kind)
+    }
+
+    /// The names of the elements of the `kinds`, sorted.
+    pub(crate) fn names_of(&self, kinds: &[&str]) -> Vec<&str> {
+        let mut names: Vec<&str> = self
+            .by_name
+            .iter()
+            .filter(|(_, (_, _, kind))| kinds.contains(kind))
+            .map(|(name, _)| name.as_str())
+            .collect();
+        names.sort_unstable();
+        names
     }
 
     /// A builder error, placed at the element it names when it can be.
@@ -163,7 +187,7 @@ impl Names {
             _ => (String::new(), e.to_string()),
         };
         match self.by_name.get(&element) {
-            Some((what, span)) => doc.error(span.as_ref(), format!("{what}: {message}")),
+            Some((what, span, _)) => doc.error(span.as_ref(), format!("{what}: {message}")),
             None => doc.error(None, format!("{element}: {message}")),
         }
     }
@@ -270,9 +294,19 @@ impl<'a, P: Copy> Reader<'a, P> {
         &mut self,
         node: &'a Node,
         what: String,
-        kind: &str,
+        kind: &'static str,
     ) -> Result<(Fields<'a>, String), FileError> {
         self.names.named(self.doc, node, what, kind)
+    }
+
+    /// The kind of element called `name` ([`Names::kind_of`]).
+    pub(crate) fn kind_of(&self, name: &str) -> Option<&'static str> {
+        self.names.kind_of(name)
+    }
+
+    /// The names of the elements of the `kinds` ([`Names::names_of`]).
+    pub(crate) fn names_of(&self, kinds: &[&str]) -> Vec<&str> {
+        self.names.names_of(kinds)
     }
 
     /// The element's fields, its name (claimed, as [`named`](Self::named))
@@ -281,7 +315,7 @@ impl<'a, P: Copy> Reader<'a, P> {
         &mut self,
         node: &'a Node,
         what: String,
-        kind: &str,
+        kind: &'static str,
         types: &'c [&'c str],
     ) -> Result<(Fields<'a>, String, &'c str), FileError> {
         let (mut f, name) = self.named(node, what, kind)?;
@@ -406,6 +440,8 @@ pub(crate) trait Elements<'a> {
     fn driver(&mut self, node: &'a Node, what: String) -> Result<(), FileError>;
     /// A `[[force]]`.
     fn force(&mut self, node: &'a Node, what: String) -> Result<(), FileError>;
+    /// A `[[sensor]]` (read after every other element).
+    fn sensor(&mut self, node: &'a Node, what: String) -> Result<(), FileError>;
 }
 
 /// How many elements the arrays of [`read_elements`] hold, and how many of
@@ -418,20 +454,20 @@ fn element_counts(top: &Fields<'_>) -> (usize, usize) {
     };
     let bodies = count("body") + count("point_mass");
     (
-        bodies + count("joint") + count("driver") + count("force"),
+        bodies + count("joint") + count("driver") + count("force") + count("sensor"),
         bodies,
     )
 }
 
-/// Reads the element arrays `body`, `point_mass`, `joint`, `driver` and
-/// `force` of the document `top` into `m`, in that order (a joint names the
-/// bodies before it), then checks that `top` has no other keys than these,
+/// Reads the element arrays `body`, `point_mass`, `joint`, `driver`,
+/// `force` and `sensor` of the document `top` into `m`, in that order (a
+/// joint names the bodies before it, a sensor any element), then checks that `top` has no other keys than these,
 /// `format`, `gravity` and the caller's `simulation` and `output`.
 pub(crate) fn read_elements<'a, M: Elements<'a>>(
     top: &mut Fields<'a>,
     m: &mut M,
 ) -> Result<(), FileError> {
-    const ELEMENTS: [&str; 5] = ["body", "point_mass", "joint", "driver", "force"];
+    const ELEMENTS: [&str; 6] = ["body", "point_mass", "joint", "driver", "force", "sensor"];
     for kind in ELEMENTS {
         for (k, node) in top.optional(kind, list)?.unwrap_or(&[]).iter().enumerate() {
             let what = format!("{kind} #{}", k + 1);
@@ -440,7 +476,8 @@ pub(crate) fn read_elements<'a, M: Elements<'a>>(
                 "point_mass" => m.point_mass(node, what),
                 "joint" => m.joint(node, what),
                 "driver" => m.driver(node, what),
-                _ => m.force(node, what),
+                "force" => m.force(node, what),
+                _ => m.sensor(node, what),
             }?;
         }
     }

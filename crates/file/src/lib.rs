@@ -38,6 +38,7 @@ mod fields;
 mod functions;
 mod node;
 mod planar;
+mod sensors;
 mod settings;
 mod spatial;
 
@@ -356,13 +357,15 @@ fn is_spatial(root: &Node) -> bool {
 fn read(doc: Doc<'_>, root: &Node) -> Result<MechanismFile, FileError> {
     let (mechanism, simulation, output, warnings) = if is_spatial(root) {
         // The settings first: they say how to form the mass matrix.
-        let (simulation, output) = settings::read(doc, root, true)?;
+        let (simulation, mut output) = settings::read(doc, root, true)?;
         let mode = simulation.rotational_mass.unwrap_or_default();
-        let (system, warnings) = spatial::read(doc, root, mode)?;
+        let (system, warnings, sensors) = spatial::read(doc, root, mode)?;
+        output.sensors = sensors;
         (Mechanism::Spatial(system), simulation, output, warnings)
     } else {
-        let system = planar::read(doc, root)?;
-        let (simulation, output) = settings::read(doc, root, false)?;
+        let (system, sensors) = planar::read(doc, root)?;
+        let (simulation, mut output) = settings::read(doc, root, false)?;
+        output.sensors = sensors;
         (Mechanism::Planar(system), simulation, output, Vec::new())
     };
     Ok(MechanismFile {

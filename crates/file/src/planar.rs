@@ -10,6 +10,7 @@ use mstar_model::planar::{
     At, BodyId, Coordinate, PlanarBuilder, PlanarSystem, RigidBody, RotationalSpringDamper,
     SpringDamper, TimeFunction,
 };
+use mstar_model::sensor::Sensor;
 
 /// The one format version this reader knows.
 pub const FORMAT: &str = "mstar.planar/1";
@@ -36,23 +37,36 @@ type Side = bodies::Side<Placed>;
 struct Model<'a> {
     builder: PlanarBuilder,
     r: Reader<'a, Placed>,
+    sensors: Vec<Sensor>,
 }
 
 /// Reads a whole document.
-pub(crate) fn read<'a>(doc: Doc<'a>, root: &'a Node) -> Result<PlanarSystem, FileError> {
+pub(crate) fn read<'a>(
+    doc: Doc<'a>,
+    root: &'a Node,
+) -> Result<(PlanarSystem, Vec<Sensor>), FileError> {
     let known = format!("'{FORMAT}' and '{}'", super::spatial::FORMAT);
     let (r, mut top, gravity) = Reader::open(doc, root, FORMAT, &known, [0.0, -9.81])?;
     let mut m = Model {
         builder: PlanarBuilder::new(),
         r,
+        sensors: Vec::new(),
     };
     m.builder.gravity(gravity[0], gravity[1]);
     // ([simulation] and [output] are the caller's: settings, not the mechanism.)
     bodies::read_elements(&mut top, &mut m)?;
-    m.builder.build().map_err(|e| m.r.located(&e))
+    let system = m.builder.build().map_err(|e| m.r.located(&e))?;
+    Ok((system, m.sensors))
 }
 
 impl<'a> bodies::Elements<'a> for Model<'a> {
+    /// A `[[sensor]]`.
+    fn sensor(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let sensor = self.r.sensor::<2>(node, what)?;
+        self.sensors.push(sensor);
+        Ok(())
+    }
+
     /// A `[[body]]`: a rigid body.
     fn body(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
         let (mut f, name) = self.r.named(node, what, "body")?;

@@ -100,14 +100,19 @@ pub struct Simulation {
     pub rotational_mass: Option<mstar_model::spatial::RotationalMass>,
 }
 
-/// `[output]`.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// `[output]`, and the `[[sensor]]`s whose columns it writes.
+#[derive(Clone, Debug, PartialEq)]
 pub struct Output {
     /// `every`: write every n-th step (≥ 1; default 1).
     pub every: usize,
     /// `every_time`: write the state every this many seconds instead,
     /// interpolated within the steps (> 0).
     pub every_time: Option<f64>,
+    /// `columns`: the columns to write, by name with `*` globs (`None`:
+    /// every column).
+    pub columns: Option<Vec<String>>,
+    /// The `[[sensor]]`s, in file order.
+    pub sensors: Vec<mstar_model::sensor::Sensor>,
 }
 
 impl Default for Output {
@@ -115,6 +120,8 @@ impl Default for Output {
         Self {
             every: 1,
             every_time: None,
+            columns: None,
+            sensors: Vec::new(),
         }
     }
 }
@@ -168,15 +175,35 @@ pub(crate) fn read(
             if let (Some(_), Some(entry)) = (every, f.entry("every_time")) {
                 return Err(f.bad(entry, "give either every (steps) or every_time (seconds)"));
             }
-            f.finish(&["every", "every_time"])?;
+            let columns = f.optional("columns", column_patterns)?;
+            f.finish(&["every", "every_time", "columns"])?;
             Output {
                 every: every.unwrap_or(1),
                 every_time,
+                columns,
+                sensors: Vec::new(),
             }
         }
         None => Output::default(),
     };
     Ok((simulation, output))
+}
+
+/// `[output] columns`: a non-empty array of non-empty names or globs.
+fn column_patterns(node: &Node) -> Result<Vec<String>, String> {
+    let items = super::fields::list(node)?;
+    if items.is_empty() {
+        return Err(
+            "an empty list selects no column: leave `columns` out to write them all".into(),
+        );
+    }
+    items
+        .iter()
+        .map(|item| match super::fields::string(item)? {
+            "" => Err("a column name must not be empty".to_string()),
+            name => Ok(name.to_string()),
+        })
+        .collect()
 }
 
 fn simulation(mut f: Fields<'_>, spatial: bool) -> Result<Simulation, FileError> {

@@ -10,6 +10,7 @@ use super::bodies::{self, Given, Reader, Spring};
 use super::fields::{Doc, Fields, choice, list, number, number_in, numbers, string};
 use super::node::{Node, Value};
 use mstar_model::planar::TimeFunction;
+use mstar_model::sensor::Sensor;
 use mstar_model::spatial::{
     Attach, Axes, DriverKind, JointSpec, JointType, RotationalMass, RotationalSpringDamper,
     SpatialBody, SpatialBodyId, SpatialBuilder, SpatialInertia, SpatialSystem, SpringDamper,
@@ -91,6 +92,7 @@ struct Model<'a> {
     /// The joints (not drivers) by name, with their type.
     joints: HashMap<String, JointType>,
     warnings: Vec<String>,
+    sensors: Vec<Sensor>,
 }
 
 /// Reads a whole document: the system and the warnings about it (each
@@ -99,7 +101,7 @@ pub(crate) fn read<'a>(
     doc: Doc<'a>,
     root: &'a Node,
     rotational_mass: RotationalMass,
-) -> Result<(SpatialSystem, Vec<String>), FileError> {
+) -> Result<(SpatialSystem, Vec<String>, Vec<Sensor>), FileError> {
     let known = format!("'{FORMAT}'");
     let (r, mut top, gravity) = Reader::open(doc, root, FORMAT, &known, [0.0, 0.0, -9.81])?;
     let mut m = Model {
@@ -107,16 +109,24 @@ pub(crate) fn read<'a>(
         r,
         joints: HashMap::new(),
         warnings: Vec::new(),
+        sensors: Vec::new(),
     };
     m.builder.gravity(gravity);
     m.builder.rotational_mass(rotational_mass);
     // ([simulation] and [output] are the caller's: settings, not the mechanism.)
     bodies::read_elements(&mut top, &mut m)?;
     let system = m.builder.build().map_err(|e| m.r.located(&e))?;
-    Ok((system, m.warnings))
+    Ok((system, m.warnings, m.sensors))
 }
 
 impl<'a> bodies::Elements<'a> for Model<'a> {
+    /// A `[[sensor]]`.
+    fn sensor(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
+        let sensor = self.r.sensor::<3>(node, what)?;
+        self.sensors.push(sensor);
+        Ok(())
+    }
+
     /// A `[[body]]`: a rigid body.
     fn body(&mut self, node: &'a Node, what: String) -> Result<(), FileError> {
         let (mut f, name) = self.r.named(node, what, "body")?;

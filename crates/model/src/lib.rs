@@ -28,6 +28,7 @@ mod pattern;
 mod pendulum;
 pub mod planar;
 mod sample;
+pub mod sensor;
 pub mod spatial;
 mod subset;
 mod system;

@@ -7,9 +7,13 @@ use std::path::{Path, PathBuf};
 use mstar_model::{Sample, SampleRef, System, coord_names};
 use mstar_newmark::Observer;
 
+use crate::columns::Selection;
+
 /// The CSV header: `t`, then `u:<name>`, `v:<name>`, `a:<name>` for each
-/// coordinate, `lambda:<i>` for each multiplier (0-based), then `energy`,
-/// `iterations`, `residual`, `constraint`.
+/// coordinate, `lambda:<row>` for each multiplier (its constraint row's
+/// name, [`System::constraint_name`]; `lambda:<i>`, 0-based, for a model
+/// whose row names repeat), then `energy`, `iterations`, `residual`,
+/// `constraint`.
 #[must_use]
 pub fn header<S: System + ?Sized>(sys: &S) -> Vec<String> {
     let names = coord_names(sys);
@@ -17,9 +21,24 @@ pub fn header<S: System + ?Sized>(sys: &S) -> Vec<String> {
     for prefix in ["u", "v", "a"] {
         h.extend(names.iter().map(|n| format!("{prefix}:{n}")));
     }
-    h.extend((0..sys.n_constraints()).map(|i| format!("lambda:{i}")));
+    h.extend(multiplier_names(sys));
     h.extend(["energy", "iterations", "residual", "constraint"].map(String::from));
     h
+}
+
+/// `lambda:<row name>` per constraint row, or `lambda:<i>` for all when two
+/// rows share a name.
+fn multiplier_names<S: System + ?Sized>(sys: &S) -> Vec<String> {
+    let m = sys.n_constraints();
+    let named: Vec<String> = (0..m)
+        .map(|i| format!("lambda:{}", sys.constraint_name(i)))
+        .collect();
+    let mut seen = std::collections::HashSet::with_capacity(m);
+    if named.iter().all(|n| seen.insert(n.as_str())) {
+        named
+    } else {
+        (0..m).map(|i| format!("lambda:{i}")).collect()
+    }
 }
 
 /// How many fields [`header`] names, without naming them.
@@ -107,6 +126,17 @@ fn row(out: &mut String, s: &SampleRef<'_>, extra: &[f64]) {
         number(out, x);
     }
     out.push('\n');
+}
+
+/// A sample's full row of values: the standard columns (`iterations` as a
+/// number), then `extra`.
+fn row_values(out: &mut Vec<f64>, s: &SampleRef<'_>, extra: &[f64]) {
+    out.clear();
+    out.push(s.t);
+    out.extend(s.u.iter().chain(s.v).chain(s.a).chain(s.lambda));
+    #[allow(clippy::cast_precision_loss)] // (iteration counts are small)
+    out.extend([s.energy(), s.iterations as f64, s.residual, s.constraint]);
+    out.extend_from_slice(extra);
 }
 
 /// The samples as CSV text (header first), numbers in shortest round-trip form.
@@ -297,6 +327,14 @@ const CHUNK: usize = 1 << 16;
 #[derive(Debug)]
 pub struct CsvStream {
     path: PathBuf,
+    /// The `.npz` layout, for an `.npz` path (rows as doubles, not text).
+    npz: Option<crate::npz::Npz>,
+    /// The columns written (indices into the full row), `None`: all.
+    selection: Option<Vec<usize>>,
+    /// How many standard columns a full row has (the extra ones follow).
+    standard: usize,
+    /// A full row's values, when a selection picks from them.
+    values: Vec<f64>,
     sink: Option<Sink>,
     line: String,
     /// Whole rows not yet handed to the target.
@@ -372,13 +410,46 @@ impl CsvStream {
         sys: &S,
         extra: &[String],
     ) -> io::Result<Self> {
+        Self::create_selected(path, sys, extra, None)
+    }
+
+    /// [`create_with`](Self::create_with) writing only the columns of
+    /// `selection` (indices into the standard header followed by `extra`;
+    /// `None`: all of them).
+    ///
+    /// # Errors
+    /// Any I/O error, with the path in the message.
+    pub fn create_selected<S: System + ?Sized>(
+        path: &Path,
+        sys: &S,
+        extra: &[String],
+        selection: Option<&Selection>,
+    ) -> io::Result<Self> {
         let mut removed = Vec::new();
+        let binary = is_npz(path);
         let sink = match target(path)? {
+            Target::Stdout | Target::Direct if binary => {
+                return Err(io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    format!(
+                        "{}: an .npz output must be a regular file (its end is written last); \
+                         write CSV to a pipe or standard output",
+                        path.display()
+                    ),
+                ));
+            }
             Target::Replace(target) => {
                 check_writable(path, &target)?;
                 removed = remove_leftovers(&target);
                 let tmp = temporary_path(&target);
-                let file = std::fs::File::create(&tmp).map_err(|e| described(path, e))?;
+                // (Read too: a partial `.npz` reads its rows back for their CRC.)
+                let file = std::fs::OpenOptions::new()
+                    .read(true)
+                    .write(true)
+                    .create(true)
+                    .truncate(true)
+                    .open(&tmp)
+                    .map_err(|e| described(path, e))?;
                 // A replaced file keeps its permissions.
                 if let Ok(m) = std::fs::metadata(&target) {
                     let _ = file.set_permissions(m.permissions());
@@ -395,12 +466,30 @@ impl CsvStream {
         };
         let mut names = header(sys);
         names.extend_from_slice(extra);
-        let mut line = join_fields(&names);
-        line.push('\n');
+        let standard = header_len(sys);
+        let selection = selection.map(|s| s.indices().to_vec());
+        if let Some(chosen) = &selection {
+            names = chosen
+                .iter()
+                .filter_map(|&i| names.get(i).cloned())
+                .collect();
+        }
+        let (npz, head, line) = if binary {
+            let (npz, head) = crate::npz::Npz::head(&names);
+            (Some(npz), head, String::new())
+        } else {
+            let mut line = join_fields(&names);
+            line.push('\n');
+            (None, line.clone().into_bytes(), line)
+        };
         Ok(Self {
             path: path.to_path_buf(),
+            npz,
+            selection,
+            standard,
+            values: Vec::new(),
             sink: Some(sink),
-            buffer: line.clone().into_bytes(),
+            buffer: head,
             line,
             buffered_rows: 0,
             rows: 0,
@@ -429,14 +518,64 @@ impl CsvStream {
         if self.error.is_some() {
             return;
         }
+        if self.npz.is_some() {
+            self.push_binary(s, extra);
+            return;
+        }
         self.line.clear();
-        row(&mut self.line, s, extra);
+        match &self.selection {
+            None => row(&mut self.line, s, extra),
+            Some(chosen) => {
+                row_values(&mut self.values, s, extra);
+                let mut first = true;
+                for &i in chosen {
+                    if !first {
+                        self.line.push(',');
+                    }
+                    first = false;
+                    number(
+                        &mut self.line,
+                        self.values.get(i).copied().unwrap_or(f64::NAN),
+                    );
+                }
+                self.line.push('\n');
+            }
+        }
         self.buffer.extend_from_slice(self.line.as_bytes());
         self.rows += 1;
         self.buffered_rows += 1;
         if self.buffer.len() >= CHUNK {
             self.flush_buffer();
         }
+    }
+
+    /// Appends a sample's row as doubles (`.npz`).
+    fn push_binary(&mut self, s: &SampleRef<'_>, extra: &[f64]) {
+        row_values(&mut self.values, s, extra);
+        let values = &self.values;
+        match &self.selection {
+            None => crate::npz::Npz::encode(values.iter().copied(), &mut self.buffer),
+            Some(chosen) => crate::npz::Npz::encode(
+                chosen
+                    .iter()
+                    .map(|&i| values.get(i).copied().unwrap_or(f64::NAN)),
+                &mut self.buffer,
+            ),
+        }
+        self.rows += 1;
+        self.buffered_rows += 1;
+        if self.buffer.len() >= CHUNK {
+            self.flush_buffer();
+        }
+    }
+
+    /// Whether the rows need the extra columns' values (a selection may
+    /// leave them all out, and save computing them).
+    #[must_use]
+    pub fn needs_extra(&self) -> bool {
+        self.selection
+            .as_ref()
+            .is_none_or(|chosen| chosen.last().is_some_and(|&i| i >= self.standard))
     }
 
     /// Hands the buffered rows to the target now; `false` when a write has
@@ -474,8 +613,27 @@ impl CsvStream {
         };
         match result {
             Ok(()) => {
+                if let Some(npz) = &mut self.npz {
+                    // (The first chunk begins with the head.)
+                    let head = npz.rows_at().saturating_sub(self.bytes_out);
+                    let head = usize::try_from(head)
+                        .unwrap_or(usize::MAX)
+                        .min(self.buffer.len());
+                    npz.written(&self.buffer[head..]);
+                }
                 self.bytes_out += self.buffer.len() as u64;
                 self.rows_out += self.buffered_rows;
+            }
+            Err(e) if self.npz.is_some() => {
+                // Whole rows after the head; the CRC is worked out again
+                // from the file when it is kept ([`keep_partial`]).
+                self.bytes_out += done as u64;
+                let rows_at = self.npz.as_ref().map_or(0, crate::npz::Npz::rows_at);
+                let row = self.npz.as_ref().map_or(1, crate::npz::Npz::row_bytes) as u64;
+                self.rows_out =
+                    usize::try_from(self.bytes_out.saturating_sub(rows_at) / row.max(1))
+                        .unwrap_or(usize::MAX);
+                self.error = Some(e);
             }
             Err(e) => {
                 // The whole rows that got through (a full disk takes part
@@ -507,9 +665,17 @@ impl CsvStream {
             return Err(described(&self.path, e));
         }
         match self.sink.take() {
-            Some(Sink::Temporary { file, tmp, target }) => {
-                let done = file
-                    .sync_all()
+            Some(Sink::Temporary {
+                mut file,
+                tmp,
+                target,
+            }) => {
+                let ended = match &mut self.npz {
+                    Some(npz) => npz.finish(&mut file, self.rows_out as u64, false),
+                    None => Ok(()),
+                };
+                let done = ended
+                    .and_then(|()| file.sync_all())
                     .and_then(|()| std::fs::rename(&tmp, &target));
                 if let Err(e) = done {
                     let _ = std::fs::remove_file(&tmp);
@@ -529,15 +695,18 @@ impl CsvStream {
     pub fn keep_partial(mut self, partial: &Path) -> Kept {
         self.flush_buffer();
         match self.sink.take() {
-            Some(Sink::Temporary { file, tmp, .. }) => {
+            Some(Sink::Temporary { mut file, tmp, .. }) => {
                 // A failed write may have left part of a chunk: cut it off.
-                let kept = if self.bytes_out == 0 {
-                    Err(io::Error::other("not even the header reached the disk"))
-                } else {
-                    file.set_len(self.bytes_out)
-                        .and_then(|()| file.sync_all())
-                        .and_then(|()| std::fs::rename(&tmp, partial))
+                let ended = match &mut self.npz {
+                    _ if self.bytes_out == 0 => {
+                        Err(io::Error::other("not even the header reached the disk"))
+                    }
+                    Some(npz) => end_partial_npz(npz, &mut file, &mut self.rows_out),
+                    None => file.set_len(self.bytes_out),
                 };
+                let kept = ended
+                    .and_then(|()| file.sync_all())
+                    .and_then(|()| std::fs::rename(&tmp, partial));
                 match kept {
                     Ok(()) => Kept::File {
                         path: partial.to_path_buf(),
@@ -581,6 +750,42 @@ impl Drop for CsvStream {
             let _ = std::fs::remove_file(&tmp);
         }
     }
+}
+
+/// Ends a partial `.npz` after the rows that reached the disk; when the
+/// disk has no room for the archive's end, with as many rows fewer as free
+/// its room.
+fn end_partial_npz(
+    npz: &mut crate::npz::Npz,
+    file: &mut std::fs::File,
+    rows: &mut usize,
+) -> io::Result<()> {
+    let row = npz.row_bytes().max(1);
+    let fewer = npz.tail_len().div_ceil(row);
+    match npz.finish(file, *rows as u64, true) {
+        Ok(()) => Ok(()),
+        Err(e) if *rows >= fewer && is_full(&e) => {
+            *rows -= fewer;
+            npz.finish(file, *rows as u64, true)
+        }
+        Err(e) => Err(e),
+    }
+}
+
+/// Whether `e` says the disk (or the quota) is full.
+fn is_full(e: &io::Error) -> bool {
+    matches!(
+        e.kind(),
+        io::ErrorKind::StorageFull | io::ErrorKind::QuotaExceeded | io::ErrorKind::WriteZero
+    )
+}
+
+/// Whether `path` names an `.npz` file (the binary output; any case).
+#[must_use]
+pub fn is_npz(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("npz"))
 }
 
 /// Writes `buf` as `write_all` does, and tells how many bytes got through
@@ -713,7 +918,7 @@ mod tests {
         let sys = PendulumChain::paper(1.0, 1.0, 10.0);
         assert_eq!(
             header(&sys).join(","),
-            "t,u:x,u:y,u:theta,v:x,v:y,v:theta,a:x,a:y,a:theta,lambda:0,lambda:1,energy,iterations,residual,constraint"
+            "t,u:x,u:y,u:theta,v:x,v:y,v:theta,a:x,a:y,a:theta,lambda:rod.x,lambda:rod.y,energy,iterations,residual,constraint"
         );
         let s = Sample {
             t: 0.5,

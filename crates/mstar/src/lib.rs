@@ -39,7 +39,9 @@
 
 pub mod accuracy;
 pub mod analysis;
+pub mod columns;
 pub mod csv;
+mod npz;
 pub mod pendulum;
 pub mod record;
 pub mod redundant;

@@ -175,7 +175,8 @@ impl<'a> Recorder<'a> {
         let Some(stream) = self.stream.as_mut() else {
             return;
         };
-        let (columns, extra) = (self.columns, &mut self.extra);
+        let columns = self.columns.filter(|_| stream.needs_extra());
+        let extra = &mut self.extra;
         self.grid.rows(s, &mut |row| {
             extra.clear();
             if let Some(columns) = columns {
@@ -192,6 +193,7 @@ impl<'a> Recorder<'a> {
         else {
             return;
         };
+        let columns = columns.filter(|_| stream.needs_extra());
         grid.finish(&mut |row| {
             extra.clear();
             if let Some(columns) = columns {

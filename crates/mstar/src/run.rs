@@ -612,7 +612,7 @@ fn violation<S: ModelLookup + ?Sized>(sys: &S, x: &[f64]) -> Option<(String, Str
 /// What running and checking a model needs of it beyond [`System`]: its
 /// initial state, and its joints and drivers by name with their rows and
 /// reactions. Implemented for planar and spatial models.
-pub trait ModelLookup: System {
+pub trait ModelLookup: System + mstar_model::sensor::Frames {
     /// Initial coordinates `u₀`, as the model file gives them.
     fn initial_position(&self) -> Vec<f64>;
     /// Initial velocities `u̇₀`.

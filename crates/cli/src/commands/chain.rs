@@ -162,7 +162,7 @@ fn run_chain<S: ChainModel>(
         (args.t_end, config.h),
         (None, args.output_every),
     )?;
-    let mut stream = open_output(out, sys, &[])?;
+    let mut stream = open_output(out, sys, &[], None)?;
     say!(
         "{n}-link chain of {} ({} coordinates, {} constraints); h = {} s, t_end = {} s",
         sys.describe(),

@@ -62,11 +62,12 @@ pub fn open_output<S: System + ?Sized>(
     out: Option<&Path>,
     sys: &S,
     extra: &[String],
+    selection: Option<&mstar::columns::Selection>,
 ) -> Result<Option<csv::CsvStream>> {
     let Some(path) = out else {
         return Ok(None);
     };
-    let stream = csv::CsvStream::create_with(path, sys, extra)?;
+    let stream = csv::CsvStream::create_selected(path, sys, extra, selection)?;
     for leftover in stream.removed_leftovers() {
         note!(
             "note: removed {}, left by an earlier run that was killed",

@@ -201,7 +201,7 @@ pub fn pendulum(args: &PendulumArgs) -> Result<()> {
     if args.reference == Some(Reference::Rk4) {
         return pendulum_reference(args, &run);
     }
-    let mut stream = open_output(out, &sys, &[])?;
+    let mut stream = open_output(out, &sys, &[], None)?;
     say!("{}", describe(&run));
     let u0 = sys.position(&[run.theta0]);
     let v0 = sys.velocity(&[run.theta0], &[run.omega0]);
@@ -251,7 +251,7 @@ fn pendulum_reference(args: &PendulumArgs, run: &PendulumRun) -> Result<()> {
     limits::check_reference(run.t_end, run.config.h, limits::available_memory())?;
     let sys = run.system();
     let samples = run.reference_on_grid();
-    let mut stream = open_output(args.out.as_deref(), &sys, &[])?;
+    let mut stream = open_output(args.out.as_deref(), &sys, &[], None)?;
     say!("RK4 reference (minimal coordinate θ): {}", describe(run));
     say!("samples: {}", samples.len());
     if let Some(last) = samples.last() {

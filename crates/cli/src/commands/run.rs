@@ -6,13 +6,14 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use mstar::columns::{OutputColumns, Selection};
 use mstar::csv::Columns;
 use mstar::file::{MAX_MAGNITUDE, Mechanism, MechanismFile, Simulation};
 use mstar::model::RowSubset;
 use mstar::newmark::Short;
 use mstar::pendulum::PendulumRun;
 use mstar::redundant::Expanded;
-use mstar::run::{ModelLookup, ReactionColumns};
+use mstar::run::ModelLookup;
 use mstar::{IntegrationError, Integrator, Observer, SampleRef, System, csv};
 
 use crate::output::Stop;
@@ -62,6 +63,11 @@ pub struct RunArgs {
     /// within the steps (overrides [output] every_time and every).
     #[arg(long, value_name = "DT", allow_hyphen_values = true)]
     output_every: Option<f64>,
+    /// Write only these columns, by name with `*` globs, comma-separated or
+    /// repeated, e.g. --columns 't,sensor:*,reaction:O2.*' (overrides
+    /// [output] columns; default: every column).
+    #[arg(long, value_name = "NAMES", value_delimiter = ',')]
+    columns: Vec<String>,
     /// Override a key of the file, e.g. --set simulation.rho=0.8,
     /// --set output.every=10, or of an element by its name,
     /// --set body.upper.mass=2 (repeatable; values in TOML syntax).
@@ -88,6 +94,10 @@ struct Loaded {
     every: usize,
     /// `[output] every_time`, s.
     every_time: Option<f64>,
+    /// `[[sensor]]`s.
+    sensors: Vec<mstar::model::sensor::Sensor>,
+    /// `[output] columns`.
+    columns: Option<Vec<String>>,
 }
 
 /// A model file's mechanism, planar or spatial (whose CSV has reaction
@@ -217,21 +227,47 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         warn_far_start(sys);
     }
     let rows = independent_rows(model)?;
-    let columns = model.system.named().map(ReactionColumns::new);
+    let columns = match model.system.named() {
+        Some(named) => Some(OutputColumns::new(named, &model.sensors)?),
+        None => None,
+    };
     // Named only for a CSV file: 6·10⁵ names for 10⁵ bodies.
     let extra = match (&columns, &args.out) {
         (Some(c), Some(_)) => c.names(),
         _ => Vec::new(),
     };
+    let patterns = if args.columns.is_empty() {
+        model.columns.clone()
+    } else {
+        Some(args.columns.clone())
+    };
+    let selection = match (&patterns, &args.out) {
+        (Some(patterns), Some(_)) => {
+            let mut names = csv::header(sys);
+            names.extend_from_slice(&extra);
+            let source = if args.columns.is_empty() {
+                "[output] columns"
+            } else {
+                "--columns"
+            };
+            let chosen = Selection::new(&names, patterns)
+                .map_err(|e| crate::output::usage(format!("{source}: {e}")))?;
+            Some(chosen)
+        }
+        _ => None,
+    };
     crate::limits::check_steps(t_end, config.h)?;
-    let fields = csv::header_len(sys) + columns.as_ref().map_or(0, Columns::count);
+    let fields = selection.as_ref().map_or_else(
+        || csv::header_len(sys) + columns.as_ref().map_or(0, Columns::count),
+        Selection::len,
+    );
     super::check_output(
         args.out.as_deref(),
         fields,
         (t_end, config.h),
         (args.builtin.is_none().then_some(every), every_time),
     )?;
-    let stream = super::open_output(args.out.as_deref(), sys, &extra)?;
+    let stream = super::open_output(args.out.as_deref(), sys, &extra, selection.as_ref())?;
     let columns = columns.as_ref().map(|c| c as &dyn Columns);
     let grid = crate::output::Grid::new(every_time)?;
     let mut output = RunOutput::new(stream, columns, (every, grid), t_end);
@@ -412,6 +448,8 @@ fn load(args: &RunArgs) -> Result<Loaded> {
         v0: sys.initial_velocity(),
         every: file.output.every,
         every_time: file.output.every_time,
+        sensors: file.output.sensors,
+        columns: file.output.columns,
         simulation: file.simulation,
         system: Model::Named(Box::new(file.mechanism)),
     })
@@ -554,6 +592,8 @@ fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
                 simulation,
                 every: 1,
                 every_time: None,
+                sensors: Vec::new(),
+                columns: None,
             }
         }
         Builtin::Chain => {
@@ -566,6 +606,8 @@ fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
                 simulation,
                 every: 1,
                 every_time: None,
+                sensors: Vec::new(),
+                columns: None,
             }
         }
     })

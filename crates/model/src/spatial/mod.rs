@@ -27,7 +27,7 @@ mod joints;
 mod kernel;
 mod loads;
 pub(crate) mod real;
-mod rotation;
+pub(crate) mod rotation;
 mod sketch;
 mod spherical;
 mod system;

@@ -8,9 +8,9 @@ use mstar_file::MechanismFile;
 
 use super::files::{Dir, Row};
 use super::{Plan, SweepError};
+use crate::columns::{OutputColumns, Selection};
 use crate::csv::{Columns, CsvStream, format_number};
 use crate::record::{Grid, Recorder, Rows};
-use crate::run::ReactionColumns;
 
 /// The figures of a run for its summary row.
 struct Figures {
@@ -90,8 +90,24 @@ fn integrate(plan: &Plan, dir: &Dir, index: usize, stop: &dyn Fn() -> bool) -> O
         Ok(c) => c,
         Err(e) => return Some(Figures::failed(e)),
     };
-    let columns = ReactionColumns::new(sys);
-    let stream = match CsvStream::create_with(&dir.csv(index), sys, &columns.names()) {
+    let columns = match OutputColumns::new(sys, &file.output.sensors) {
+        Ok(columns) => columns,
+        Err(e) => return Some(Figures::failed(e)),
+    };
+    let extra = columns.names();
+    let selection = match &file.output.columns {
+        Some(patterns) => {
+            let mut names = crate::csv::header(sys);
+            names.extend_from_slice(&extra);
+            match Selection::new(&names, patterns) {
+                Ok(s) => Some(s),
+                Err(e) => return Some(Figures::failed(format!("[output] columns: {e}"))),
+            }
+        }
+        None => None,
+    };
+    let stream = match CsvStream::create_selected(&dir.csv(index), sys, &extra, selection.as_ref())
+    {
         Ok(stream) => stream,
         Err(e) => return Some(Figures::failed(e)),
     };
