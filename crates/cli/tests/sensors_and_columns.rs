@@ -484,3 +484,59 @@ fn malformed_sensors_and_columns_are_placed_errors() {
         "{err}"
     );
 }
+
+/// A sweep's runs write the chosen columns, and its summary has each
+/// sensor's value at the last state under the CSV's name: the last row of
+/// the run's own file.
+#[test]
+fn a_sweep_summary_has_the_sensors_last_values() {
+    let dir = scratch("sensors-sweep");
+    let base = std::fs::read_to_string(model("four-bar.toml")).expect("the model");
+    let file = dir.join("four-bar-sensors.toml");
+    std::fs::write(&file, format!("{base}{PLANAR_SENSORS}")).expect("written");
+    let out = dir.join("sweep");
+    let r = mstar(&[
+        "sweep",
+        &file.display().to_string(),
+        "--set",
+        "body.coupler.mass=1.0,1.5",
+        "--set",
+        "simulation.t_end=0.05",
+        "--out",
+        &out.display().to_string(),
+    ]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    let body = std::fs::read_to_string(out.join("summary.csv")).expect("the summary");
+    let mut lines = body.lines();
+    let names: Vec<String> = lines
+        .next()
+        .expect("a header")
+        .split(',')
+        .map(String::from)
+        .collect();
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let summary = |name: &str, run: usize| -> f64 {
+        let k = names.iter().position(|n| n == name).expect("a column");
+        rows[run][k].parse().expect("a number")
+    };
+    for run in 0..2 {
+        let (run_names, rows) = read_csv(&out.join(format!("runs/{run}.csv")));
+        assert_eq!(run_names[0], "t");
+        assert!(
+            run_names.iter().all(|n| n == "t"
+                || n.starts_with("sensor:")
+                || n.starts_with("reaction:O2.")
+                || n.starts_with("effort:")),
+            "{run_names:?}"
+        );
+        for name in run_names.iter().filter(|n| n.starts_with("sensor:")) {
+            assert!(names.contains(name), "{name} not in {names:?}");
+            let last = *rows[name].last().expect("rows");
+            assert_eq!(
+                summary(name, run).to_bits(),
+                last.to_bits(),
+                "{name}, run {run}"
+            );
+        }
+    }
+}

@@ -6,8 +6,98 @@
 use mstar_model::sensor::{BodyPoint, Frame, Motion, Sensor, SensorKind, cardan_angles};
 use mstar_model::{SampleRef, StateRef};
 
-use crate::csv::Columns;
-use crate::run::{ModelLookup, ReactionColumns};
+use crate::run::ModelLookup;
+
+/// Columns a model adds after the standard ones (e.g. reactions by joint,
+/// see [`ReactionColumns`]).
+pub trait Columns {
+    /// Their header names.
+    fn names(&self) -> Vec<String>;
+
+    /// How many there are (as many as `names`, without naming them).
+    fn count(&self) -> usize {
+        self.names().len()
+    }
+
+    /// Their values at a sample, appended to `out` (as many as `names`).
+    fn values(&self, s: &SampleRef<'_>, out: &mut Vec<f64>);
+}
+
+/// The reaction and effort columns of a model's CSV
+/// (`docs/model-format.md`, "Output"): per joint and driver, in the order of
+/// the file, `reaction:<name>.fx`, `.fy`, `.tau` (planar) or `.fx`, `.fy`,
+/// `.fz`, `.tx`, `.ty`, `.tz` (spatial) — the constraint force `−Bᵀλ` its
+/// rows put on its body ([`PlanarSystem::reaction`],
+/// [`SpatialSystem::reaction`]) — then per driver `effort:<name>` = `−λ`,
+/// the force (N) or torque (N m) the driver applies along the coordinate
+/// (or joint motion) it drives, positive in that coordinate's direction.
+pub struct ReactionColumns<'a> {
+    sys: &'a dyn ModelLookup,
+    /// How many joints (drivers included) it has.
+    joints: usize,
+    /// `(joint index, first row)` of each driver.
+    drivers: Vec<(usize, usize)>,
+}
+
+impl std::fmt::Debug for ReactionColumns<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ReactionColumns")
+            .field("drivers", &self.drivers)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<'a> ReactionColumns<'a> {
+    /// The columns of `sys`.
+    #[must_use]
+    pub fn new(sys: &'a dyn ModelLookup) -> Self {
+        let names = sys.joint_names();
+        let joints = names.len();
+        let drivers = names
+            .into_iter()
+            .enumerate()
+            .filter(|(_, name)| sys.is_driver(name) == Some(true))
+            .filter_map(|(i, name)| Some((i, sys.joint_rows(name)?.start)))
+            .collect();
+        Self {
+            sys,
+            joints,
+            drivers,
+        }
+    }
+}
+
+impl Columns for ReactionColumns<'_> {
+    fn names(&self) -> Vec<String> {
+        let joints = self.sys.joint_names();
+        let components = self.sys.reaction_components();
+        let mut names: Vec<String> = joints
+            .iter()
+            .flat_map(|j| components.iter().map(move |c| format!("reaction:{j}.{c}")))
+            .collect();
+        names.extend(
+            self.drivers
+                .iter()
+                .map(|&(i, _)| format!("effort:{}", joints[i])),
+        );
+        names
+    }
+
+    fn count(&self) -> usize {
+        self.joints * self.sys.reaction_components().len() + self.drivers.len()
+    }
+
+    fn values(&self, s: &mstar_model::SampleRef<'_>, out: &mut Vec<f64>) {
+        for i in 0..self.joints {
+            self.sys.reaction_into(i, s.t, s.u, s.lambda, out);
+        }
+        out.extend(
+            self.drivers
+                .iter()
+                .map(|&(_, row)| s.lambda.get(row).map_or(f64::NAN, |l| -l)),
+        );
+    }
+}
 
 /// A sensor that names what the model does not have (a model built in
 /// code: a file's sensors are checked where they are written).
@@ -197,6 +287,14 @@ impl<'a> OutputColumns<'a> {
             reactions: ReactionColumns::new(sys),
             sensors: SensorColumns::new(sys, sensors)?,
         })
+    }
+}
+
+impl OutputColumns<'_> {
+    /// The sensors' columns alone.
+    #[must_use]
+    pub fn sensors(&self) -> &SensorColumns<'_> {
+        &self.sensors
     }
 }
 

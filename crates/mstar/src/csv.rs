@@ -47,20 +47,7 @@ pub fn header_len<S: System + ?Sized>(sys: &S) -> usize {
     1 + 3 * sys.n_coords() + sys.n_constraints() + 4
 }
 
-/// Columns a model adds after the standard ones (e.g. reactions by joint,
-/// see [`crate::run::ReactionColumns`]).
-pub trait Columns {
-    /// Their header names.
-    fn names(&self) -> Vec<String>;
-
-    /// How many there are (as many as `names`, without naming them).
-    fn count(&self) -> usize {
-        self.names().len()
-    }
-
-    /// Their values at a sample, appended to `out` (as many as `names`).
-    fn values(&self, s: &SampleRef<'_>, out: &mut Vec<f64>);
-}
+pub use crate::columns::Columns;
 
 /// The header as one CSV line (without the newline): names from model files
 /// may hold commas or quotes, so such fields are quoted (RFC 4180: in double
@@ -947,7 +934,7 @@ mod tests {
         let file = MechanismFile::parse(text, "slider-crank.toml", Format::Toml).expect("valid");
         let sys = crate::run::lookup(&file.mechanism);
         assert_eq!(header_len(sys), header(sys).len());
-        let columns = crate::run::ReactionColumns::new(sys);
+        let columns = crate::columns::ReactionColumns::new(sys);
         let names = columns.names();
         assert!(names.iter().any(|n| n.starts_with("effort:")), "{names:?}");
         assert_eq!(columns.count(), names.len());

@@ -8,7 +8,8 @@
 use mstar_model::SampleRef;
 use mstar_newmark::Observer;
 
-use crate::csv::{Columns, CsvStream};
+use crate::columns::Columns;
+use crate::csv::CsvStream;
 
 /// A Δt for `[output] every_time` / `--output-every` that is not a positive,
 /// finite number of seconds.
@@ -98,6 +99,8 @@ pub struct Recorder<'a> {
     drift: f64,
     max_constraint: f64,
     last_u: Vec<f64>,
+    /// The whole last state observed, when asked to keep it.
+    last_state: Option<mstar_model::Sample>,
 }
 
 impl std::fmt::Debug for Recorder<'_> {
@@ -133,7 +136,25 @@ impl<'a> Recorder<'a> {
             drift: 0.0,
             max_constraint: 0.0,
             last_u: Vec::new(),
+            last_state: None,
         }
+    }
+
+    /// The recorder keeping the whole last state observed
+    /// ([`last_state`](Self::last_state)), not only its coordinates.
+    #[must_use]
+    pub fn keeping_last_state(mut self) -> Self {
+        self.last_state = Some(mstar_model::Sample::default());
+        self
+    }
+
+    /// The last state observed, when kept ([`keeping_last_state`](Self::keeping_last_state)).
+    #[must_use]
+    pub fn last_state(&self) -> Option<SampleRef<'_>> {
+        self.last_state
+            .as_ref()
+            .filter(|_| self.seen > 0)
+            .map(mstar_model::Sample::view)
     }
 
     /// The CSV stream, if any.
@@ -221,6 +242,18 @@ impl Observer for Recorder<'_> {
         self.last_seen = s.t;
         self.last_u.clear();
         self.last_u.extend_from_slice(s.u);
+        if let Some(kept) = &mut self.last_state {
+            kept.t = s.t;
+            for (to, from) in [
+                (&mut kept.u, s.u),
+                (&mut kept.v, s.v),
+                (&mut kept.a, s.a),
+                (&mut kept.lambda, s.lambda),
+            ] {
+                to.clear();
+                to.extend_from_slice(from);
+            }
+        }
         let e = s.energy();
         let e0 = *self.energy0.get_or_insert(e);
         self.drift = if (e - e0).abs() > self.drift || e.is_nan() {

@@ -6,8 +6,8 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use mstar::columns::Columns;
 use mstar::columns::{OutputColumns, Selection};
-use mstar::csv::Columns;
 use mstar::file::{MAX_MAGNITUDE, Mechanism, MechanismFile, Simulation};
 use mstar::model::RowSubset;
 use mstar::newmark::Short;

@@ -21,6 +21,7 @@ pub fn summary_header(plan: &Plan) -> Vec<String> {
     h.extend(plan.params().iter().map(|p| p.key.clone()));
     h.extend(["status", "t"].map(String::from));
     h.extend(plan.coords.iter().map(|c| format!("u:{c}")));
+    h.extend(plan.sensors.iter().cloned());
     h.extend(["max_constraint", "energy_drift", "steps", WALL].map(String::from));
     h
 }

@@ -190,6 +190,8 @@ pub struct Plan {
     combine: Combine,
     /// The coordinates' names (the summary's `u:` columns).
     coords: Vec<String>,
+    /// The sensors' column names (the summary's `sensor:` columns).
+    sensors: Vec<String>,
     /// The model file's own output settings, for [`Plan::estimate`].
     base: OutputSettings,
 }
@@ -285,6 +287,12 @@ impl Plan {
         }
         let sys = base.mechanism.system();
         let coords = mstar_model::coord_names(sys);
+        let sensors = crate::columns::SensorColumns::new(
+            crate::run::lookup(&base.mechanism),
+            &base.output.sensors,
+        )
+        .map(|c| crate::columns::Columns::names(&c))
+        .map_err(|e| SweepError::Plan(format!("{}: {e}", model.display())))?;
         let base = OutputSettings {
             t_end: base.simulation.t_end.unwrap_or(crate::run::defaults::T_END),
             h: base.simulation.h.unwrap_or(crate::run::defaults::H),
@@ -300,6 +308,7 @@ impl Plan {
             params,
             combine,
             coords,
+            sensors,
             base,
         })
     }

@@ -8,8 +8,9 @@ use mstar_file::MechanismFile;
 
 use super::files::{Dir, Row};
 use super::{Plan, SweepError};
+use crate::columns::Columns;
 use crate::columns::{OutputColumns, Selection};
-use crate::csv::{Columns, CsvStream, format_number};
+use crate::csv::{CsvStream, format_number};
 use crate::record::{Grid, Recorder, Rows};
 
 /// The figures of a run for its summary row.
@@ -21,6 +22,8 @@ struct Figures {
     beyond: Option<String>,
     /// The time reached and the last coordinates (none before the start).
     last: Option<(f64, Vec<f64>)>,
+    /// The sensors' values at the last state (none before the start).
+    sensors: Option<Vec<f64>>,
     max_constraint: Option<f64>,
     drift: Option<f64>,
     steps: Option<usize>,
@@ -32,6 +35,7 @@ impl Figures {
             error: Some(why.to_string()),
             beyond: None,
             last: None,
+            sensors: None,
             max_constraint: None,
             drift: None,
             steps: None,
@@ -119,13 +123,19 @@ fn integrate(plan: &Plan, dir: &Dir, index: usize, stop: &dyn Fn() -> bool) -> O
         every: file.output.every,
         grid,
     };
-    let mut recorder = Recorder::new(Some(stream), Some(&columns), rows, t_end);
+    let mut recorder =
+        Recorder::new(Some(stream), Some(&columns), rows, t_end).keeping_last_state();
     let result = crate::run::simulate_until(sys, &file.simulation, &mut recorder, &mut || stop());
     recorder.finish_rows();
     let mut figures = Figures {
         error: None,
         beyond: None,
         last: recorder.last().map(|(t, u)| (t, u.to_vec())),
+        sensors: recorder.last_state().map(|s| {
+            let mut values = Vec::new();
+            columns.sensors().values(&s, &mut values);
+            values
+        }),
         max_constraint: Some(recorder.max_constraint()),
         drift: Some(recorder.energy_drift()),
         steps: None,
@@ -175,6 +185,10 @@ fn row(plan: &Plan, index: usize, f: &Figures, wall: f64) -> Row {
     match &f.last {
         Some((_, u)) => fields.extend(u.iter().map(|&x| format_number(x))),
         None => fields.extend(plan.coords.iter().map(|_| String::new())),
+    }
+    match &f.sensors {
+        Some(values) => fields.extend(values.iter().map(|&x| format_number(x))),
+        None => fields.extend(plan.sensors.iter().map(|_| String::new())),
     }
     fields.push(number(f.max_constraint));
     fields.push(number(f.drift));
