@@ -33,6 +33,25 @@ pub trait Figure {
     /// The results columns the drawing reads, each `u:<body>.<axis>` with
     /// its index in `u`.
     fn columns(&self) -> Vec<(String, usize)>;
+
+    /// The faces of the bodies' solids that face the viewer at `u`, in any
+    /// order (the scene sorts them by depth); none for a planar model.
+    fn faces(&self, _u: &[f64]) -> Vec<Face> {
+        Vec::new()
+    }
+}
+
+/// One face of a body's solid in the picture's plane.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Face {
+    /// The body.
+    pub body: usize,
+    /// Its corners, world metres in the picture's plane.
+    pub corners: Vec<Point>,
+    /// How far its centre lies behind the picture, m (larger: farther).
+    pub depth: f64,
+    /// Its brightness in the light, 0 to 1 (Lambert).
+    pub brightness: f64,
 }
 
 /// A planar model: its sketch as it is, each rigid body drawn through the

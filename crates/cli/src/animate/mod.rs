@@ -9,9 +9,11 @@
 pub mod figure;
 pub mod geometry;
 pub mod html;
+pub mod page3d;
 pub mod picture;
 pub mod results;
 pub mod scene;
+pub mod solid;
 pub mod spatial;
 
 /// A 1 m bar named `name`, hinged at the origin, lying along +x: the model

@@ -293,6 +293,7 @@ impl Scene {
         let mut points: Vec<Point> = self.grounds.clone();
         for u in states {
             points.extend((0..s.bodies.len()).map(|b| f.centre(b, u)));
+            points.extend(f.faces(u).into_iter().flat_map(|face| face.corners));
             for (i, e) in s.elements.iter().enumerate() {
                 let ends = if one_body(e.kind) { 1 } else { 2 };
                 points.extend((0..ends).map(|side| f.end(i, side, u)));
@@ -396,6 +397,7 @@ impl Scene {
     /// with its centre of mass as a dot; a filled circle (point mass).
     fn body_items(&self, u: &[f64], view: &View, out: &mut Vec<Item>) {
         let k = view.unit;
+        self.face_items(u, view, out);
         for (i, body) in self.sketch().bodies.iter().enumerate() {
             let colour = body_colour(i);
             let centre = view.px(self.figure.centre(i, u));
@@ -422,6 +424,28 @@ impl Scene {
                 shape: Shape::Circle(centre, 2.5 * k),
                 style: Style::fill(INK),
                 body: Some(i),
+            });
+        }
+    }
+}
+
+impl Scene {
+    /// The faces of the bodies' solids (spatial models), far ones first
+    /// (the painter's algorithm), each in its body's colour darkened by its
+    /// angle to the light, with a darker outline.
+    fn face_items(&self, u: &[f64], view: &View, out: &mut Vec<Item>) {
+        let mut faces = self.figure.faces(u);
+        faces.sort_by(|a, b| b.depth.total_cmp(&a.depth));
+        for face in faces {
+            let c = body_colour(face.body);
+            let dim = |f: f64| {
+                let d = |x: u8| (f64::from(x) * f).round().clamp(0.0, 255.0) as u8;
+                Colour(d(c.0), d(c.1), d(c.2))
+            };
+            out.push(Item {
+                shape: Shape::Polygon(face.corners.into_iter().map(|p| view.px(p)).collect()),
+                style: Style::stroke(dim(0.45), view.unit).with_fill(dim(face.brightness), 1.0),
+                body: Some(face.body),
             });
         }
     }
