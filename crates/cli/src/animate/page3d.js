@@ -1,8 +1,8 @@
 // mstar animate: the 3-D page's renderer (Canvas 2-D, no library).
-// Every frame is drawn from scratch: the ground grid first, then every face,
-// line piece and dot of the scene sorted far to near (the painter's
-// algorithm), each body a box shaded by the angle of its faces to a light
-// that moves with the camera (Lambert). The page's data: see page3d.rs.
+// Every frame is drawn from scratch: the ground grid first, then every face
+// and line piece of the scene sorted far to near (the painter's algorithm),
+// the joint points last. Each body is a box shaded by the angle of its faces
+// to a light that moves with the camera (Lambert). The data: page3d.rs.
 (function () {
   'use strict';
   const D = JSON.parse(document.getElementById('frames').textContent);
@@ -172,10 +172,15 @@
         return;
       }
       boxItems(n, p, P, light, items);
-      const half = [0, 1, 2].map(function (k) { return Math.hypot(b[2 + 3 * k], b[3 + 3 * k], b[4 + 3 * k]); });
-      const len = 1.4 * Math.max(half[0], half[1], half[2]) + 0.04 * R;
+      // Each body axis out of the box by 0.3 of its largest half side: the
+      // box reaches Σ_i |h_i · e_a| along body axis a.
+      const h = [b.slice(2, 5), b.slice(5, 8), b.slice(8, 11)];
+      const half = h.map(function (v) { return Math.hypot(v[0], v[1], v[2]); });
+      const extra = 0.3 * Math.max(half[0], half[1], half[2]) + 0.01 * R;
       for (let a = 0; a < 3; a++) {
-        lineItems(p.r, add(p.r, mul([p.A[0][a], p.A[1][a], p.A[2][a]], len)), AXIS[a], 2, P, items);
+        const reach = Math.abs(h[0][a]) + Math.abs(h[1][a]) + Math.abs(h[2][a]);
+        const tip = add(p.r, mul([p.A[0][a], p.A[1][a], p.A[2][a]], reach + extra));
+        lineItems(p.r, tip, AXIS[a], 2, P, items);
       }
     });
     // Each body's joint points joined to its centre of mass (a top's stem).
@@ -185,12 +190,13 @@
     D.e.forEach(function (e) {
       lineItems(dotAt[e[0]], dotAt[e[1]], e[2] ? '#777777' : INK, e[2] ? 1.5 : 3, P, items);
     });
-    dotAt.forEach(function (p) {
-      const q = P.at(p);
-      items.push({ depth: q[2] - 1e-3 * R, kind: 'ball', at: q, r: 0.018 * R, fill: INK });
-    });
     items.sort(function (a, b) { return b.depth - a.depth; });
     items.forEach(function (it) { paint(it, P); });
+    // The joint points last, over everything (they lie at the ends of
+    // bodies, inside their boxes), far ones first.
+    dotAt.map(P.at).sort(function (a, b) { return b[2] - a[2]; }).forEach(function (q) {
+      paint({ kind: 'ball', at: q, r: 0.018 * R, fill: INK }, P);
+    });
   }
 
   // One item on the canvas.

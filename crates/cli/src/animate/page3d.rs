@@ -144,8 +144,8 @@ fn extent(model: &Model3d<'_>, frames: &Results) -> ([f64; 3], f64) {
         return ([0.0; 3], 1.0);
     }
     let centre: [f64; 3] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
-    let half = (0..3).map(|k| hi[k] - centre[k]).fold(0.0, f64::max);
-    let r = (half * 3f64.sqrt()).max(half) + reach;
+    let half = (0..3).map(|k| (hi[k] - centre[k]).powi(2)).sum::<f64>().sqrt();
+    let r = half + reach;
     (centre, if r > 1e-9 { r } else { 1.0 })
 }
 

@@ -348,6 +348,50 @@ mod tests {
         (SpatialFigure::new(sys.sketch(), Projection::Xy), u)
     }
 
+    /// A cube of half side 0.5 m at (1, 2, 3), unturned, as a solid.
+    fn cube(projection: Projection) -> (SpatialFigure, Vec<f64>) {
+        let (figure, _) = bar();
+        let h = [[0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0, 0.5]];
+        let mut figure = figure.with_solids(vec![Solid { half_axes: h }]);
+        figure.projection = projection;
+        (figure, vec![1.0, 2.0, 3.0, 1.0, 0.0, 0.0, 0.0])
+    }
+
+    /// Seen from the front (`xz`, looking along +y) a cube shows its −y face
+    /// only: the square x ∈ [0.5, 1.5], z ∈ [2.5, 3.5], lit by
+    /// l = (−0.4, −1, 0.6)/√1.52 at 0.3 + 0.7 (n·l) = 0.3 + 0.7/√1.52.
+    /// Obliquely (from the front, above, right) it shows −y, +x and +z.
+    #[test]
+    fn a_solid_shows_the_faces_toward_the_viewer_lit_by_their_angle() {
+        let (front, u) = cube(Projection::Xz);
+        let faces = front.faces(&u);
+        assert_eq!(faces.len(), 1, "{faces:?}");
+        let mut corners = faces[0].corners.clone();
+        corners.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+        let want = [[0.5, 2.5], [0.5, 3.5], [1.5, 2.5], [1.5, 3.5]];
+        for (p, q) in corners.iter().zip(want) {
+            assert!(close(*p, q), "{corners:?}");
+        }
+        let lit = 0.3 + 0.7 / 1.52f64.sqrt();
+        assert!((faces[0].brightness - lit).abs() < 1e-12, "{faces:?}");
+        // Depth along +y: the face's centre at y = 1.5.
+        assert!((faces[0].depth - 1.5).abs() < 1e-12);
+        let (oblique, u) = cube(Projection::Oblique);
+        let faces = oblique.faces(&u);
+        assert_eq!(faces.len(), 3, "{faces:?}");
+        // The top face (+z, centre (1, 2, 3.5)) and the right face (+x,
+        // centre (1.5, 2, 3)) in the picture: their centres projected.
+        let centre = |f: &Face| {
+            let n = f.corners.len() as f64;
+            let s = f.corners.iter().fold([0.0, 0.0], |a, p| [a[0] + p[0], a[1] + p[1]]);
+            [s[0] / n, s[1] / n]
+        };
+        for c in [[1.0, 2.0, 3.5], [1.5, 2.0, 3.0], [1.0, 1.5, 3.0]] {
+            let p = Projection::Oblique.project(c);
+            assert!(faces.iter().any(|f| close(centre(f), p)), "{c:?}");
+        }
+    }
+
     #[test]
     fn body_points_turn_with_the_body_and_are_projected() {
         let (figure, u) = bar();
