@@ -271,7 +271,12 @@ fn a_spatial_body_is_a_shaded_box_of_its_inertia() {
     let shaded = svg_points(&page, &["<polygon", "fill=\"#1b679c\""]);
     assert_eq!(shaded, faces, "the face's colour");
     let (h, w) = (0.546_35, 0.038_73);
-    let world = [[1.0 - h, 1.0 - w], [1.0 + h, 1.0 - w], [1.0 - h, 1.0 + w], [1.0 + h, 1.0 + w]];
+    let world = [
+        [1.0 - h, 1.0 - w],
+        [1.0 + h, 1.0 - w],
+        [1.0 - h, 1.0 + w],
+        [1.0 + h, 1.0 + w],
+    ];
     let mut corners = faces[0].clone();
     // In the order of `world`: left to right, then bottom (larger y px) first.
     corners.sort_by(|p, q| p[1].total_cmp(&q[1]).reverse().then(p[0].total_cmp(&q[0])));

@@ -46,7 +46,10 @@ fn the_3d_page_is_self_contained_and_escapes_names() {
         assert!(!page.contains(outside), "the page refers to {outside}");
     }
     assert!(page.contains("<canvas id=\"view\""), "no canvas");
-    assert!(page.contains("function rotation(q)"), "the renderer is not inline");
+    assert!(
+        page.contains("function rotation(q)"),
+        "the renderer is not inline"
+    );
     assert!(page.contains("\"v\":[30,20]"), "the oblique view's camera");
     // A body named like markup: escaped in the legend and the fallback
     // drawing, absent from the frames' JSON.
@@ -63,8 +66,15 @@ fn the_3d_page_is_self_contained_and_escapes_names() {
     assert!(ok.status.success(), "{}", text(&ok.stderr));
     let page = std::fs::read_to_string(&html).expect("the page");
     assert!(!page.contains("</script><b>"), "an unescaped name");
-    assert!(page.contains("&lt;/script&gt;&lt;b&gt;&amp;&#39;&quot;"), "the escaped name");
-    assert_eq!(page.matches("</script>").count(), 2, "one data block, one script");
+    assert!(
+        page.contains("&lt;/script&gt;&lt;b&gt;&amp;&#39;&quot;"),
+        "the escaped name"
+    );
+    assert_eq!(
+        page.matches("</script>").count(),
+        2,
+        "one data block, one script"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -170,7 +180,9 @@ fn the_top_page_shows_turns_with_a_drag_and_spins_in_chromium() {
             std::env::var_os("MSTAR_REQUIRE_CHROMIUM").is_none(),
             "MSTAR_REQUIRE_CHROMIUM is set and no chromium, chromium-browser or google-chrome is on PATH"
         );
-        eprintln!("\n*** not run: chromium not found (page3d_chromium.rs; set MSTAR_REQUIRE_CHROMIUM=1 to fail instead) ***\n");
+        eprintln!(
+            "\n*** not run: chromium not found (page3d_chromium.rs; set MSTAR_REQUIRE_CHROMIUM=1 to fail instead) ***\n"
+        );
         return;
     };
     let dir = scratch("page3d-chromium");
@@ -201,7 +213,11 @@ fn the_top_page_shows_turns_with_a_drag_and_spins_in_chromium() {
         body as f64 >= 0.5 * least,
         "{body} pixels in the top's colour, fewer than half of {least:.0}"
     );
-    assert_eq!(top_changes(&first, &again), 0, "the same view twice differs");
+    assert_eq!(
+        top_changes(&first, &again),
+        0,
+        "the same view twice differs"
+    );
     // A quarter turn of a square face about its centre leaves outside the
     // other at least (1 − 0.83) of it at 45° (the overlap is a regular
     // octagon, 2(√2 − 1) = 0.83 of the square); at 0.9 rad of spin (30 rad/s

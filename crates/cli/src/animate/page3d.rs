@@ -51,7 +51,13 @@ pub fn camera(projection: Projection) -> [f64; 2] {
 /// The page for `frames` (at most [`super::html::MAX_FRAMES`]) of `model`;
 /// `scene` in `view` draws the first frame for a browser without script.
 #[must_use]
-pub fn page(model: &Model3d<'_>, scene: &Scene, view: &View, frames: &Results, title: &str) -> String {
+pub fn page(
+    model: &Model3d<'_>,
+    scene: &Scene,
+    view: &View,
+    frames: &Results,
+    title: &str,
+) -> String {
     let mut svg = String::new();
     if let Some(u) = frames.states.first() {
         for item in scene.items(u, view) {
@@ -99,7 +105,11 @@ fn num(out: &mut String, x: f64, decimals: usize) {
     } else {
         &text
     };
-    out.push_str(if text == "-0" || text.is_empty() { "0" } else { text });
+    out.push_str(if text == "-0" || text.is_empty() {
+        "0"
+    } else {
+        text
+    });
 }
 
 /// Numbers joined by commas.
@@ -144,7 +154,10 @@ fn extent(model: &Model3d<'_>, frames: &Results) -> ([f64; 3], f64) {
         return ([0.0; 3], 1.0);
     }
     let centre: [f64; 3] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
-    let half = (0..3).map(|k| (hi[k] - centre[k]).powi(2)).sum::<f64>().sqrt();
+    let half = (0..3)
+        .map(|k| (hi[k] - centre[k]).powi(2))
+        .sum::<f64>()
+        .sqrt();
     let r = half + reach;
     (centre, if r > 1e-9 { r } else { 1.0 })
 }
@@ -185,7 +198,14 @@ fn data(model: &Model3d<'_>, frames: &Results) -> String {
     }
     out.push_str("],\"e\":[");
     for (k, l) in lines.iter().enumerate() {
-        let _ = write!(out, "{}[{},{},{}]", if k > 0 { "," } else { "" }, l[0], l[1], l[2]);
+        let _ = write!(
+            out,
+            "{}[{},{},{}]",
+            if k > 0 { "," } else { "" },
+            l[0],
+            l[1],
+            l[2]
+        );
     }
     out.push_str("],\"f\":[");
     for (k, u) in frames.states.iter().enumerate() {
@@ -212,11 +232,14 @@ fn data(model: &Model3d<'_>, frames: &Results) -> String {
     out
 }
 
-/// The distinct joint points `(body or −1, point in its axes)` and the
-/// lines of rods (0) and springs (1) between two of them.
-#[allow(clippy::type_complexity)]
-fn dots_and_lines(sketch: &SpatialSketch) -> (Vec<(i64, [f64; 3])>, Vec<[usize; 3]>) {
-    let mut dots: Vec<(i64, [f64; 3])> = Vec::new();
+/// A joint point: its body (−1: the ground) and where it is in the body's
+/// axes (the ground's: global), m.
+type Dot = (i64, [f64; 3]);
+
+/// The distinct joint points and the lines of rods (0) and springs (1)
+/// between two of them, `[dot, dot, kind]`.
+fn dots_and_lines(sketch: &SpatialSketch) -> (Vec<Dot>, Vec<[usize; 3]>) {
+    let mut dots: Vec<Dot> = Vec::new();
     let mut lines = Vec::new();
     for e in sketch.elements.iter().filter(|e| dotted(e.kind, e.driver)) {
         let ends = e.ends.map(|end| {

@@ -32,7 +32,7 @@ impl Solid {
     /// The box's half sides, m (the lengths of [`Solid::half_axes`]).
     #[must_use]
     pub fn half_sides(&self) -> [f64; 3] {
-        self.half_axes.map(|a| norm(a))
+        self.half_axes.map(norm)
     }
 
     /// The box's eight corners in body axes, m: corner `k` is
@@ -56,14 +56,20 @@ impl Solid {
 /// body centres and joint points (1 for a model that is a single point).
 #[must_use]
 pub fn spread(sketch: &SpatialSketch, u: &[f64]) -> f64 {
-    let centres = sketch.bodies.iter().map(|b| [u[b.x], u[b.x + 1], u[b.x + 2]]);
+    let centres = sketch
+        .bodies
+        .iter()
+        .map(|b| [u[b.x], u[b.x + 1], u[b.x + 2]]);
     let ends = sketch
         .elements
         .iter()
         .flat_map(|e| e.ends.iter().map(|end| sketch.position(end, u)));
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for p in centres.chain(ends).filter(|p| p.iter().all(|x| x.is_finite())) {
+    for p in centres
+        .chain(ends)
+        .filter(|p| p.iter().all(|x| x.is_finite()))
+    {
         for k in 0..3 {
             lo[k] = lo[k].min(p[k]);
             hi[k] = hi[k].max(p[k]);
@@ -82,12 +88,7 @@ fn norm(a: [f64; 3]) -> f64 {
 /// inertia gives no box (zero mass, a massless body) gets a cube of half
 /// side `fallback`, m.
 #[must_use]
-pub fn solids(
-    sys: &dyn System,
-    sketch: &SpatialSketch,
-    u: &[f64],
-    fallback: f64,
-) -> Vec<Solid> {
+pub fn solids(sys: &dyn System, sketch: &SpatialSketch, u: &[f64], fallback: f64) -> Vec<Solid> {
     let blocks = mass_blocks(sys, sketch, u);
     sketch
         .bodies
@@ -196,7 +197,11 @@ fn mass_and_inertia(block: &[[f64; 7]; 7], p: [f64; 4]) -> (f64, [[f64; 3]; 3]) 
 pub fn box_of(m: f64, j: [[f64; 3]; 3], fallback: f64) -> Solid {
     let (moments, axes) = principal(j);
     let [i1, i2, i3] = moments;
-    let side2 = [6.0 * (i2 + i3 - i1), 6.0 * (i1 + i3 - i2), 6.0 * (i1 + i2 - i3)];
+    let side2 = [
+        6.0 * (i2 + i3 - i1),
+        6.0 * (i1 + i3 - i2),
+        6.0 * (i1 + i2 - i3),
+    ];
     let half = side2.map(|s| {
         let a = (s / m).max(0.0).sqrt();
         if a.is_finite() { 0.5 * a } else { 0.0 }
@@ -298,17 +303,27 @@ mod tests {
                 .find(|&l| (len - want[l]).abs() < 1e-9)
                 .unwrap_or_else(|| panic!("{len} is no half side"));
             let dot: f64 = (0..3).map(|i| axis[i] * r[i][l]).sum();
-            assert!((dot.abs() - want[l]).abs() < 1e-9, "{axis:?} against column {l}");
+            assert!(
+                (dot.abs() - want[l]).abs() < 1e-9,
+                "{axis:?} against column {l}"
+            );
         }
     }
 
     #[test]
     fn degenerate_inertia_gets_a_thickness_or_the_fallback() {
         // A slender rod of 1 kg and 1 m: I = [0, 1/12, 1/12]: a² = 6 (1/6) = 1.
-        let rod = box_of(1.0, [[0.0; 3], [0.0, 1.0 / 12.0, 0.0], [0.0, 0.0, 1.0 / 12.0]], 9.0);
+        let rod = box_of(
+            1.0,
+            [[0.0; 3], [0.0, 1.0 / 12.0, 0.0], [0.0, 0.0, 1.0 / 12.0]],
+            9.0,
+        );
         let h = rod.half_sides();
         assert!((h[0] - 0.5).abs() < 1e-12, "{h:?}");
-        assert!((h[1] - 0.025).abs() < 1e-12 && (h[2] - 0.025).abs() < 1e-12, "{h:?}");
+        assert!(
+            (h[1] - 0.025).abs() < 1e-12 && (h[2] - 0.025).abs() < 1e-12,
+            "{h:?}"
+        );
         // No mass: the fallback cube.
         assert_eq!(box_of(0.0, [[0.0; 3]; 3], 0.1).half_sides(), [0.1; 3]);
         assert_eq!(box_of(f64::NAN, [[1.0; 3]; 3], 0.1).half_sides(), [0.1; 3]);
@@ -334,7 +349,10 @@ mod tests {
             "ball",
             JointSpec {
                 kind: JointType::Spherical,
-                bodies: [mstar::model::spatial::Attach::Ground, mstar::model::spatial::Attach::Body(body)],
+                bodies: [
+                    mstar::model::spatial::Attach::Ground,
+                    mstar::model::spatial::Attach::Body(body),
+                ],
                 points: [[1.0, 2.0, 3.5], [0.0, 0.0, 0.5]],
                 axes: [[0.0, 0.0, 1.0]; 2],
                 length: None,
@@ -347,7 +365,10 @@ mod tests {
         // Body axes are principal: the half axes lie along x, y, z.
         for (i, want) in [0.3, 0.2, 0.1].into_iter().enumerate() {
             assert!((h[i] - want).abs() < 1e-9, "{h:?}");
-            assert!((solids[0].half_axes[i][i].abs() - want).abs() < 1e-9, "{solids:?}");
+            assert!(
+                (solids[0].half_axes[i][i].abs() - want).abs() < 1e-9,
+                "{solids:?}"
+            );
         }
     }
 }

@@ -175,7 +175,8 @@ impl SpatialFigure {
         let r = [u[x], u[x + 1], u[x + 2]];
         let p = [u[x + 3], u[x + 4], u[x + 5], u[x + 6]];
         let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3]).sqrt();
-        if !(n > 0.0) {
+        // (A row of zeros or NaN: no orientation, no box.)
+        if n.is_nan() || n <= 0.0 {
             return;
         }
         let a = rotation_matrix(p.map(|e| e / n));
@@ -199,7 +200,10 @@ impl SpatialFigure {
                 std::array::from_fn(|k| face.iter().map(|&c| corners[c][k]).sum::<f64>() / 4.0);
             out.push(Face {
                 body,
-                corners: face.iter().map(|&c| self.projection.project(corners[c])).collect(),
+                corners: face
+                    .iter()
+                    .map(|&c| self.projection.project(corners[c]))
+                    .collect(),
                 depth: dot(centre, d),
                 brightness: 0.3 + 0.7 * dot(normal, light).max(0.0),
             });
@@ -383,7 +387,10 @@ mod tests {
         // centre (1.5, 2, 3)) in the picture: their centres projected.
         let centre = |f: &Face| {
             let n = f.corners.len() as f64;
-            let s = f.corners.iter().fold([0.0, 0.0], |a, p| [a[0] + p[0], a[1] + p[1]]);
+            let s = f
+                .corners
+                .iter()
+                .fold([0.0, 0.0], |a, p| [a[0] + p[0], a[1] + p[1]]);
             [s[0] / n, s[1] / n]
         };
         for c in [[1.0, 2.0, 3.5], [1.5, 2.0, 3.0], [1.0, 1.5, 3.0]] {

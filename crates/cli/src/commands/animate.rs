@@ -209,8 +209,8 @@ fn figure(
             let fallback = 0.05 * solid::spread(&sketch, &u0);
             let solids = solid::solids(sys, &sketch, &u0, fallback);
             let projection = view.unwrap_or_default();
-            let figure = spatial::SpatialFigure::new(sketch.clone(), projection)
-                .with_solids(solids.clone());
+            let figure =
+                spatial::SpatialFigure::new(sketch.clone(), projection).with_solids(solids.clone());
             let model = Spatial3d {
                 sketch,
                 solids,
