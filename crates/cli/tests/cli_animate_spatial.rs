@@ -282,13 +282,20 @@ fn a_spatial_body_is_a_shaded_box_of_its_inertia() {
     corners.sort_by(|p, q| p[1].total_cmp(&q[1]).reverse().then(p[0].total_cmp(&q[0])));
     one_view(&corners, &world, 0.3).unwrap_or_else(|e| panic!("{e}: {corners:?}"));
     // In the PNG: a quarter of the way along the face, halfway between the
-    // stick figure (7 px wide on the face's middle line) and its edge.
+    // stick figure (7 px wide on the face's middle line, plus a pixel of
+    // anti-aliasing) and the face's 1 px outline.
     let (left, right) = (corners[0], corners[1]);
     let top = corners[2];
     let x = 0.75 * left[0] + 0.25 * right[0];
-    let y = 0.5 * (left[1] + top[1]);
-    let off = 0.5 * (left[1] - top[1]);
-    let pixel = png_pixel(&png, x, y - 0.5 * off);
+    let middle = 0.5 * (left[1] + top[1]);
+    let half = 0.5 * (left[1] - top[1]);
+    assert!(
+        half > 7.0,
+        "the face is {} px high: too thin to probe",
+        2.0 * half
+    );
+    let y = middle - 0.5 * ((3.5 + 1.0) + (half - 1.0));
+    let pixel = png_pixel(&png, x, y);
     assert_eq!(pixel, [27, 103, 156], "at ({x}, {y})");
     let _ = std::fs::remove_dir_all(&dir);
 }

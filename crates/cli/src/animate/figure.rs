@@ -39,6 +39,13 @@ pub trait Figure {
     fn faces(&self, _u: &[f64]) -> Vec<Face> {
         Vec::new()
     }
+
+    /// How far the `body`-th body's solid reaches from its centre of mass at
+    /// `u` along the picture's right and up, m (0 without a solid): the
+    /// view's fit over a long run, without working out every face.
+    fn reach(&self, _body: usize, _u: &[f64]) -> Point {
+        [0.0; 2]
+    }
 }
 
 /// One face of a body's solid in the picture's plane.

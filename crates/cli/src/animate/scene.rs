@@ -285,15 +285,22 @@ impl Scene {
         self.figure.sketch()
     }
 
-    /// The box around every body centre, joint point and ground point over
-    /// the given states (the run: the view stays put while it plays).
+    /// The box around every body centre, joint point, ground point and
+    /// body solid over the given states (the run: the view stays put while
+    /// it plays).
     #[must_use]
     pub fn bounds(&self, states: &[Vec<f64>]) -> Bounds {
         let (f, s) = (&self.figure, self.sketch());
         let mut points: Vec<Point> = self.grounds.clone();
         for u in states {
             points.extend((0..s.bodies.len()).map(|b| f.centre(b, u)));
-            points.extend(f.faces(u).into_iter().flat_map(|face| face.corners));
+            for b in 0..s.bodies.len() {
+                let r = f.reach(b, u);
+                if r != [0.0; 2] {
+                    let c = f.centre(b, u);
+                    points.extend([[c[0] - r[0], c[1] - r[1]], [c[0] + r[0], c[1] + r[1]]]);
+                }
+            }
             for (i, e) in s.elements.iter().enumerate() {
                 let ends = if one_body(e.kind) { 1 } else { 2 };
                 points.extend((0..ends).map(|side| f.end(i, side, u)));

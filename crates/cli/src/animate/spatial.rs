@@ -169,17 +169,22 @@ impl SpatialFigure {
         self
     }
 
+    /// The rotation matrix of the rigid body whose coordinates start at `x`,
+    /// its Euler parameters normalized (interpolated rows are shorter);
+    /// none for a row of zeros or NaN.
+    fn turn(&self, x: usize, u: &[f64]) -> Option<[[f64; 3]; 3]> {
+        let p = [u[x + 3], u[x + 4], u[x + 5], u[x + 6]];
+        let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3]).sqrt();
+        (n > 0.0).then(|| rotation_matrix(p.map(|e| e / n)))
+    }
+
     /// The faces of body `body`'s box that face the viewer at `u`.
     fn body_faces(&self, body: usize, solid: &Solid, u: &[f64], out: &mut Vec<Face>) {
         let x = self.model.bodies[body].x;
         let r = [u[x], u[x + 1], u[x + 2]];
-        let p = [u[x + 3], u[x + 4], u[x + 5], u[x + 6]];
-        let n = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2] + p[3] * p[3]).sqrt();
-        // (A row of zeros or NaN: no orientation, no box.)
-        if n.is_nan() || n <= 0.0 {
+        let Some(a) = self.turn(x, u) else {
             return;
-        }
-        let a = rotation_matrix(p.map(|e| e / n));
+        };
         let turn = |v: [f64; 3]| -> [f64; 3] { std::array::from_fn(|i| dot(a[i], v)) };
         let corners = solid.corners().map(|c| {
             let g = turn(c);
@@ -275,6 +280,23 @@ impl Figure for SpatialFigure {
             }
         }
         out
+    }
+
+    /// A box with half axes `g_i` (global) reaches `Σ_i |P g_i|` from its
+    /// centre along each picture axis, exactly (`P`, the projection, is
+    /// linear).
+    fn reach(&self, body: usize, u: &[f64]) -> Point {
+        let (Some(solid), Some(b)) = (self.solids.get(body), self.model.bodies.get(body)) else {
+            return [0.0; 2];
+        };
+        let Some(a) = self.turn(b.x, u).filter(|_| b.rigid) else {
+            return [0.0; 2];
+        };
+        solid.half_axes.iter().fold([0.0; 2], |r, h| {
+            let g: [f64; 3] = std::array::from_fn(|i| dot(a[i], *h));
+            let p = self.projection.project(g);
+            [r[0] + p[0].abs(), r[1] + p[1].abs()]
+        })
     }
 
     fn columns(&self) -> Vec<(String, usize)> {
@@ -397,6 +419,11 @@ mod tests {
             let p = Projection::Oblique.project(c);
             assert!(faces.iter().any(|f| close(centre(f), p)), "{c:?}");
         }
+        // Its reach: 0.5 m each way from the front; obliquely the y half
+        // axis adds 0.5 (½ cos 30°, ½ sin 30°) m.
+        assert!(close(front.reach(0, &u), [0.5, 0.5]));
+        let c = 0.5 * 30f64.to_radians().cos();
+        assert!(close(oblique.reach(0, &u), [0.5 + 0.5 * c, 0.5 + 0.125]));
     }
 
     #[test]
