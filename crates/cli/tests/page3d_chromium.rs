@@ -6,7 +6,7 @@
 //! on `PATH`. Without one the browser test prints "not run: chromium not
 //! found" and passes, unless `MSTAR_REQUIRE_CHROMIUM` is set (`.ci/run` sets
 //! it when it could install Chromium): then a missing browser fails it.
-//! About 6 s with Chromium (four screenshots of 1 to 2 s each).
+//! About 4 s with Chromium on 2 cores (four screenshots of about 1 s each).
 
 mod common;
 
