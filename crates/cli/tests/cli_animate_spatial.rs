@@ -1,7 +1,9 @@
 //! `mstar animate` on spatial model files: every model of models/spatial
 //! drawn in every output, the four `--view` projections checked point by
-//! point against coordinates worked out by hand, and the errors of `--view`
-//! (an unknown view; a planar file, which is drawn in its own plane).
+//! point against coordinates worked out by hand (in the drawing the 3-D
+//! page carries for a browser without script, the PNG's), a body's shaded
+//! box of its inertia, and the errors of `--view` (an unknown view; a
+//! planar file, which is drawn in its own plane).
 
 mod common;
 
@@ -231,6 +233,83 @@ fn each_view_puts_body_points_where_the_projection_says() {
         one_view(&px, &world[..3 + distinct], 0.3).unwrap_or_else(|e| panic!("{view}: {e}"));
     }
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The bar of [`BAR`] as a solid, seen from the side (`yz`, looking along
+/// −x) in [`STATE`]. Its box by hand: m = 1 kg, I = (0.001, 0.1, 0.1) kg m²
+/// give sides a = √(6 (0.1 + 0.1 − 0.001)) = 1.0927 m and
+/// b = c = √(6 · 0.001) = 0.07746 m. Turned 90° about z, its body −y face
+/// looks along +x, toward the viewer: the only face drawn, y from
+/// 1 ∓ 0.54635, z from 1 ∓ 0.03873. The light l = (1, −0.4, 0.6)/√1.52
+/// (toward the viewer, up, left) meets it at n·l = 1/√1.52: brightness
+/// 0.3 + 0.7/√1.52 = 0.8678, the body colour (31, 119, 180) becomes
+/// (27, 103, 156), #1b679c. The PNG shows that colour inside the face,
+/// off the stick figure drawn over it.
+#[test]
+fn a_spatial_body_is_a_shaded_box_of_its_inertia() {
+    let dir = scratch("animate-solid");
+    let (model_file, csv) = (dir.join("bar.toml"), dir.join("bar.csv"));
+    std::fs::write(&model_file, BAR).expect("write");
+    std::fs::write(&csv, STATE).expect("write");
+    let (html, png) = (dir.join("bar.html"), dir.join("bar.png"));
+    let ok = mstar(&[
+        "animate",
+        &path(&model_file),
+        &path(&csv),
+        "--html",
+        &path(&html),
+        "--png",
+        &path(&png),
+        "--view",
+        "yz",
+    ]);
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+    // The page's drawing for a browser without script is the PNG's.
+    let page = std::fs::read_to_string(&html).expect("the page");
+    let faces = svg_points(&page, &["<polygon", "<title>bar</title>"]);
+    assert_eq!(faces.len(), 1, "{faces:?}");
+    let shaded = svg_points(&page, &["<polygon", "fill=\"#1b679c\""]);
+    assert_eq!(shaded, faces, "the face's colour");
+    let (h, w) = (0.546_35, 0.038_73);
+    let world = [
+        [1.0 - h, 1.0 - w],
+        [1.0 + h, 1.0 - w],
+        [1.0 - h, 1.0 + w],
+        [1.0 + h, 1.0 + w],
+    ];
+    let mut corners = faces[0].clone();
+    // In the order of `world`: left to right, then bottom (larger y px) first.
+    corners.sort_by(|p, q| p[1].total_cmp(&q[1]).reverse().then(p[0].total_cmp(&q[0])));
+    one_view(&corners, &world, 0.3).unwrap_or_else(|e| panic!("{e}: {corners:?}"));
+    // In the PNG: a quarter of the way along the face, halfway between the
+    // stick figure (7 px wide on the face's middle line, plus a pixel of
+    // anti-aliasing) and the face's 1 px outline.
+    let (left, right) = (corners[0], corners[1]);
+    let top = corners[2];
+    let x = 0.75 * left[0] + 0.25 * right[0];
+    let middle = 0.5 * (left[1] + top[1]);
+    let half = 0.5 * (left[1] - top[1]);
+    assert!(
+        half > 7.0,
+        "the face is {} px high: too thin to probe",
+        2.0 * half
+    );
+    let y = middle - 0.5 * ((3.5 + 1.0) + (half - 1.0));
+    let pixel = png_pixel(&png, x, y);
+    assert_eq!(pixel, [27, 103, 156], "at ({x}, {y})");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The RGB of pixel (x, y) of a PNG picture.
+fn png_pixel(file: &Path, x: f64, y: f64) -> [u8; 3] {
+    let bytes = std::fs::read(file).expect("the picture");
+    let decoder = png::Decoder::new(bytes.as_slice());
+    let mut reader = decoder.read_info().expect("a PNG");
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).expect("a frame");
+    let channels = info.color_type.samples();
+    let i = (y.round() as usize * info.width as usize + x.round() as usize) * channels;
+    [buf[i], buf[i + 1], buf[i + 2]]
 }
 
 #[test]

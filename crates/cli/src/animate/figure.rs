@@ -33,6 +33,32 @@ pub trait Figure {
     /// The results columns the drawing reads, each `u:<body>.<axis>` with
     /// its index in `u`.
     fn columns(&self) -> Vec<(String, usize)>;
+
+    /// The faces of the bodies' solids that face the viewer at `u`, in any
+    /// order (the scene sorts them by depth); none for a planar model.
+    fn faces(&self, _u: &[f64]) -> Vec<Face> {
+        Vec::new()
+    }
+
+    /// How far the `body`-th body's solid reaches from its centre of mass at
+    /// `u` along the picture's right and up, m (0 without a solid): the
+    /// view's fit over a long run, without working out every face.
+    fn reach(&self, _body: usize, _u: &[f64]) -> Point {
+        [0.0; 2]
+    }
+}
+
+/// One face of a body's solid in the picture's plane.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Face {
+    /// The body.
+    pub body: usize,
+    /// Its corners, world metres in the picture's plane.
+    pub corners: Vec<Point>,
+    /// How far its centre lies behind the picture, m (larger: farther).
+    pub depth: f64,
+    /// Its brightness in the light, 0 to 1 (Lambert).
+    pub brightness: f64,
 }
 
 /// A planar model: its sketch as it is, each rigid body drawn through the

@@ -90,7 +90,7 @@ pub fn page(scene: &Scene, view: &View, frames: &Results, title: &str) -> String
 
 /// `template` with each `{key}` of `values` replaced, in one pass: text
 /// that was put in is never searched again (a body may be called `{data}`).
-fn fill(template: &str, values: &[(&str, &str)]) -> String {
+pub(crate) fn fill(template: &str, values: &[(&str, &str)]) -> String {
     let mut out = String::with_capacity(template.len());
     let mut rest = template;
     while let Some(open) = rest.find('{') {
@@ -165,7 +165,7 @@ fn data(frames: &Results, items: &[Vec<Item>], moving: &[bool]) -> String {
 
 /// One item as an SVG element; `dynamic` ones are marked `data-d` for the
 /// script, body shapes carry the body's name as a tooltip.
-fn element(out: &mut String, item: &Item, dynamic: bool, scene: &Scene) {
+pub(crate) fn element(out: &mut String, item: &Item, dynamic: bool, scene: &Scene) {
     let points = |out: &mut String, p: &[[f64; 2]]| {
         for (k, q) in p.iter().enumerate() {
             if k > 0 {

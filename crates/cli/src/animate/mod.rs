@@ -1,17 +1,21 @@
 //! `mstar animate`: the mechanism of a model file moving through the results
 //! of `mstar run`, as an animated GIF, a self-contained HTML page, or one
-//! frame as a PNG picture. All three draw the same [`scene`]: each body
-//! through its joint points, springs as zigzags, the ground marked, the time
-//! in a corner (docs/model-format.md, "Animating a run"). A planar model is
-//! drawn in its plane ([`figure`]), a spatial one projected onto the
-//! picture by `--view` ([`spatial`]).
+//! frame as a PNG picture. The GIF, the PNG and a planar model's page draw
+//! the same [`scene`]: each body through its joint points, springs as
+//! zigzags, the ground marked, the time in a corner (docs/model-format.md,
+//! "Animating a run"). A planar model is drawn in its plane ([`figure`]), a
+//! spatial one projected onto the picture by `--view` ([`spatial`]), each
+//! body also as a shaded box of its inertia ([`solid`]); a spatial model's
+//! page is 3-D, drawn in the browser by a script of its own ([`page3d`]).
 
 pub mod figure;
 pub mod geometry;
 pub mod html;
+pub mod page3d;
 pub mod picture;
 pub mod results;
 pub mod scene;
+pub mod solid;
 pub mod spatial;
 
 /// A 1 m bar named `name`, hinged at the origin, lying along +x: the model

@@ -285,14 +285,22 @@ impl Scene {
         self.figure.sketch()
     }
 
-    /// The box around every body centre, joint point and ground point over
-    /// the given states (the run: the view stays put while it plays).
+    /// The box around every body centre, joint point, ground point and
+    /// body solid over the given states (the run: the view stays put while
+    /// it plays).
     #[must_use]
     pub fn bounds(&self, states: &[Vec<f64>]) -> Bounds {
         let (f, s) = (&self.figure, self.sketch());
         let mut points: Vec<Point> = self.grounds.clone();
         for u in states {
             points.extend((0..s.bodies.len()).map(|b| f.centre(b, u)));
+            for b in 0..s.bodies.len() {
+                let r = f.reach(b, u);
+                if r != [0.0; 2] {
+                    let c = f.centre(b, u);
+                    points.extend([[c[0] - r[0], c[1] - r[1]], [c[0] + r[0], c[1] + r[1]]]);
+                }
+            }
             for (i, e) in s.elements.iter().enumerate() {
                 let ends = if one_body(e.kind) { 1 } else { 2 };
                 points.extend((0..ends).map(|side| f.end(i, side, u)));
@@ -396,6 +404,7 @@ impl Scene {
     /// with its centre of mass as a dot; a filled circle (point mass).
     fn body_items(&self, u: &[f64], view: &View, out: &mut Vec<Item>) {
         let k = view.unit;
+        self.face_items(u, view, out);
         for (i, body) in self.sketch().bodies.iter().enumerate() {
             let colour = body_colour(i);
             let centre = view.px(self.figure.centre(i, u));
@@ -422,6 +431,28 @@ impl Scene {
                 shape: Shape::Circle(centre, 2.5 * k),
                 style: Style::fill(INK),
                 body: Some(i),
+            });
+        }
+    }
+}
+
+impl Scene {
+    /// The faces of the bodies' solids (spatial models), far ones first
+    /// (the painter's algorithm), each in its body's colour darkened by its
+    /// angle to the light, with a darker outline.
+    fn face_items(&self, u: &[f64], view: &View, out: &mut Vec<Item>) {
+        let mut faces = self.figure.faces(u);
+        faces.sort_by(|a, b| b.depth.total_cmp(&a.depth));
+        for face in faces {
+            let c = body_colour(face.body);
+            let dim = |f: f64| {
+                let d = |x: u8| (f64::from(x) * f).round().clamp(0.0, 255.0) as u8;
+                Colour(d(c.0), d(c.1), d(c.2))
+            };
+            out.push(Item {
+                shape: Shape::Polygon(face.corners.into_iter().map(|p| view.px(p)).collect()),
+                style: Style::stroke(dim(0.45), view.unit).with_fill(dim(face.brightness), 1.0),
+                body: Some(face.body),
             });
         }
     }

@@ -10,9 +10,11 @@ use mstar::newmark::Short;
 
 use crate::animate::figure::{Figure, PlanarFigure};
 use crate::animate::html;
+use crate::animate::page3d::{self, Model3d};
 use crate::animate::picture::{self, Canvas};
 use crate::animate::results::{self, Results};
 use crate::animate::scene::{Scene, View};
+use crate::animate::solid::{self, Solid};
 use crate::animate::spatial::{self, Projection};
 
 /// Arguments of `mstar animate`.
@@ -32,8 +34,9 @@ pub struct AnimateArgs {
     /// Write an animated GIF (looping) to this file.
     #[arg(long, value_name = "OUT.gif")]
     gif: Option<PathBuf>,
-    /// Write one self-contained HTML page (inline SVG and script, play/pause,
-    /// time slider, speed) to this file.
+    /// Write one self-contained HTML page (play/pause, time slider, speed;
+    /// a spatial model in 3-D: drag to turn, wheel to zoom, shift-drag to
+    /// pan) to this file.
     #[arg(long, value_name = "OUT.html")]
     html: Option<PathBuf>,
     /// Write one frame (the one at --at) as a PNG picture to this file.
@@ -129,15 +132,15 @@ pub fn animate(args: &AnimateArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let figure = match figure(args, &file.mechanism) {
-        Ok(figure) => figure,
+    let drawing = match figure(args, &file.mechanism) {
+        Ok(drawing) => drawing,
         Err(e) => {
             note!("error: {e}");
             return ExitCode::from(2);
         }
     };
     let n_coords = file.mechanism.system().n_coords();
-    match render(args, figure, n_coords) {
+    match render(args, drawing, n_coords) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if e.downcast_ref::<crate::signals::Interrupted>().is_some() => {
             ExitCode::from(crate::output::exit_code(Err(e), false, 1))
@@ -179,24 +182,51 @@ fn check_outputs(args: &AnimateArgs) -> Result<()> {
     Ok(())
 }
 
+/// A spatial model for the 3-D page: its sketch, each body's solid and the
+/// first view.
+struct Spatial3d {
+    sketch: mstar::model::spatial::SpatialSketch,
+    solids: Vec<Solid>,
+    projection: Projection,
+}
+
 /// The mechanism as drawn: a planar one in its plane (which takes no
-/// `--view`), a spatial one through `--view`.
-fn figure(args: &AnimateArgs, mechanism: &Mechanism) -> Result<Box<dyn Figure>> {
+/// `--view`), a spatial one through `--view`, its bodies as solids (and in
+/// 3-D on the page).
+fn figure(
+    args: &AnimateArgs,
+    mechanism: &Mechanism,
+) -> Result<(Box<dyn Figure>, Option<Spatial3d>)> {
     match (mechanism, args.view) {
-        (Mechanism::Planar(sys), None) => Ok(Box::new(PlanarFigure::new(sys.sketch()))),
+        (Mechanism::Planar(sys), None) => Ok((Box::new(PlanarFigure::new(sys.sketch())), None)),
         (Mechanism::Planar(_), Some(_)) => bail!(
             "--view is for spatial models: {} is planar and is drawn in its own plane (x right, y up)",
             args.model.display()
         ),
-        (Mechanism::Spatial(sys), view) => Ok(Box::new(spatial::SpatialFigure::new(
-            sys.sketch(),
-            view.unwrap_or_default(),
-        ))),
+        (Mechanism::Spatial(sys), view) => {
+            let sketch = sys.sketch();
+            let u0 = sys.initial_position();
+            let fallback = 0.05 * solid::spread(&sketch, &u0);
+            let solids = solid::solids(sys, &sketch, &u0, fallback);
+            let projection = view.unwrap_or_default();
+            let figure =
+                spatial::SpatialFigure::new(sketch.clone(), projection).with_solids(solids.clone());
+            let model = Spatial3d {
+                sketch,
+                solids,
+                projection,
+            };
+            Ok((Box::new(figure), Some(model)))
+        }
     }
 }
 
 /// Reads the results and writes each output asked for.
-fn render(args: &AnimateArgs, figure: Box<dyn Figure>, n_coords: usize) -> Result<()> {
+fn render(
+    args: &AnimateArgs,
+    (figure, model3d): (Box<dyn Figure>, Option<Spatial3d>),
+    n_coords: usize,
+) -> Result<()> {
     let run = results::read(&args.results, &figure.columns(), n_coords)?;
     let scene = Scene::new(figure, &run.states);
     let view = View::fit(scene.bounds(&run.states), args.size.width, args.size.height);
@@ -209,7 +239,7 @@ fn render(args: &AnimateArgs, figure: Box<dyn Figure>, n_coords: usize) -> Resul
         GifPlan::new(t1 - t0, args).check(view.width, view.height)?;
     }
     if let Some(path) = &args.html {
-        write_html(path, args, &canvas, &run)?;
+        write_html(path, args, &canvas, model3d.as_ref(), &run)?;
     }
     if let Some(path) = &args.png {
         let (t0, t1) = run.span();
@@ -243,7 +273,13 @@ fn file_name(path: &Path) -> String {
     )
 }
 
-fn write_html(path: &Path, args: &AnimateArgs, canvas: &Canvas<'_>, run: &Results) -> Result<()> {
+fn write_html(
+    path: &Path,
+    args: &AnimateArgs,
+    canvas: &Canvas<'_>,
+    model3d: Option<&Spatial3d>,
+    run: &Results,
+) -> Result<()> {
     let frames = run.at_most(html::MAX_FRAMES);
     let (t0, t1) = run.span();
     let title = format!(
@@ -254,7 +290,17 @@ fn write_html(path: &Path, args: &AnimateArgs, canvas: &Canvas<'_>, run: &Result
         Short(t1),
         frames.times.len()
     );
-    let page = html::page(canvas.scene, &canvas.view, &frames, &title);
+    let page = match model3d {
+        Some(m) => {
+            let model = Model3d {
+                sketch: &m.sketch,
+                solids: &m.solids,
+                projection: m.projection,
+            };
+            page3d::page(&model, canvas.scene, &canvas.view, &frames, &title)
+        }
+        None => html::page(canvas.scene, &canvas.view, &frames, &title),
+    };
     mstar::csv::write_atomically(path, page.as_bytes())?;
     say!(
         "wrote {} ({} frames, {} kB)",
