@@ -40,6 +40,7 @@ mod node;
 mod planar;
 mod settings;
 mod spatial;
+mod urdf;
 
 use std::path::Path;
 
@@ -107,15 +108,19 @@ pub enum Format {
     Toml,
     /// JSON (`.json`).
     Json,
+    /// A URDF robot description (`.urdf`, XML), read as the
+    /// `mstar.spatial/1` model it means ([`convert_urdf`]).
+    Urdf,
 }
 
 impl Format {
-    /// The format of `path` from its extension: `.json` is JSON, anything
-    /// else TOML.
+    /// The format of `path` from its extension: `.json` is JSON, `.urdf`
+    /// URDF, anything else TOML.
     #[must_use]
     pub fn of(path: &Path) -> Self {
         match path.extension().and_then(|e| e.to_str()) {
             Some(e) if e.eq_ignore_ascii_case("json") => Self::Json,
+            Some(e) if e.eq_ignore_ascii_case("urdf") => Self::Urdf,
             _ => Self::Toml,
         }
     }
@@ -307,17 +312,28 @@ impl MechanismFile {
         format: Format,
         overrides: &[String],
     ) -> Result<Self, FileError> {
-        let mut root = match format {
-            Format::Toml => node::parse_toml(text, origin)?,
-            Format::Json => node::parse_json(text, origin)?,
+        let doc = Doc { origin, text };
+        let (mut root, mut notes) = match format {
+            Format::Toml => (node::parse_toml(text, origin)?, Vec::new()),
+            Format::Json => (node::parse_json(text, origin)?, Vec::new()),
+            Format::Urdf => urdf::read(text, origin)?,
         };
+        // A spatial file that starts from a URDF (`urdf = "arm.urdf"`):
+        // expanded first, so that overrides reach the URDF's bodies too.
+        if is_spatial(&root)
+            && let Some(expanded) = urdf::expand(doc, &root)?
+        {
+            (root, notes) = expanded;
+        }
         for o in overrides {
             settings::apply_override(&mut root, o).map_err(|why| {
                 FileError::unplaced(origin, format!("--set {o}: {why}")).of_override()
             })?;
         }
-        let doc = Doc { origin, text };
-        read(doc, &root)
+        let mut file = read(doc, &root)?;
+        // The URDF's notes first: they are about what the model is made of.
+        file.warnings.splice(0..0, notes);
+        Ok(file)
     }
 }
 
@@ -340,6 +356,22 @@ impl Simulation {
         let doc = Doc { origin, text: "" };
         Ok(settings::read(doc, &root, false)?.0)
     }
+}
+
+/// The `mstar.spatial/1` model file of the URDF robot `text` (the file
+/// `origin`, named in errors and in the document's first comment), and
+/// one note for each kind of URDF element read and ignored (`<limit>`,
+/// `<visual>`, …) and for each massless link left out, each
+/// `FILE:LINE:COLUMN: what`. Reading the document gives the model
+/// [`MechanismFile::load`] reads from the URDF, bit for bit.
+///
+/// # Errors
+/// [`FileError`] for malformed XML (`FILE:LINE:COLUMN`), a joint type other
+/// than revolute, continuous, prismatic or fixed, a joint naming a link the
+/// file does not have, a cycle, two root links, a massless link between
+/// moving joints, or a name given to a link and a joint.
+pub fn convert_urdf(text: &str, origin: &str) -> Result<(String, Vec<String>), FileError> {
+    urdf::convert(text, origin)
 }
 
 /// Whether the document says `format = "mstar.spatial/1"`.
