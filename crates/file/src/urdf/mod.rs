@@ -220,3 +220,6 @@ fn check_initial(
         ),
     ))
 }
+
+#[cfg(test)]
+mod tests;

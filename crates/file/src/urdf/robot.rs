@@ -107,7 +107,8 @@ struct Reader<'t> {
     origin: &'t str,
     doc: &'t roxmltree::Document<'t>,
     noted: HashSet<String>,
-    notes: Vec<String>,
+    /// The notes, with their places (sorted by place at the end).
+    notes: Vec<(Place, String)>,
 }
 
 type XNode<'a, 't> = roxmltree::Node<'a, 't>;
@@ -154,9 +155,12 @@ impl Reader<'_> {
             .find(|(t, _)| *t == tag)
             .map_or("not part of what mstar reads (links, inertials, joints)", |(_, w)| *w);
         let (line, column) = self.place(node.range().start);
-        self.notes.push(format!(
-            "{}:{line}:{column}: <{tag}>: ignored (each one in the file): {why}",
-            self.origin
+        self.notes.push((
+            (line, column),
+            format!(
+                "{}:{line}:{column}: <{tag}>: ignored (each one in the file): {why}",
+                self.origin
+            ),
         ));
     }
 
@@ -282,13 +286,15 @@ pub(crate) fn parse(text: &str, origin: &str) -> Result<Robot, FileError> {
         joints.push(joint);
     }
     let (root, children) = tree(&r, top, &links, &joints)?;
+    // In the order of the file (joints are read after the links).
+    r.notes.sort_by_key(|(place, _)| *place);
     Ok(Robot {
         origin: origin.to_string(),
         links,
         joints,
         root,
         children,
-        notes: r.notes,
+        notes: r.notes.into_iter().map(|(_, note)| note).collect(),
     })
 }
 
