@@ -7,7 +7,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{mstar, model, scratch, text};
+use common::{model, mstar, scratch, text};
 
 /// The columns of a CSV file by name.
 fn columns(path: &Path) -> std::collections::HashMap<String, Vec<f64>> {
@@ -30,7 +30,9 @@ fn columns(path: &Path) -> std::collections::HashMap<String, Vec<f64>> {
 
 /// The reference's data file.
 fn data(name: &str) -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
 }
 
 /// The largest distance over the reference's rows (every 0.01 s) between
@@ -57,7 +59,10 @@ fn error_against_pinocchio(model_file: &str, reference: &str, h: f64, dir: &Path
             let ours = &run[&format!("u:{body}.{axis}")];
             let theirs = &pin[&format!("{body}.{axis}")];
             assert_eq!(theirs.len(), 101);
-            assert!((ours[0] - theirs[0]).abs() < 1e-14, "{body}.{axis} at t = 0");
+            assert!(
+                (ours[0] - theirs[0]).abs() < 1e-14,
+                "{body}.{axis} at t = 0"
+            );
             for (k, x) in theirs.iter().enumerate() {
                 worst = worst.max((ours[k * every] - x).abs());
             }
@@ -169,10 +174,14 @@ fn four_bar_closed_in_toml_has_one_degree_of_freedom_and_holds() {
     ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let cols = columns(&csv);
-    let worst = cols["constraint"].iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let worst = cols["constraint"]
+        .iter()
+        .fold(0.0_f64, |m, x| m.max(x.abs()));
     assert!(worst <= 1e-12, "constraint {worst:e}");
     // It moves: the crank turns (e2 = sin(θ/2) of its turn about y).
-    let turned = cols["u:crank.e2"].iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    let turned = cols["u:crank.e2"]
+        .iter()
+        .fold(0.0_f64, |m, x| m.max(x.abs()));
     assert!(turned > 0.05, "{turned}");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -184,7 +193,14 @@ fn animate_draws_a_urdf_run() {
     let csv = dir.join("arm.csv");
     let png = dir.join("arm.png");
     let urdf = model("urdf/two-link-arm.urdf");
-    let o = mstar(&["run", &urdf, "--t-end", "0.1", "--out", csv.to_str().expect("utf-8")]);
+    let o = mstar(&[
+        "run",
+        &urdf,
+        "--t-end",
+        "0.1",
+        "--out",
+        csv.to_str().expect("utf-8"),
+    ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let o = mstar(&[
         "animate",
@@ -206,9 +222,25 @@ fn malformed_urdfs_are_errors_with_a_place() {
     let arm = std::fs::read_to_string(model("urdf/two-link-arm.urdf")).expect("the URDF");
     let cases = [
         // The close tag of the elbow joint dropped: <robot> closes it (line 57).
-        (arm.replacen("  </joint>\n\n  <joint name=\"tool_mount\"", "\n  <joint name=\"tool_mount\"", 1), "XML syntax"),
-        (arm.replace("type=\"continuous\"", "type=\"floating\""), "joint 'elbow': type: 'floating' is not supported"),
-        (arm.replace("<parent link=\"upper_arm\"/>", "<parent link=\"upperarm\"/>"), "joint 'elbow': parent: no link is called 'upperarm'"),
+        (
+            arm.replacen(
+                "  </joint>\n\n  <joint name=\"tool_mount\"",
+                "\n  <joint name=\"tool_mount\"",
+                1,
+            ),
+            "XML syntax",
+        ),
+        (
+            arm.replace("type=\"continuous\"", "type=\"floating\""),
+            "joint 'elbow': type: 'floating' is not supported",
+        ),
+        (
+            arm.replace(
+                "<parent link=\"upper_arm\"/>",
+                "<parent link=\"upperarm\"/>",
+            ),
+            "joint 'elbow': parent: no link is called 'upperarm'",
+        ),
     ];
     for (k, (body, says)) in cases.iter().enumerate() {
         let path = dir.join(format!("bad-{k}.urdf"));
@@ -219,7 +251,10 @@ fn malformed_urdfs_are_errors_with_a_place() {
             let err = text(&o.stderr);
             assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
             let place = format!("error: {p}:");
-            let rest = err.split(&place).nth(1).unwrap_or_else(|| panic!("{args:?}: {err}"));
+            let rest = err
+                .split(&place)
+                .nth(1)
+                .unwrap_or_else(|| panic!("{args:?}: {err}"));
             // LINE:COLUMN: then the message.
             let mut parts = rest.splitn(3, ':');
             for _ in 0..2 {

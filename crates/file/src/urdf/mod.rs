@@ -46,7 +46,8 @@ pub(crate) fn read(text: &str, origin: &str) -> Result<(Node, Vec<String>), File
 
 /// The tree of a converted `document`, without places.
 fn tree(document: &str, origin: &str) -> Result<Node, FileError> {
-    let mut root = node::parse_toml(document, origin).map_err(|e| FileError { place: None, ..e })?;
+    let mut root =
+        node::parse_toml(document, origin).map_err(|e| FileError { place: None, ..e })?;
     unplace(&mut root);
     Ok(root)
 }
@@ -121,7 +122,10 @@ pub(crate) fn expand(doc: Doc<'_>, root: &Node) -> Result<Option<(Node, Vec<Stri
         .join(file);
     let source = path.display().to_string();
     let text = std::fs::read_to_string(&path).map_err(|e| {
-        doc.error(at, format!("the model: urdf: cannot read the URDF file {source}: {e}"))
+        doc.error(
+            at,
+            format!("the model: urdf: cannot read the URDF file {source}: {e}"),
+        )
     })?;
     let robot = robot::parse(&text, &source)?;
     let initial = read_initial(doc, root)?;
@@ -151,7 +155,8 @@ fn merged(entries: &[Entry], urdf: Node) -> Node {
         }
         let mut e = e.clone();
         if let Some(k) = from_urdf.iter().position(|u| u.key == e.key)
-            && let (Value::List(first), Value::List(own)) = (from_urdf.remove(k).node.value, &mut e.node.value)
+            && let (Value::List(first), Value::List(own)) =
+                (from_urdf.remove(k).node.value, &mut e.node.value)
         {
             own.splice(0..0, first);
         }
@@ -165,13 +170,17 @@ fn merged(entries: &[Entry], urdf: Node) -> Node {
     }
 }
 
+/// An `[[initial]]` table: the joint's name, its state, and where the name
+/// is written.
+type Initial = (String, JointState, Option<Range<usize>>);
+
 /// The `[[initial]]` tables of a wrapper: joint name, state, and where the
 /// name is written. Each has `joint`, `position` (default 0) and
 /// `velocity` (default 0), and names its joint once.
-fn read_initial(doc: Doc<'_>, root: &Node) -> Result<Vec<(String, JointState, Option<Range<usize>>)>, FileError> {
+fn read_initial(doc: Doc<'_>, root: &Node) -> Result<Vec<Initial>, FileError> {
     let mut top = Fields::of(doc, root, "the model".to_string())?;
     let items = top.optional("initial", list)?.unwrap_or(&[]);
-    let mut out: Vec<(String, JointState, Option<Range<usize>>)> = Vec::new();
+    let mut out: Vec<Initial> = Vec::new();
     for (k, node) in items.iter().enumerate() {
         let mut f = Fields::of(doc, node, format!("initial #{}", k + 1))?;
         let joint = f.required("joint", string)?.to_string();
@@ -180,9 +189,19 @@ fn read_initial(doc: Doc<'_>, root: &Node) -> Result<Vec<(String, JointState, Op
         f.finish(&["joint", "position", "velocity"])?;
         let e = f.read_entry("joint")?;
         if out.iter().any(|(n, _, _)| *n == joint) {
-            return Err(f.bad(e, format!("joint '{}' has an [[initial]] already", joint.escape_debug())));
+            return Err(f.bad(
+                e,
+                format!(
+                    "joint '{}' has an [[initial]] already",
+                    joint.escape_debug()
+                ),
+            ));
         }
-        out.push((joint, JointState { position, velocity }, e.node.span.clone()));
+        out.push((
+            joint,
+            JointState { position, velocity },
+            e.node.span.clone(),
+        ));
     }
     Ok(out)
 }

@@ -80,7 +80,10 @@ pub(crate) struct Robot {
 
 /// What an ignored element is, and why it does not matter to mstar.
 const IGNORED: [(&str, &str); 8] = [
-    ("limit", "joint limits are not modelled: the joint moves freely"),
+    (
+        "limit",
+        "joint limits are not modelled: the joint moves freely",
+    ),
     (
         "dynamics",
         "joint damping and friction are not modelled (a [[force]] of type rotational-spring-damper adds them in a mstar.spatial/1 file)",
@@ -89,10 +92,7 @@ const IGNORED: [(&str, &str); 8] = [
         "mimic",
         "the joint moves on its own: mimic couplings are not modelled",
     ),
-    (
-        "safety_controller",
-        "safety controllers are not modelled",
-    ),
+    ("safety_controller", "safety controllers are not modelled"),
     ("calibration", "calibration is not used"),
     (
         "transmission",
@@ -150,10 +150,10 @@ impl Reader<'_> {
         if !self.noted.insert(tag.to_string()) {
             return;
         }
-        let why = IGNORED
-            .iter()
-            .find(|(t, _)| *t == tag)
-            .map_or("not part of what mstar reads (links, inertials, joints)", |(_, w)| *w);
+        let why = IGNORED.iter().find(|(t, _)| *t == tag).map_or(
+            "not part of what mstar reads (links, inertials, joints)",
+            |(_, w)| *w,
+        );
         let (line, column) = self.place(node.range().start);
         self.notes.push((
             (line, column),
@@ -165,13 +165,14 @@ impl Reader<'_> {
     }
 
     /// The attribute `key` of `node`, required.
-    fn required<'a>(&self, node: XNode<'a, '_>, what: &str, key: &str) -> Result<&'a str, FileError> {
-        node.attribute(key).ok_or_else(|| {
-            self.error(
-                node,
-                format!("{what}: the attribute '{key}' is missing"),
-            )
-        })
+    fn required<'a>(
+        &self,
+        node: XNode<'a, '_>,
+        what: &str,
+        key: &str,
+    ) -> Result<&'a str, FileError> {
+        node.attribute(key)
+            .ok_or_else(|| self.error(node, format!("{what}: the attribute '{key}' is missing")))
     }
 
     /// The attribute `key` of `node` as numbers, `N` of them separated by
@@ -281,7 +282,13 @@ pub(crate) fn parse(text: &str, origin: &str) -> Result<Robot, FileError> {
     for node in joint_nodes {
         let joint = read_joint(&mut r, node, &index, &links)?;
         if !names.insert(joint.name.clone()) {
-            return Err(r.error(node, format!("{}: a second joint of this name", described("joint", &joint.name))));
+            return Err(r.error(
+                node,
+                format!(
+                    "{}: a second joint of this name",
+                    described("joint", &joint.name)
+                ),
+            ));
         }
         joints.push(joint);
     }
@@ -345,8 +352,12 @@ fn read_inertial(
     what: &str,
 ) -> Result<Option<Inertial>, FileError> {
     let origin = r.origin(node, what)?;
-    let mass_node = child(node, "mass")
-        .ok_or_else(|| r.error(node, format!("{what}: inertial: the element <mass value=\"..\"/> is missing")))?;
+    let mass_node = child(node, "mass").ok_or_else(|| {
+        r.error(
+            node,
+            format!("{what}: inertial: the element <mass value=\"..\"/> is missing"),
+        )
+    })?;
     let what_mass = format!("{what}: mass");
     let [mass] = r.numbers::<1>(mass_node, &what_mass, "value", [f64::NAN])?;
     if mass.is_nan() || mass < 0.0 {
@@ -360,12 +371,18 @@ fn read_inertial(
         return Ok(None);
     }
     let i_node = child(node, "inertia").ok_or_else(|| {
-        r.error(node, format!("{what}: inertial: the element <inertia ixx=\"..\" .. izz=\"..\"/> is missing"))
+        r.error(
+            node,
+            format!("{what}: inertial: the element <inertia ixx=\"..\" .. izz=\"..\"/> is missing"),
+        )
     })?;
     let what_i = format!("{what}: inertia");
     let get = |key: &str| -> Result<f64, FileError> {
         if i_node.attribute(key).is_none() {
-            return Err(r.error(i_node, format!("{what_i}: the attribute '{key}' is missing")));
+            return Err(r.error(
+                i_node,
+                format!("{what_i}: the attribute '{key}' is missing"),
+            ));
         }
         Ok(r.numbers::<1>(i_node, &what_i, key, [0.0])?[0])
     };
@@ -401,7 +418,10 @@ fn read_joint(
     };
     let link = |tag: &str| -> Result<usize, FileError> {
         let Some(c) = child(node, tag) else {
-            return Err(r.error(node, format!("{what}: the element <{tag} link=\"..\"/> is missing")));
+            return Err(r.error(
+                node,
+                format!("{what}: the element <{tag} link=\"..\"/> is missing"),
+            ));
         };
         let wanted = r.required(c, &format!("{what}: {tag}"), "link")?;
         index.get(wanted).copied().ok_or_else(|| {
@@ -413,7 +433,11 @@ fn read_joint(
                 format!(
                     "{what}: {tag}: no link is called '{}' (known: {})",
                     wanted.escape_debug(),
-                    if known.is_empty() { "none".to_string() } else { known.join(", ") }
+                    if known.is_empty() {
+                        "none".to_string()
+                    } else {
+                        known.join(", ")
+                    }
                 ),
             )
         })
@@ -444,8 +468,12 @@ fn read_joint(
 /// The message for a joint type mstar does not import.
 fn unsupported(what: &str, kind: &str) -> String {
     let hint = match kind {
-        "floating" => "a floating base is a body without joints: convert the file without this joint (mstar convert) and add the base as a [[body]]",
-        "planar" => "model it as two prismatic joints and a revolute joint through links with mass, or convert the file (mstar convert) and join the bodies in TOML",
+        "floating" => {
+            "a floating base is a body without joints: convert the file without this joint (mstar convert) and add the base as a [[body]]"
+        }
+        "planar" => {
+            "model it as two prismatic joints and a revolute joint through links with mass, or convert the file (mstar convert) and join the bodies in TOML"
+        }
         _ => "URDF's joint types are revolute, continuous, prismatic, fixed, floating and planar",
     };
     format!(
@@ -460,7 +488,11 @@ fn unit_axis(r: &Reader<'_>, node: XNode<'_, '_>, what: &str) -> Result<V3, File
     let a = r.numbers(node, &what, "xyz", [1.0, 0.0, 0.0])?;
     let norm = a.iter().map(|x| x * x).sum::<f64>().sqrt();
     if !(norm > 0.0 && norm.is_finite()) {
-        return Err(r.attribute_error(node, "xyz", format!("{what}: xyz: must not be zero: a direction in the joint frame")));
+        return Err(r.attribute_error(
+            node,
+            "xyz",
+            format!("{what}: xyz: must not be zero: a direction in the joint frame"),
+        ));
     }
     Ok(a.map(|x| x / norm))
 }
@@ -497,7 +529,9 @@ fn tree(
         parent_joint[j.child] = Some(k);
         children[j.parent].push(k);
     }
-    let roots: Vec<usize> = (0..links.len()).filter(|&l| parent_joint[l].is_none()).collect();
+    let roots: Vec<usize> = (0..links.len())
+        .filter(|&l| parent_joint[l].is_none())
+        .collect();
     match roots.as_slice() {
         [root] => match unreached(joints, &children, links.len(), *root) {
             Some(start) => Err(cycle(r, links, joints, &parent_joint, start)),
@@ -553,7 +587,10 @@ fn cycle(
         path.push(l);
     }
     path.reverse();
-    let names: Vec<String> = path.iter().map(|&l| format!("'{}'", links[l].name.escape_debug())).collect();
+    let names: Vec<String> = path
+        .iter()
+        .map(|&l| format!("'{}'", links[l].name.escape_debug()))
+        .collect();
     let first = parent_joint[path[0]].map_or(links[path[0]].place, |j| joints[j].place);
     FileError {
         origin: r.origin.to_string(),

@@ -86,7 +86,13 @@ fn origins_chain_and_massless_links_merge_into_their_parent() {
         "<link name=\"base\"/>{}<link name=\"m\"/>{}{}{}{}",
         link("a", "xyz=\"0.5 0 0\""),
         link("b", "xyz=\"0.5 0 0\""),
-        joint("j1", "revolute", "base", "a", &format!("<origin xyz=\"1 0 0\" rpy=\"0 0 {h}\"/><axis xyz=\"0 0 1\"/>")),
+        joint(
+            "j1",
+            "revolute",
+            "base",
+            "a",
+            &format!("<origin xyz=\"1 0 0\" rpy=\"0 0 {h}\"/><axis xyz=\"0 0 1\"/>")
+        ),
         joint("fix", "fixed", "a", "m", "<origin xyz=\"0 1 0\"/>"),
         joint("j2", "continuous", "m", "b", "<axis xyz=\"0 0 2\"/>"),
     ));
@@ -128,11 +134,16 @@ fn off_diagonal_inertia_is_written_as_a_tensor() {
     );
     let (doc, _) = crate::convert_urdf(&text, "r.urdf").expect("valid");
     assert!(
-        doc.contains("inertia = [[0.02, -0.001, 0.002], [-0.001, 0.03, 0.003], [0.002, 0.003, 0.04]]"),
+        doc.contains(
+            "inertia = [[0.02, -0.001, 0.002], [-0.001, 0.03, 0.003], [0.002, 0.003, 0.04]]"
+        ),
         "{doc}"
     );
     // A root with mass is welded to the ground.
-    assert!(doc.contains("name = \"a_to_ground\"\ntype = \"weld\""), "{doc}");
+    assert!(
+        doc.contains("name = \"a_to_ground\"\ntype = \"weld\""),
+        "{doc}"
+    );
 }
 
 /// `urdf =` with `[[initial]]`: the shoulder at angle θ about y places the
@@ -148,7 +159,13 @@ fn initial_joint_states_place_the_bodies_by_forward_kinematics() {
     let urdf = robot(&format!(
         "<link name=\"base\"/>{}{}",
         link("bar", "xyz=\"0.5 0 0\""),
-        joint("shoulder", "revolute", "base", "bar", "<axis xyz=\"0 1 0\"/>")
+        joint(
+            "shoulder",
+            "revolute",
+            "base",
+            "bar",
+            "<axis xyz=\"0 1 0\"/>"
+        )
     ));
     std::fs::write(dir.join("arm.urdf"), urdf).expect("written");
     let (theta, omega) = (0.3_f64, 2.0_f64);
@@ -159,16 +176,30 @@ fn initial_joint_states_place_the_bodies_by_forward_kinematics() {
     let file = MechanismFile::parse(&wrapper, &origin, Format::Toml).expect("valid");
     let (s, c) = theta.sin_cos();
     let (sh, ch) = (theta / 2.0).sin_cos();
-    close(&pose(&file, "bar"), &[0.5 * c, 0.0, -0.5 * s, ch, 0.0, sh, 0.0]);
+    close(
+        &pose(&file, "bar"),
+        &[0.5 * c, 0.0, -0.5 * s, ch, 0.0, sh, 0.0],
+    );
     close(
         &velocity(&file, "bar"),
-        &[-0.5 * s * omega, 0.0, -0.5 * c * omega, -0.5 * omega * sh, 0.0, 0.5 * omega * ch, 0.0],
+        &[
+            -0.5 * s * omega,
+            0.0,
+            -0.5 * c * omega,
+            -0.5 * omega * sh,
+            0.0,
+            0.5 * omega * ch,
+            0.0,
+        ],
     );
     // An [[initial]] of a joint the URDF does not have: at its name.
     let bad = wrapper.replace("joint = \"shoulder\"", "joint = \"elbow\"");
     let e = MechanismFile::parse(&bad, &origin, Format::Toml).expect_err("no elbow");
     assert_eq!(e.place, Some((5, 9)), "{e}");
-    assert!(e.message.contains("'elbow' is not a joint of the URDF"), "{e}");
+    assert!(
+        e.message.contains("'elbow' is not a joint of the URDF"),
+        "{e}"
+    );
     assert!(e.message.ends_with("(here: shoulder)"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -185,12 +216,20 @@ fn errors_name_the_place_and_the_fix() {
             "XML syntax",
         ),
         (
-            robot(&format!("{base}{}{}", link("a", ""), joint("free", "floating", "base", "a", ""))),
+            robot(&format!(
+                "{base}{}{}",
+                link("a", ""),
+                joint("free", "floating", "base", "a", "")
+            )),
             (3, 1),
             "'floating' is not supported",
         ),
         (
-            robot(&format!("{base}{}{}", link("a", ""), joint("j", "revolute", "base", "arm", ""))),
+            robot(&format!(
+                "{base}{}{}",
+                link("a", ""),
+                joint("j", "revolute", "base", "arm", "")
+            )),
             (3, 1),
             "joint 'j': child: no link is called 'arm' (known: a, base)",
         ),
@@ -221,7 +260,11 @@ fn errors_name_the_place_and_the_fix() {
             "joint 'j1': its child link 'm' has no mass",
         ),
         (
-            robot(&format!("{base}{}{}", link("a", ""), joint("a", "revolute", "base", "a", ""))),
+            robot(&format!(
+                "{base}{}{}",
+                link("a", ""),
+                joint("a", "revolute", "base", "a", "")
+            )),
             (3, 1),
             "'a': a link and a joint",
         ),
@@ -247,7 +290,19 @@ fn ignored_elements_get_one_note_each() {
     ));
     let file = load(&text).expect("valid");
     assert_eq!(file.warnings.len(), 2, "{:?}", file.warnings);
-    assert!(file.warnings[0].starts_with("r.urdf:3:365: "), "{:?}", file.warnings);
-    assert!(file.warnings[0].contains("<limit>: ignored"), "{:?}", file.warnings);
-    assert!(file.warnings[1].contains("<transmission>: ignored"), "{:?}", file.warnings);
+    assert!(
+        file.warnings[0].starts_with("r.urdf:3:365: "),
+        "{:?}",
+        file.warnings
+    );
+    assert!(
+        file.warnings[0].contains("<limit>: ignored"),
+        "{:?}",
+        file.warnings
+    );
+    assert!(
+        file.warnings[1].contains("<transmission>: ignored"),
+        "{:?}",
+        file.warnings
+    );
 }

@@ -87,7 +87,8 @@ pub(crate) fn place(
         for &j in &robot.children[l] {
             let joint = &robot.joints[j];
             let state = initial.get(&joint.name).copied().unwrap_or_default();
-            frames[joint.child] = child_frame(&frames[l], joint.kind, &joint.origin, joint.axis, state);
+            frames[joint.child] =
+                child_frame(&frames[l], joint.kind, &joint.origin, joint.axis, state);
             carriers[joint.child] = carrier(robot, j, carriers[l], &mut notes)?;
             order.push(joint.child);
         }
@@ -133,7 +134,11 @@ fn carrier(
             "joint '{}': its child link '{}' has no mass (no <inertial>, or mass 0) and carries further joints: a {} joint between massless links cannot be merged into a body; give '{}' an <inertial> with a mass, or make the joint fixed",
             joint.name.escape_debug(),
             child.name.escape_debug(),
-            if joint.kind == Kind::Revolute { "revolute" } else { "prismatic" },
+            if joint.kind == Kind::Revolute {
+                "revolute"
+            } else {
+                "prismatic"
+            },
             child.name.escape_debug()
         ),
         in_override: false,
