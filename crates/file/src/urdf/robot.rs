@@ -469,10 +469,10 @@ fn read_joint(
 fn unsupported(what: &str, kind: &str) -> String {
     let hint = match kind {
         "floating" => {
-            "a floating base is a body without joints: convert the file without this joint (mstar convert) and add the base as a [[body]]"
+            "for a fixed base make the joint fixed (a weld); a free body is a [[body]] without joints in a mstar.spatial/1 file"
         }
         "planar" => {
-            "model it as two prismatic joints and a revolute joint through links with mass, or convert the file (mstar convert) and join the bodies in TOML"
+            "model it as two prismatic joints and a revolute joint through links with mass"
         }
         _ => "URDF's joint types are revolute, continuous, prismatic, fixed, floating and planar",
     };
