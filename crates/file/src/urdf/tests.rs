@@ -306,3 +306,36 @@ fn ignored_elements_get_one_note_each() {
         file.warnings
     );
 }
+
+/// A prismatic joint on a turning arm: the arm turns about z at ω (at
+/// angle 0), the slider sits at d along the arm's x moving out at ḋ. Its
+/// centre is at (d, 0, 0) and moves at ḋ x̂ + ω ẑ × d x̂ = (ḋ, ω d, 0); it
+/// turns with the arm, so its Euler parameters (the identity) change at
+/// ṗ = ½ (0, ω ẑ) ⊗ p = (0, 0, 0, ω/2).
+#[test]
+fn prismatic_joints_on_moving_parents_carry_the_transport_velocity() {
+    let dir = std::env::temp_dir().join(format!("mstar-urdf-slider-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("a directory");
+    let urdf = robot(&format!(
+        "<link name=\"base\"/>{}{}{}{}",
+        link("arm", ""),
+        link("slider", ""),
+        joint("turn", "revolute", "base", "arm", "<axis xyz=\"0 0 1\"/>"),
+        joint("slide", "prismatic", "arm", "slider", "")
+    ));
+    std::fs::write(dir.join("slider.urdf"), urdf).expect("written");
+    let (omega, d, d_dot) = (3.0, 0.4, 0.7);
+    let wrapper = format!(
+        "format = \"mstar.spatial/1\"\nurdf = \"slider.urdf\"\n\
+         [[initial]]\njoint = \"turn\"\nvelocity = {omega}\n\
+         [[initial]]\njoint = \"slide\"\nposition = {d}\nvelocity = {d_dot}\n"
+    );
+    let origin = dir.join("slider.toml").display().to_string();
+    let file = MechanismFile::parse(&wrapper, &origin, Format::Toml).expect("valid");
+    close(&pose(&file, "slider"), &[d, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0]);
+    close(
+        &velocity(&file, "slider"),
+        &[d_dot, omega * d, 0.0, 0.0, 0.0, 0.0, omega / 2.0],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
