@@ -32,6 +32,11 @@
 //! Every error names the file, the key and the element, with the line and
 //! column where the format tells them (every TOML value; JSON syntax errors):
 //! `bar.toml:7:8: body 'bar': mass: must be positive, in kg (got -1)`.
+//!
+//! URDF robots (`.urdf`, [`Format::Urdf`]) are read as the
+//! `mstar.spatial/1` document they mean ([`convert_urdf`] writes it), and a
+//! spatial file may start from one (`urdf = "arm.urdf"`); errors in the
+//! URDF name its line and column too.
 
 mod bodies;
 mod fields;
