@@ -471,9 +471,7 @@ fn unsupported(what: &str, kind: &str) -> String {
         "floating" => {
             "for a fixed base make the joint fixed (a weld); a free body is a [[body]] without joints in a mstar.spatial/1 file"
         }
-        "planar" => {
-            "model it as two prismatic joints and a revolute joint through links with mass"
-        }
+        "planar" => "model it as two prismatic joints and a revolute joint through links with mass",
         _ => "URDF's joint types are revolute, continuous, prismatic, fixed, floating and planar",
     };
     format!(
