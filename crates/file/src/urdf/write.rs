@@ -47,8 +47,6 @@ enum Carrier {
 pub(crate) struct Placement {
     frames: Vec<Frame>,
     carriers: Vec<Carrier>,
-    /// The links in tree order (parents first).
-    order: Vec<usize>,
     pub(crate) notes: Vec<String>,
 }
 
@@ -80,6 +78,7 @@ pub(crate) fn place(
     if robot.links[root].inertial.is_some() {
         carriers[root] = Carrier::Body(root);
     }
+    // Breadth first from the root: each link placed after its parent.
     let mut order = vec![root];
     let mut k = 0;
     while let Some(&l) = order.get(k) {
@@ -96,7 +95,6 @@ pub(crate) fn place(
     Ok(Placement {
         frames,
         carriers,
-        order,
         notes,
     })
 }
@@ -284,9 +282,9 @@ impl Placement {
                  gravity = [0.0, 0.0, -9.81]"
             );
         }
-        for &l in &self.order_in_file(robot) {
-            if let (Carrier::Body(_), Some(i)) = (self.carriers[l], &robot.links[l].inertial) {
-                self.write_body(&mut out, &robot.links[l].name, &self.frames[l], i);
+        for (l, link) in robot.links.iter().enumerate() {
+            if let (Carrier::Body(_), Some(i)) = (self.carriers[l], &link.inertial) {
+                self.write_body(&mut out, &link.name, &self.frames[l], i);
             }
         }
         let root = robot.root;
@@ -306,14 +304,6 @@ impl Placement {
             }
         }
         out
-    }
-
-    /// The links in file order (the placement holds them in tree order).
-    fn order_in_file(&self, robot: &Robot) -> Vec<usize> {
-        let mut links = self.order.clone();
-        links.sort_unstable();
-        debug_assert_eq!(links.len(), robot.links.len());
-        links
     }
 
     /// A `[[body]]`: the link's centre of mass, the orientation of its
