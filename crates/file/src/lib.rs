@@ -318,24 +318,32 @@ impl MechanismFile {
         overrides: &[String],
     ) -> Result<Self, FileError> {
         let doc = Doc { origin, text };
-        let (mut root, mut notes) = match format {
-            Format::Toml => (node::parse_toml(text, origin)?, Vec::new()),
-            Format::Json => (node::parse_json(text, origin)?, Vec::new()),
-            Format::Urdf => urdf::read(text, origin)?,
+        let (mut root, mut notes, mut places) = match format {
+            Format::Toml => (node::parse_toml(text, origin)?, Vec::new(), None),
+            Format::Json => (node::parse_json(text, origin)?, Vec::new(), None),
+            Format::Urdf => {
+                let read = urdf::read(text, origin)?;
+                (read.root, read.notes, Some(read.places))
+            }
         };
         // A spatial file that starts from a URDF (`urdf = "arm.urdf"`):
         // expanded first, so that overrides reach the URDF's bodies too.
         if is_spatial(&root)
-            && let Some(expanded) = urdf::expand(doc, &root)?
+            && let Some(read) = urdf::expand(doc, &root)?
         {
-            (root, notes) = expanded;
+            (root, notes, places) = (read.root, read.notes, Some(read.places));
         }
         for o in overrides {
             settings::apply_override(&mut root, o).map_err(|why| {
                 FileError::unplaced(origin, format!("--set {o}: {why}")).of_override()
             })?;
         }
-        let mut file = read(doc, &root)?;
+        // An error in a URDF's body or joint: at the URDF's element (unless
+        // an override may have given the value).
+        let mut file = read(doc, &root).map_err(|e| match &places {
+            Some(p) if overrides.is_empty() => p.locate(e),
+            _ => e,
+        })?;
         // The URDF's notes first: they are about what the model is made of.
         file.warnings.splice(0..0, notes);
         Ok(file)

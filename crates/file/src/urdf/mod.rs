@@ -17,6 +17,45 @@ use crate::FileError;
 use crate::fields::{Doc, Fields, list, number, string};
 use crate::node::{self, Entry, Node, Value};
 
+/// A URDF read as a tree: the tree, the notes, and where the URDF defines
+/// each of its bodies and joints.
+pub(crate) struct Read {
+    pub(crate) root: Node,
+    pub(crate) notes: Vec<String>,
+    pub(crate) places: Places,
+}
+
+/// Where a URDF defines the bodies and joints of its model, for errors the
+/// spatial reader finds in them (the tree has no places of its own).
+pub(crate) struct Places {
+    origin: String,
+    by_name: Vec<(String, (usize, usize))>,
+}
+
+impl Places {
+    /// `e` placed at the URDF element it is about, when it has no place and
+    /// is about a body or joint of the URDF (`body 'upper_arm': …`).
+    pub(crate) fn locate(&self, e: FileError) -> FileError {
+        if e.place.is_some() || e.in_override {
+            return e;
+        }
+        let about = |name: &str| {
+            ["body", "joint"].iter().any(|kind| {
+                e.message
+                    .starts_with(&format!("{kind} '{}':", name.escape_debug()))
+            })
+        };
+        match self.by_name.iter().find(|(name, _)| about(name)) {
+            Some((_, place)) => FileError {
+                origin: self.origin.clone(),
+                place: Some(*place),
+                ..e
+            },
+            None => e,
+        }
+    }
+}
+
 /// The `mstar.spatial/1` document of the URDF `text` (the file `origin`),
 /// all joints at 0 and at rest, and one note for each kind of element read
 /// and ignored (and each massless link left out).
@@ -25,23 +64,38 @@ use crate::node::{self, Entry, Node, Value};
 /// As [`robot::parse`], and for a massless link between moving joints or a
 /// name that is both a link's and a joint's.
 pub(crate) fn convert(text: &str, origin: &str) -> Result<(String, Vec<String>), FileError> {
+    let (document, notes, _) = converted(text, origin)?;
+    Ok((document, notes))
+}
+
+/// [`convert`], and where the URDF defines each body and joint.
+fn converted(text: &str, origin: &str) -> Result<(String, Vec<String>, Places), FileError> {
     let robot = robot::parse(text, origin)?;
     let placement = write::place(&robot, &HashMap::new())?;
     check_names(&robot, &placement)?;
     let document = placement.document(&robot, origin, true);
+    let places = Places {
+        origin: origin.to_string(),
+        by_name: placement.names(&robot),
+    };
     let mut notes = robot.notes;
     notes.extend(placement.notes);
-    Ok((document, notes))
+    Ok((document, notes, places))
 }
 
 /// The tree of the URDF `text` as [`convert`] writes it, without places
-/// (they would be the converted text's), and the notes.
+/// (they would be the converted text's), the notes and the places of the
+/// bodies and joints in the URDF.
 ///
 /// # Errors
 /// As [`convert`].
-pub(crate) fn read(text: &str, origin: &str) -> Result<(Node, Vec<String>), FileError> {
-    let (document, notes) = convert(text, origin)?;
-    Ok((tree(&document, origin)?, notes))
+pub(crate) fn read(text: &str, origin: &str) -> Result<Read, FileError> {
+    let (document, notes, places) = converted(text, origin)?;
+    Ok(Read {
+        root: tree(&document, origin)?,
+        notes,
+        places,
+    })
 }
 
 /// The tree of a converted `document`, without places.
@@ -99,7 +153,7 @@ fn check_names(robot: &Robot, placement: &Placement) -> Result<(), FileError> {
 /// # Errors
 /// A `urdf` that is not a string or cannot be read, the URDF's errors, and
 /// an `[[initial]]` that names no moving joint of the URDF or is malformed.
-pub(crate) fn expand(doc: Doc<'_>, root: &Node) -> Result<Option<(Node, Vec<String>)>, FileError> {
+pub(crate) fn expand(doc: Doc<'_>, root: &Node) -> Result<Option<Read>, FileError> {
     let Value::Table(entries) = &root.value else {
         return Ok(None);
     };
@@ -137,9 +191,17 @@ pub(crate) fn expand(doc: Doc<'_>, root: &Node) -> Result<Option<(Node, Vec<Stri
         check_initial(doc, &robot, &placement, name, span.as_ref())?;
     }
     let urdf = tree(&placement.document(&robot, &source, false), &source)?;
+    let places = Places {
+        origin: source,
+        by_name: placement.names(&robot),
+    };
     let mut notes = robot.notes;
     notes.extend(placement.notes);
-    Ok(Some((merged(entries, urdf), notes)))
+    Ok(Some(Read {
+        root: merged(entries, urdf),
+        notes,
+        places,
+    }))
 }
 
 /// The wrapper's `entries` without `urdf` and `initial`, with the URDF's

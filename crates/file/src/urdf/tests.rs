@@ -339,3 +339,21 @@ fn prismatic_joints_on_moving_parents_carry_the_transport_velocity() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A value the spatial reader refuses is placed at the URDF element of its
+/// body: izz = 0.1 > ixx + iyy = 0.05 is no rigid body's inertia.
+#[test]
+fn spatial_errors_point_at_the_urdf_element() {
+    let text = robot(
+        "<link name=\"base\"/>\n<link name=\"a\"><inertial><mass value=\"1\"/>\
+         <inertia ixx=\"0.02\" ixy=\"0\" ixz=\"0\" iyy=\"0.03\" iyz=\"0\" izz=\"0.1\"/></inertial></link>\n\
+         <joint name=\"j\" type=\"fixed\"><parent link=\"base\"/><child link=\"a\"/></joint>",
+    );
+    let e = load(&text).expect_err("no rigid body");
+    assert_eq!(
+        (e.origin.as_str(), e.place),
+        ("r.urdf", Some((4, 1))),
+        "{e}"
+    );
+    assert!(e.message.starts_with("body 'a': "), "{e}");
+}
