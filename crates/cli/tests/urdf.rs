@@ -266,3 +266,24 @@ fn malformed_urdfs_are_errors_with_a_place() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--set` reaches the URDF's bodies, in a `.urdf` and in a file that
+/// starts from one; a value out of range is the model's error, named by
+/// its body (and not placed in the URDF, which does not hold it).
+#[test]
+fn overrides_reach_the_urdf_bodies() {
+    for file in ["urdf/two-link-arm.urdf", "urdf/two-link-arm-start.toml"] {
+        let o = mstar(&["check", &model(file), "--set", "body.forearm.mass=1.5"]);
+        assert!(o.status.success(), "{file}: {}", text(&o.stderr));
+        let o = mstar(&["check", &model(file), "--set", "body.forearm.mass=-1"]);
+        let err = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{file}: {err}");
+        assert!(
+            err.contains(&format!(
+                "{}: body 'forearm': mass: must be positive",
+                model(file)
+            )),
+            "{file}: {err}"
+        );
+    }
+}
