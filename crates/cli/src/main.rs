@@ -45,7 +45,7 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
-    /// Run a model file (TOML or JSON; docs/model-format.md) or a built-in
+    /// Run a model file (TOML, JSON or URDF; docs/model-format.md) or a built-in
     /// model, with a progress bar on long runs and a summary at the end.
     /// Exit 0 when it reaches its end within the error tolerance, 3 when it
     /// reaches its end beyond it (a warning says where), 2 when the file
@@ -56,6 +56,12 @@ enum Command {
     /// initial state is from the constraints. Exit 0 when it can run as
     /// written, 1 when it cannot, 2 when the file cannot be read or holds a value out of range (an unknown KKT solver too).
     Check(commands::check::CheckArgs),
+    /// Write a URDF robot (`.urdf`) as the mstar.spatial/1 model file it
+    /// means (docs/model-format.md, "URDF robots"); `run`, `check` and
+    /// `animate` also read a `.urdf` directly. Exit 0 when written, 2 when
+    /// the URDF cannot be read or converted, 1 when the output cannot be
+    /// written.
+    Convert(commands::convert::ConvertArgs),
     /// Run a model file for many values of its keys (--set KEY=V1,V2,… or
     /// KEY=START:STOP:COUNT; every combination, or --zip), on all cores or
     /// --jobs N, one shard of a cluster job with --shard I/N; resumable.
@@ -118,6 +124,7 @@ fn dispatch(cli: Cli) -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => return commands::run::run(&args),
         Command::Check(args) => return commands::check::check(&args),
+        Command::Convert(args) => return commands::convert::convert(&args),
         Command::Sweep(args) => return commands::sweep::sweep(&args),
         Command::Animate(args) => return commands::animate::animate(&args),
         Command::Pendulum(args) => commands::pendulum::pendulum(&args),

@@ -32,6 +32,11 @@
 //! Every error names the file, the key and the element, with the line and
 //! column where the format tells them (every TOML value; JSON syntax errors):
 //! `bar.toml:7:8: body 'bar': mass: must be positive, in kg (got -1)`.
+//!
+//! URDF robots (`.urdf`, [`Format::Urdf`]) are read as the
+//! `mstar.spatial/1` document they mean ([`convert_urdf`] writes it), and a
+//! spatial file may start from one (`urdf = "arm.urdf"`); errors in the
+//! URDF name its line and column too.
 
 mod bodies;
 mod fields;
@@ -41,6 +46,7 @@ mod planar;
 mod sensors;
 mod settings;
 mod spatial;
+mod urdf;
 
 use std::path::Path;
 
@@ -108,15 +114,19 @@ pub enum Format {
     Toml,
     /// JSON (`.json`).
     Json,
+    /// A URDF robot description (`.urdf`, XML), read as the
+    /// `mstar.spatial/1` model it means ([`convert_urdf`]).
+    Urdf,
 }
 
 impl Format {
-    /// The format of `path` from its extension: `.json` is JSON, anything
-    /// else TOML.
+    /// The format of `path` from its extension: `.json` is JSON, `.urdf`
+    /// URDF, anything else TOML.
     #[must_use]
     pub fn of(path: &Path) -> Self {
         match path.extension().and_then(|e| e.to_str()) {
             Some(e) if e.eq_ignore_ascii_case("json") => Self::Json,
+            Some(e) if e.eq_ignore_ascii_case("urdf") => Self::Urdf,
             _ => Self::Toml,
         }
     }
@@ -308,17 +318,36 @@ impl MechanismFile {
         format: Format,
         overrides: &[String],
     ) -> Result<Self, FileError> {
-        let mut root = match format {
-            Format::Toml => node::parse_toml(text, origin)?,
-            Format::Json => node::parse_json(text, origin)?,
+        let doc = Doc { origin, text };
+        let (mut root, mut notes, mut places) = match format {
+            Format::Toml => (node::parse_toml(text, origin)?, Vec::new(), None),
+            Format::Json => (node::parse_json(text, origin)?, Vec::new(), None),
+            Format::Urdf => {
+                let read = urdf::read(text, origin)?;
+                (read.root, read.notes, Some(read.places))
+            }
         };
+        // A spatial file that starts from a URDF (`urdf = "arm.urdf"`):
+        // expanded first, so that overrides reach the URDF's bodies too.
+        if is_spatial(&root)
+            && let Some(read) = urdf::expand(doc, &root)?
+        {
+            (root, notes, places) = (read.root, read.notes, Some(read.places));
+        }
         for o in overrides {
             settings::apply_override(&mut root, o).map_err(|why| {
                 FileError::unplaced(origin, format!("--set {o}: {why}")).of_override()
             })?;
         }
-        let doc = Doc { origin, text };
-        read(doc, &root)
+        // An error in a URDF's body or joint: at the URDF's element (unless
+        // an override may have given the value).
+        let mut file = read(doc, &root).map_err(|e| match &places {
+            Some(p) if overrides.is_empty() => p.locate(e),
+            _ => e,
+        })?;
+        // The URDF's notes first: they are about what the model is made of.
+        file.warnings.splice(0..0, notes);
+        Ok(file)
     }
 }
 
@@ -341,6 +370,22 @@ impl Simulation {
         let doc = Doc { origin, text: "" };
         Ok(settings::read(doc, &root, false)?.0)
     }
+}
+
+/// The `mstar.spatial/1` model file of the URDF robot `text` (the file
+/// `origin`, named in errors and in the document's first comment), and
+/// one note for each kind of URDF element read and ignored (`<limit>`,
+/// `<visual>`, …) and for each massless link left out, each
+/// `FILE:LINE:COLUMN: what`. Reading the document gives the model
+/// [`MechanismFile::load`] reads from the URDF, bit for bit.
+///
+/// # Errors
+/// [`FileError`] for malformed XML (`FILE:LINE:COLUMN`), a joint type other
+/// than revolute, continuous, prismatic or fixed, a joint naming a link the
+/// file does not have, a cycle, two root links, a massless link between
+/// moving joints, or a name given to a link and a joint.
+pub fn convert_urdf(text: &str, origin: &str) -> Result<(String, Vec<String>), FileError> {
+    urdf::convert(text, origin)
 }
 
 /// Whether the document says `format = "mstar.spatial/1"`.

@@ -4,6 +4,7 @@
 pub mod animate;
 pub mod chain;
 pub mod check;
+pub mod convert;
 pub mod options;
 pub mod pendulum;
 pub mod run;
