@@ -154,11 +154,18 @@ fn read_csv(path: &Path) -> (Vec<String>, Vec<Vec<f64>>) {
 #[test]
 fn an_npz_holds_the_csv_columns_to_the_bit() {
     let dir = scratch("npz");
-    for choice in [None, Some("t,u:crank.*,reaction:O2.*,effort:motor")] {
+    // The four-bar with a sensor of each kind of column it makes.
+    let base = std::fs::read_to_string(model("four-bar.toml")).expect("the model");
+    let sensors = dir.join("four-bar-sensors.toml");
+    let extra = "\n[[sensor]]\nname = \"tip\"\ntype = \"acceleration\"\nbody = \"coupler\"\npoint = [0.3, 0.0]\n\n[[sensor]]\nname = \"gap\"\ntype = \"distance\"\nbodies = [\"ground\", \"rocker\"]\n";
+    std::fs::write(&sensors, format!("{base}{extra}")).expect("written");
+    let sensors = sensors.display().to_string();
+    for choice in [None, Some("t,u:crank.*,reaction:O2.*,effort:motor"), Some("t,sensor:*")] {
         let mut outputs = Vec::new();
         for ext in ["csv", "npz"] {
             let out = dir.join(format!("run.{ext}"));
-            let (m, o) = (model("four-bar.toml"), out.display().to_string());
+            let file = if choice == Some("t,sensor:*") { sensors.clone() } else { model("four-bar.toml") };
+            let (m, o) = (file, out.display().to_string());
             let mut args = vec!["run", m.as_str(), "--t-end", "0.05", "--out", o.as_str()];
             if let Some(c) = choice {
                 args.extend(["--columns", c]);
@@ -178,8 +185,10 @@ fn an_npz_holds_the_csv_columns_to_the_bit() {
                 .all(|(x, y)| x.to_bits() == y.to_bits() || (*x == 0.0 && *y == 0.0));
             assert!(same, "{a:?}\n{b:?}");
         }
-        if choice.is_some() {
-            assert_eq!(npz_names.len(), 1 + 3 + 3 + 1);
+        match choice {
+            Some("t,sensor:*") => assert_eq!(npz_names, ["t", "sensor:tip.x", "sensor:tip.y", "sensor:gap"]),
+            Some(_) => assert_eq!(npz_names.len(), 1 + 3 + 3 + 1),
+            None => {}
         }
     }
 }
