@@ -7,11 +7,12 @@ use std::time::{Duration, Instant};
 
 use mstar::System;
 use mstar::file::{FileError, Format, Mechanism, MechanismFile, Simulation};
-use mstar::run::{CheckReport, RunError};
+use mstar::csv::Columns;
+use mstar::run::{CheckReport, ReactionColumns, RunError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::collect::{Collect, stats_dict};
+use crate::collect::{Collect, Extra, stats_dict};
 use crate::{IntegrationError, ModelError};
 
 /// Where a model came from: what a run with settings re-reads.
@@ -188,20 +189,27 @@ impl NativeModel {
             collect.reserve(rows);
         }
         let mut raised = None;
-        let outcome = py.detach(|| {
+        let (outcome, extra_names) = py.detach(|| {
             let mut poll = Poll {
                 last: Instant::now(),
                 raised: &mut raised,
             };
+            let columns = extra_columns(mechanism);
+            let mut observer = Extra {
+                collect: &mut collect,
+                columns: &*columns,
+            };
             let sys = mstar::run::lookup(mechanism);
-            mstar::run::simulate_until(sys, &sim, &mut collect, &mut || poll.stop())
+            let outcome =
+                mstar::run::simulate_until(sys, &sim, &mut observer, &mut || poll.stop());
+            (outcome, columns.names())
         });
         let wall = collect.wall();
         let names = |d: &Bound<'py, PyDict>| -> PyResult<()> {
             d.set_item("coords", mstar::model::coord_names(sys))?;
             d.set_item("constraints", constraint_names(sys))
         };
-        let samples = collect.into_dict(py)?;
+        let samples = collect.into_dict(py, extra_names)?;
         names(&samples)?;
         let error = match outcome {
             Ok(stats) => {
@@ -218,6 +226,13 @@ impl NativeModel {
         error.value(py).setattr("partial", samples)?;
         Err(error)
     }
+}
+
+/// The columns a run adds after the standard ones, as `mstar run --out`
+/// writes them: the reactions and efforts of its joints and drivers
+/// ([`ReactionColumns`]). Results expose whatever these name, generically.
+pub(crate) fn extra_columns(mechanism: &Mechanism) -> Box<dyn Columns + '_> {
+    Box::new(ReactionColumns::new(mstar::run::lookup(mechanism)))
 }
 
 /// The samples of a run with a fixed step size (`None` with adaptive steps,
