@@ -49,7 +49,7 @@ SWEEP_RULES: List[Tuple[str, str]] = [
     (r"--shard", "shard="),
     (r"--jobs (\S+?):", r"jobs=\1:"),
     (r"--zip", "zip=True"),
-    (r"--grid", "zip=False"),
+    (r"or use --grid", "or zip=False"),
 ]
 
 

@@ -12,7 +12,7 @@ from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
-from ._errors import SWEEP_RULES, translated
+from ._errors import RUN_RULES, SWEEP_RULES, python_message, translated
 from ._literal import integer, toml_literal
 from ._native import sweep as _sweep
 from ._result import Result
@@ -65,6 +65,8 @@ class Sweep:
         beyond: ``(index, warning)`` of each run of the shard that reached its
             end with steps beyond the error tolerance (status
             ``beyond tolerance: …``; ``mstar run`` exits 3 for it).
+            These messages name settings as Python arguments (``h=...``);
+            the summary's ``status`` keeps the command line's text.
     """
 
     def __init__(self, out: Path, model: Path, raw: Dict[str, Any]) -> None:
@@ -74,8 +76,9 @@ class Sweep:
         self.runs: int = raw["runs"]
         self.ran: int = raw["ran"]
         self.skipped: int = raw["skipped"]
-        self.failed: List[Tuple[int, str]] = list(raw["failed"])
-        self.beyond: List[Tuple[int, str]] = list(raw.get("beyond", []))
+        # The summary's status keeps the command line's words; these speak Python.
+        self.failed: List[Tuple[int, str]] = [(i, python_message(m, RUN_RULES)) for i, m in raw["failed"]]
+        self.beyond: List[Tuple[int, str]] = [(i, python_message(m, RUN_RULES)) for i, m in raw.get("beyond", [])]
 
     @property
     def summary(self) -> List[Dict[str, Any]]:
