@@ -16,6 +16,7 @@ use pyo3::create_exception;
 use pyo3::prelude::*;
 
 mod builder;
+mod cli;
 mod collect;
 mod model;
 mod sweep;
@@ -61,5 +62,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(model::load_text, m)?)?;
     m.add_function(wrap_pyfunction!(builder::ground, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::sweep, m)?)?;
+    m.add_function(wrap_pyfunction!(cli::cli_main, m)?)?;
     Ok(())
 }
