@@ -15,6 +15,7 @@ messages it prints after ``error:``, with its options named as Python
 arguments. The full API is in ``docs/python.md``.
 """
 
+from ._animate import animate as animate
 from ._errors import Error as Error
 from ._errors import IntegrationError as IntegrationError
 from ._errors import ModelError as ModelError
@@ -37,12 +38,13 @@ __all__ = [
     "Stats",
     "Sweep",
     "__version__",
+    "animate",
     "load",
     "sweep",
 ]
 
 # Python's own exceptions and classes report the package, not the private
 # module that defines them.
-for _name in ("Model", "ModelWarning", "Result", "Stats", "Sweep", "load", "sweep"):
+for _name in ("Model", "ModelWarning", "Result", "Stats", "Sweep", "animate", "load", "sweep"):
     globals()[_name].__module__ = __name__
 del _name

@@ -55,8 +55,11 @@ class Model:
     Made by :func:`load` or :meth:`mstar.planar.Builder.build`.
     """
 
-    def __init__(self, native: Any) -> None:
+    def __init__(self, native: Any, source: Optional[str] = None, is_path: bool = False) -> None:
         self._native = native
+        #: The model file's path (``is_path``) or TOML text; None for a builder's.
+        self._source = source
+        self._is_path = is_path
 
     @property
     def origin(self) -> str:
@@ -143,7 +146,7 @@ class Model:
             if isinstance(partial, dict):
                 e.partial = Result(partial)  # type: ignore[union-attr]
             raise
-        return Result(raw)
+        return Result(raw, model=self, overrides=given)
 
     def __repr__(self) -> str:
         return f"<mstar.Model {self.origin!r}: {self.kind}, {len(self.coords)} coordinates, {len(self.constraints)} constraints>"
@@ -171,11 +174,12 @@ def load(source: Union[str, "os.PathLike[str]"]) -> Model:
     """
     if not isinstance(source, (str, os.PathLike)):
         raise TypeError(f"source: expected a path or TOML text, got {type(source).__name__}")
+    is_path = _is_path(source)
     with translated(RUN_RULES):
-        if _is_path(source):
+        if is_path:
             native = _load_path(os.fspath(source))
         else:
             native = _load_text(source)
     for w in native.warnings:
         warnings.warn(w, ModelWarning, stacklevel=2)
-    return Model(native)
+    return Model(native, os.fspath(source), is_path)

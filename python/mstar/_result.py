@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import html
 from dataclasses import dataclass
 from typing import Any, Dict, List, Optional
 
@@ -73,7 +74,11 @@ class Result:
     constraints: List[str]
     stats: Stats
 
-    def __init__(self, raw: Dict[str, Any]) -> None:
+    def __init__(self, raw: Dict[str, Any], model: Any = None, overrides: Optional[List[str]] = None) -> None:
+        #: The model that ran (None for a result read from a sweep's file)
+        #: and its overrides, for :func:`mstar.animate` and Jupyter.
+        self._model = model
+        self._overrides = list(overrides or [])
         for key in ("t", "u", "v", "a", "lam", "energy", "iterations", "residual", "constraint"):
             setattr(self, key, raw[key])
         self.coords = list(raw["coords"])
@@ -199,6 +204,19 @@ class Result:
         ) if len(self.t) else np.empty((0, len(self.columns())))
         frame = pd.DataFrame(data, columns=self.columns())
         return frame.astype({"iterations": "int64"})
+
+    def _repr_html_(self) -> Optional[str]:
+        """The animation page of ``mstar animate --html`` (play/pause, time
+        slider) in an iframe, for Jupyter; None (plain repr) when the result
+        has no model file to draw (:func:`mstar.animate`)."""
+        from ._animate import html_page
+
+        try:
+            page = html_page(self)
+        except Exception:  # noqa: BLE001 - a repr never raises: the plain one instead
+            return None
+        escaped = html.escape(page, quote=True)
+        return f'<iframe srcdoc="{escaped}" style="width: 100%; height: 560px; border: 0"></iframe>'
 
     def __repr__(self) -> str:
         end = f"t = {self.t[-1]} s" if len(self.t) else "no sample"
