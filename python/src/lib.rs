@@ -19,6 +19,7 @@ mod builder;
 mod cli;
 mod collect;
 mod model;
+mod spatial;
 mod sweep;
 
 create_exception!(
@@ -62,6 +63,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(model::load_text, m)?)?;
     m.add_function(wrap_pyfunction!(builder::ground, m)?)?;
     m.add_function(wrap_pyfunction!(sweep::sweep, m)?)?;
+    m.add_class::<spatial::SpatialBuilder>()?;
+    m.add_class::<spatial::SpatialBody>()?;
+    m.add_class::<spatial::SpatialPoint>()?;
+    m.add_function(wrap_pyfunction!(spatial::spatial_ground, m)?)?;
     m.add_function(wrap_pyfunction!(cli::cli_main, m)?)?;
     Ok(())
 }

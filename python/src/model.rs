@@ -84,6 +84,17 @@ impl NativeModel {
         }
     }
 
+    /// A spatial builder's system, with the default settings.
+    pub(crate) fn built_spatial(system: mstar::model::spatial::SpatialSystem) -> Self {
+        Self {
+            source: Source::Built,
+            origin: "<builder>".to_string(),
+            mechanism: Mechanism::Spatial(system),
+            simulation: Simulation::default(),
+            warnings: Vec::new(),
+        }
+    }
+
     /// The settings with `overrides` (`simulation.key=value`) applied, read
     /// as `--set` reads them, and the mechanism read again when they change
     /// it (`None`: this one).
