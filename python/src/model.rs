@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use mstar::System;
-use mstar::file::{FileError, Format, Mechanism, MechanismFile, Simulation};
 use mstar::csv::Columns;
+use mstar::file::{FileError, Format, Mechanism, MechanismFile, Simulation};
 use mstar::run::{CheckReport, ReactionColumns, RunError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -211,8 +211,7 @@ impl NativeModel {
                 columns: &*columns,
             };
             let sys = mstar::run::lookup(mechanism);
-            let outcome =
-                mstar::run::simulate_until(sys, &sim, &mut observer, &mut || poll.stop());
+            let outcome = mstar::run::simulate_until(sys, &sim, &mut observer, &mut || poll.stop());
             (outcome, columns.names())
         });
         let wall = collect.wall();

@@ -196,7 +196,13 @@ impl SpatialBuilder {
 
     /// A force `(fx, fy, fz)(t)` at the point `at` of a body, its components
     /// in `axes` (`"global"` or `"body"`).
-    fn force(&mut self, name: &str, at: SpatialPoint, f: [FunctionArg; 3], axes: &str) -> PyResult<()> {
+    fn force(
+        &mut self,
+        name: &str,
+        at: SpatialPoint,
+        f: [FunctionArg; 3],
+        axes: &str,
+    ) -> PyResult<()> {
         let Attach::Body(body) = at.0 else {
             return Err(PyValueError::new_err(
                 "at: expected a point of a body (body.at(sx, sy, sz)), got a point of the ground",
@@ -207,7 +213,13 @@ impl SpatialBuilder {
     }
 
     /// A torque `(tx, ty, tz)(t)` on a rigid body, its components in `axes`.
-    fn torque(&mut self, name: &str, body: &SpatialBody, n: [FunctionArg; 3], axes: &str) -> PyResult<()> {
+    fn torque(
+        &mut self,
+        name: &str,
+        body: &SpatialBody,
+        n: [FunctionArg; 3],
+        axes: &str,
+    ) -> PyResult<()> {
         self.0.torque(name, body.id, functions(n), axes_of(axes)?);
         Ok(())
     }

@@ -60,9 +60,7 @@ pub fn sweep(args: &SweepArgs) -> u8 {
         None => run(args),
     };
     match result {
-        Ok(Ended::Counted { failed, beyond }) => {
-            mstar::sweep::exit_code(failed, beyond)
-        }
+        Ok(Ended::Counted { failed, beyond }) => mstar::sweep::exit_code(failed, beyond),
         Ok(Ended::Signal(signal)) => u8::try_from(128 + signal).unwrap_or(1),
         Err(e) => {
             note!("error: {e}");
