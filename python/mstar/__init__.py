@@ -19,6 +19,7 @@ from ._animate import animate as animate
 from ._errors import Error as Error
 from ._errors import IntegrationError as IntegrationError
 from ._errors import ModelError as ModelError
+from ._model import AccuracyWarning as AccuracyWarning
 from ._model import Model as Model
 from ._model import ModelWarning as ModelWarning
 from ._model import load as load
@@ -29,6 +30,7 @@ from ._sweep import Sweep as Sweep
 from ._sweep import sweep as sweep
 
 __all__ = [
+    "AccuracyWarning",
     "Error",
     "IntegrationError",
     "Model",
@@ -45,6 +47,6 @@ __all__ = [
 
 # Python's own exceptions and classes report the package, not the private
 # module that defines them.
-for _name in ("Model", "ModelWarning", "Result", "Stats", "Sweep", "animate", "load", "sweep"):
+for _name in ("AccuracyWarning", "Model", "ModelWarning", "Result", "Stats", "Sweep", "animate", "load", "sweep"):
     globals()[_name].__module__ = __name__
 del _name

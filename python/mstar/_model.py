@@ -18,6 +18,12 @@ _REAL_KEYS = frozenset({"t_end", "h", "h_min", "h_max", "rho", "alpha", "beta", 
 _INTEGER_KEYS = frozenset({"max_iterations"})
 
 
+class AccuracyWarning(UserWarning):
+    """A run that reached its end with steps beyond the error tolerance, or
+    an energy drift beyond it (``mstar run`` warns and exits 3): the message
+    says where and what to rerun with."""
+
+
 class ModelWarning(UserWarning):
     """A value the model reader changed (``mstar run`` prints ``warning: ...``)."""
 
@@ -136,6 +142,10 @@ class Model:
                 constraints were refused; ``e.partial`` is the :class:`Result`
                 of the samples before.
             KeyboardInterrupt: Ctrl-C; ``e.partial`` as above.
+
+        Warns:
+            AccuracyWarning: the run went beyond the error tolerance (``mstar
+                run``'s warning, in ``result.stats.warning`` too).
         """
         given = _overrides({"t_end": t_end, "h": h, **settings}, overrides)
         try:
@@ -146,6 +156,12 @@ class Model:
             if isinstance(partial, dict):
                 e.partial = Result(partial)  # type: ignore[union-attr]
             raise
+        stats = raw["stats"]
+        if isinstance(stats.get("warning"), str):
+            lines = [python_message(l.removeprefix("warning: "), RUN_RULES) for l in stats["warning"].splitlines()]
+            stats["warning"] = "\n".join(lines)
+            for line in lines:
+                warnings.warn(line, AccuracyWarning, stacklevel=2)
         return Result(raw, model=self, overrides=given)
 
     def __repr__(self) -> str:

@@ -37,6 +37,9 @@ class Stats:
     t: Optional[float] = None
     #: The largest local error estimate as a ratio to the tolerance.
     max_error_ratio: Optional[float] = None
+    #: ``mstar run``'s warning when the run went beyond the error tolerance
+    #: (it exits 3 then; in Python's words, one line per finding), else None.
+    warning: Optional[str] = None
 
 
 class Result:

@@ -14,6 +14,7 @@ import numpy as np
 
 from ._errors import RUN_RULES, SWEEP_RULES, python_message, translated
 from ._literal import integer, toml_literal
+from ._native import load_path as _load_path
 from ._native import sweep as _sweep
 from ._result import Result
 
@@ -116,7 +117,8 @@ class Sweep:
         """Run ``index``'s samples as a :class:`Result` (read from its CSV
         file: the rows the model's ``[output]`` keeps; ``stats`` has the
         summary's ``steps`` and ``wall_time``, the others None; a failed
-        run's samples before the failure).
+        run's samples before the failure; the constraint rows named as the
+        model file names them).
 
         Raises:
             IndexError: ``index`` is not a run of the plan.
@@ -128,7 +130,12 @@ class Sweep:
             raise FileNotFoundError(f"run {i} has no CSV file in {self.dir / 'runs'}: it has not run here")
         header, data = _read_csv(path)
         row = next((r for r in self.summary if r.get("index") == i), {})
-        return Result(_raw(header, data, row))
+        raw = _raw(header, data, row)
+        # The CSV numbers the multipliers; the model file names their rows.
+        names = _load_path(os.fspath(self.model)).constraints
+        if len(names) == len(raw["constraints"]):
+            raw["constraints"] = names
+        return Result(raw)
 
     def to_pandas(self) -> Any:
         """The summary as a pandas DataFrame (needs pandas)."""

@@ -223,7 +223,9 @@ impl NativeModel {
         names(&samples)?;
         let error = match outcome {
             Ok(stats) => {
-                samples.set_item("stats", stats_dict(py, Some(&stats), wall)?)?;
+                let stats_py = stats_dict(py, Some(&stats), wall)?;
+                stats_py.set_item("warning", accuracy_warning(sys, &sim, &stats))?;
+                samples.set_item("stats", stats_py)?;
                 return Ok(samples);
             }
             Err(RunError::Settings(e)) => return Err(ModelError::new_err(e.to_string())),
@@ -243,6 +245,14 @@ impl NativeModel {
 /// ([`ReactionColumns`]). Results expose whatever these name, generically.
 pub(crate) fn extra_columns(mechanism: &Mechanism) -> Box<dyn Columns + '_> {
     Box::new(ReactionColumns::new(mstar::run::lookup(mechanism)))
+}
+
+/// The warning `mstar run` prints (and exits 3 for) when a run's steps went
+/// beyond the error tolerance or its energy drifted beyond it: one line
+/// each, after `warning: ` (`None`: within the tolerance).
+fn accuracy_warning(sys: &dyn System, sim: &Simulation, stats: &mstar::RunStats) -> Option<String> {
+    let (config, _) = mstar::run::config(sim).ok()?;
+    mstar::accuracy::warning(stats, &config, &|i| sys.coord_name(i), true)
 }
 
 /// The samples of a run with a fixed step size (`None` with adaptive steps,

@@ -62,7 +62,8 @@ def test_results_of_a_sweep_are_its_runs(swept):
     # Run 2 is upper.mass = 2, h = 1e-3: the same run from a model.
     direct = mstar.load(MODEL).run(t_end=0.02, h=1e-3, overrides={"body.upper.mass": 2.0})
     assert r.columns() == direct.columns()
-    assert r.coords == direct.coords
+    assert r.coords == direct.coords and r.constraints == direct.constraints
+    assert np.array_equal(r["lambda:elbow.x"], direct["lambda:elbow.x"])
     for name in r.columns():
         assert np.array_equal(r[name], direct[name]), name
     assert r.iterations.dtype == np.int64
