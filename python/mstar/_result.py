@@ -87,6 +87,9 @@ class Result:
         self.coords = list(raw["coords"])
         self.constraints = list(raw["constraints"])
         self.extra_names = list(raw.get("extra_names", []))
+        # The standard columns' names as the library writes them (None: the
+        # scheme above, built here).
+        self._header = list(raw["header"]) if raw.get("header") is not None else None
         self.extra = raw.get("extra", np.empty((len(self.t), 0)))
         stats = dict(raw["stats"])
         stats.setdefault("steps", max(len(self.t) - 1, 0))
@@ -103,7 +106,10 @@ class Result:
         """The names of the columns ``mstar run --out`` writes, in its
         order: ``t``, ``u:<coord>``, ``v:<coord>``, ``a:<coord>``,
         ``lambda:<i>``, ``energy``, ``iterations``, ``residual``,
-        ``constraint``, then :attr:`extra_names`."""
+        ``constraint`` (as the library names them, ``mstar::csv::header``),
+        then :attr:`extra_names`."""
+        if self._header is not None:
+            return self._header + self.extra_names
         names = ["t"]
         for prefix in ("u", "v", "a"):
             names += [f"{prefix}:{c}" for c in self.coords]

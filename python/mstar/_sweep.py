@@ -164,6 +164,7 @@ def _raw(header: List[str], data: np.ndarray, row: Dict[str, Any]) -> Dict[str, 
     raw["lam"] = data[:, [col[n] for n in lam]]
     raw["coords"] = coords
     raw["constraints"] = [n[len("lambda:"):] for n in lam]
+    raw["header"] = header[:end]
     raw["extra_names"] = header[end:]
     raw["extra"] = data[:, end:]
     steps = row.get("steps")

@@ -217,7 +217,9 @@ impl NativeModel {
         let wall = collect.wall();
         let names = |d: &Bound<'py, PyDict>| -> PyResult<()> {
             d.set_item("coords", mstar::model::coord_names(sys))?;
-            d.set_item("constraints", constraint_names(sys))
+            d.set_item("constraints", constraint_names(sys))?;
+            // The standard columns' names as `mstar run --out` writes them.
+            d.set_item("header", mstar::csv::header(sys))
         };
         let samples = collect.into_dict(py, extra_names)?;
         names(&samples)?;
