@@ -63,8 +63,8 @@ def numbers_of(value: Any, name: str, length: int) -> List[float]:
 
 def toml_literal(value: Any, what: str, lists: bool = False) -> str:
     """``value`` (a bool, a number of any kind or a string; with ``lists``,
-    also a list, tuple or 1-d array of them) as a TOML literal; ``what``
-    names it in the TypeError for anything else."""
+    also a list, tuple or numpy array of them, nested) as a TOML literal;
+    ``what`` names it in the TypeError for anything else."""
     plain = scalar(value)
     if isinstance(plain, bool):
         return "true" if plain else "false"
@@ -73,7 +73,9 @@ def toml_literal(value: Any, what: str, lists: bool = False) -> str:
     if isinstance(plain, str):
         escaped = plain.replace("\\", "\\\\").replace('"', '\\"')
         return f'"{escaped}"'
-    if lists and isinstance(plain, np.ndarray) and plain.ndim == 1:
+    if lists and isinstance(plain, np.ndarray) and plain.ndim >= 1 and plain.dtype != object:
+        plain = plain.tolist()  # nested lists of Python numbers
+    elif lists and isinstance(plain, np.ndarray) and plain.ndim == 1:
         plain = list(plain)
     if lists and isinstance(plain, (list, tuple)):
         return "[" + ", ".join(toml_literal(v, what, lists) for v in plain) + "]"

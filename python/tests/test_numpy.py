@@ -60,6 +60,12 @@ def test_overrides_take_numpy_numbers(run_cli):
     heavy = mstar.load(path).run(t_end=0.1, overrides={"body.bob.mass": np.float64(2.0), "output.every": 1})
     cli = run_cli(path, "--t-end", "0.1", "--set", "body.bob.mass=2.0", "--set", "output.every=1")
     assert_same_columns(heavy, cli)
+    # A 2-d array for a key that takes a list of points.
+    points = np.array([[0.5, 0.0, 0.0], [0.0, -0.5, 0.0]], dtype=np.float32)
+    path = MODELS / "spatial" / "double-pendulum.toml"
+    arrayed = mstar.load(path).run(t_end=0.05, overrides={"joint.elbow.points": points})
+    listed = mstar.load(path).run(t_end=0.05, overrides={"joint.elbow.points": [[0.5, 0.0, 0.0], [0.0, -0.5, 0.0]]})
+    assert np.array_equal(arrayed.u, listed.u)  # 0.5 and 0.0 are exact in float32
     with pytest.raises(TypeError, match=r"overrides\['body.bob.mass'\]: expected a number"):
         mstar.load(MODELS / "pendulum.toml").run(overrides={"body.bob.mass": object()})
 
