@@ -32,6 +32,7 @@ mod signals;
 mod summary;
 
 use std::ffi::OsString;
+use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
@@ -104,7 +105,7 @@ where
         }
     };
     match thread_pool() {
-        Ok(pool) => pool.install(|| dispatch(cli)),
+        Ok(pool) => code_of(pool.install(|| dispatch(cli))),
         Err(e) => {
             note!("error: could not start the thread pool: {e}");
             1
@@ -112,8 +113,16 @@ where
     }
 }
 
+/// The number of an exit code (`ExitCode` keeps it private; the program's
+/// codes are those of `ExitCode::from(u8)`, told apart by comparison).
+fn code_of(code: ExitCode) -> u8 {
+    (0..=u8::MAX)
+        .find(|&k| ExitCode::from(k) == code)
+        .unwrap_or(1)
+}
+
 /// Runs the command.
-fn dispatch(cli: Cli) -> u8 {
+fn dispatch(cli: Cli) -> ExitCode {
     let integrates = matches!(
         cli.command,
         Command::Run(_)
@@ -140,7 +149,7 @@ fn dispatch(cli: Cli) -> u8 {
         Command::Pendulum(args) => commands::pendulum::pendulum(&args),
         Command::Chain(args) => commands::chain::chain(&args),
     };
-    output::exit_code(result, false, 1)
+    ExitCode::from(output::exit_code(result, false, 1))
 }
 
 /// The thread pool the program runs in: one thread a core, or as many as
@@ -170,6 +179,16 @@ fn thread_pool() -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every exit code the program can give reads back as its number.
+    #[test]
+    fn exit_codes_read_back() {
+        for k in [0, 1, 2, 3, 10, 110, 130, 143, 255] {
+            assert_eq!(code_of(ExitCode::from(k)), k);
+        }
+        assert_eq!(code_of(ExitCode::SUCCESS), 0);
+        assert_eq!(code_of(ExitCode::FAILURE), 1);
+    }
 
     /// The help describes the program's options, not library items, and
     /// offers every registered KKT backend with its summary.

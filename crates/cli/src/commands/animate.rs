@@ -2,6 +2,7 @@
 //! drawing is [`crate::animate`]'s.
 
 use std::path::{Path, PathBuf};
+use std::process::ExitCode;
 
 use anyhow::{Result, bail};
 use mstar::file::{Mechanism, MechanismFile};
@@ -116,34 +117,34 @@ fn positive(text: &str) -> Result<f64, String> {
 /// `mstar animate`: exit 0 when every output is written, 1 when the results
 /// do not fit the model or an output cannot be written, 2 when the model
 /// file cannot be read (as `mstar check`).
-pub fn animate(args: &AnimateArgs) -> u8 {
+pub fn animate(args: &AnimateArgs) -> ExitCode {
     if let Err(e) = check_outputs(args) {
         note!("error: {e}");
-        return 2;
+        return ExitCode::from(2);
     }
     let file = match MechanismFile::load_with(&args.model, &args.set) {
         Ok(file) => file,
         Err(e) => {
             note!("error: {e}");
-            return 2;
+            return ExitCode::from(2);
         }
     };
     let figure = match figure(args, &file.mechanism) {
         Ok(figure) => figure,
         Err(e) => {
             note!("error: {e}");
-            return 2;
+            return ExitCode::from(2);
         }
     };
     let n_coords = file.mechanism.system().n_coords();
     match render(args, figure, n_coords) {
-        Ok(()) => 0,
+        Ok(()) => ExitCode::SUCCESS,
         Err(e) if e.downcast_ref::<crate::signals::Interrupted>().is_some() => {
-            crate::output::exit_code(Err(e), false, 1)
+            ExitCode::from(crate::output::exit_code(Err(e), false, 1))
         }
         Err(e) => {
             note!("error: {e:#}");
-            1
+            ExitCode::from(1)
         }
     }
 }

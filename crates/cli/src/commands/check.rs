@@ -1,6 +1,7 @@
 //! `mstar check`: a model file checked without integrating it.
 
 use std::path::PathBuf;
+use std::process::ExitCode;
 
 use mstar::file::MechanismFile;
 
@@ -16,12 +17,12 @@ pub struct CheckArgs {
 
 /// `mstar check`: exit 0 when the model can run as written, 1 when it
 /// cannot (or its redundant constraints could not be computed), 2 when the file cannot be read or holds a value out of range.
-pub fn check(args: &CheckArgs) -> u8 {
+pub fn check(args: &CheckArgs) -> ExitCode {
     let file = match MechanismFile::load_with(&args.model, &args.set) {
         Ok(file) => file,
         Err(e) => {
             note!("error: {e}");
-            return 2;
+            return ExitCode::from(2);
         }
     };
     let config = match mstar::run::config(&file.simulation) {
@@ -29,7 +30,7 @@ pub fn check(args: &CheckArgs) -> u8 {
         // A setting out of range, as a value the file cannot hold: 2.
         Err(e) => {
             note!("error: {}: {e}", args.model.display());
-            return 2;
+            return ExitCode::from(2);
         }
     };
     let redundant = file.simulation.redundant.unwrap_or_default();
@@ -41,7 +42,7 @@ pub fn check(args: &CheckArgs) -> u8 {
     std::mem::forget(file);
     print!("{report}");
     if report.can_run() {
-        0
+        ExitCode::SUCCESS
     } else {
         if let Some(why) = &report.not_computed {
             note!("error: the redundant constraints were not computed: {why}");
@@ -54,6 +55,6 @@ pub fn check(args: &CheckArgs) -> u8 {
             );
             note!("error: {e}");
         }
-        1
+        ExitCode::from(1)
     }
 }

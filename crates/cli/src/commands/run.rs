@@ -1,6 +1,7 @@
 //! `mstar run`: a model file (or a built-in model) on the command line.
 
 use std::path::PathBuf;
+use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context, Result, bail};
@@ -117,7 +118,7 @@ impl Model {
 /// tolerance, 3 when it reaches its end beyond it (`mstar::accuracy`), 2 when
 /// the model file cannot be read (as `mstar check`), 130/143 after SIGINT /
 /// SIGTERM, 1 on any other failure.
-pub fn run(args: &RunArgs) -> u8 {
+pub fn run(args: &RunArgs) -> ExitCode {
     if let (Some(out), Some(file)) = (&args.out, &args.model)
         && let Err(e) =
             crate::output::refuse_overwrites(&[("the model file", file)], &[("--out", out)])
@@ -129,7 +130,7 @@ pub fn run(args: &RunArgs) -> u8 {
         Err(e) => return failed(e, None),
     };
     let code = match run_model(args, &model) {
-        Ok(()) => 0,
+        Ok(()) => ExitCode::SUCCESS,
         Err(e) => failed(e, Some(&model)),
     };
     // The process ends next and its memory with it: freeing a 10⁵-body
@@ -141,23 +142,23 @@ pub fn run(args: &RunArgs) -> u8 {
 /// Reports a failure of `mstar run` (with a hint where there is one) and
 /// its exit code: 2 for a file that cannot be read, 130/143 for an
 /// interrupted run (`crate::output::exit_code`), else 1.
-fn failed(e: anyhow::Error, model: Option<&Loaded>) -> u8 {
+fn failed(e: anyhow::Error, model: Option<&Loaded>) -> ExitCode {
     if e.downcast_ref::<mstar::accuracy::Inaccurate>().is_some() {
-        return mstar::accuracy::EXIT_INACCURATE;
+        return ExitCode::from(mstar::accuracy::EXIT_INACCURATE);
     }
     if e.downcast_ref::<crate::signals::Interrupted>().is_some() {
-        return crate::output::exit_code(Err(e), true, 1);
+        return ExitCode::from(crate::output::exit_code(Err(e), true, 1));
     }
     note!("error: {}", crate::messages::report(&e));
     if e.downcast_ref::<crate::output::Usage>().is_some() {
-        return 2;
+        return ExitCode::from(2);
     }
     let settings = matches!(
         e.downcast_ref::<mstar::run::RunError>(),
         Some(mstar::run::RunError::Settings(_))
     );
     if settings || e.downcast_ref::<mstar::file::FileError>().is_some() {
-        return 2;
+        return ExitCode::from(2);
     }
     if let Some(e) = e.downcast_ref::<IntegrationError>() {
         let hint = model
@@ -167,7 +168,7 @@ fn failed(e: anyhow::Error, model: Option<&Loaded>) -> u8 {
             note!("hint: {hint}");
         }
     }
-    1
+    ExitCode::FAILURE
 }
 
 /// What to edit in the model file when the start fails on a constraint the

@@ -3,6 +3,7 @@
 
 use std::io::IsTerminal as _;
 use std::path::PathBuf;
+use std::process::ExitCode;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
@@ -54,17 +55,19 @@ pub struct SweepArgs {
 /// or the runs would not fit (their files on disk, the summary in memory),
 /// 130/143 after SIGINT/SIGTERM (the summary of the runs complete so far
 /// written).
-pub fn sweep(args: &SweepArgs) -> u8 {
+pub fn sweep(args: &SweepArgs) -> ExitCode {
     let result = match &args.merge {
         Some(dir) => merge(dir),
         None => run(args),
     };
     match result {
-        Ok(Ended::Counted { failed, beyond }) => mstar::sweep::exit_code(failed, beyond),
-        Ok(Ended::Signal(signal)) => u8::try_from(128 + signal).unwrap_or(1),
+        Ok(Ended::Counted { failed, beyond }) => {
+            ExitCode::from(mstar::sweep::exit_code(failed, beyond))
+        }
+        Ok(Ended::Signal(signal)) => ExitCode::from(u8::try_from(128 + signal).unwrap_or(1)),
         Err(e) => {
             note!("error: {e}");
-            if e.is_usage() { 2 } else { 1 }
+            ExitCode::from(if e.is_usage() { 2 } else { 1 })
         }
     }
 }
