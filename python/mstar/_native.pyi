@@ -2,11 +2,16 @@
 
 from typing import Any, Dict, List, Optional, Sequence, Tuple, Union
 
-class ModelError(Exception):
+__version__: str
+
+class Error(Exception):
+    """The base of mstar's own exceptions (named ``mstar.Error``)."""
+
+class ModelError(Error):
     """A model that cannot be read or built, or a setting out of range
     (``mstar run`` exits 2); the message is the CLI's."""
 
-class IntegrationError(Exception):
+class IntegrationError(Error):
     """A run that fails (``mstar run`` exits 1); the message is the CLI's.
     ``partial``: the samples before the failure (a ``mstar.Result``)."""
     partial: Any
@@ -26,6 +31,7 @@ class NativeModel:
     def run(self, overrides: List[str]) -> Dict[str, Any]: ...
 
 def load_path(path: str) -> NativeModel: ...
+def cli_main(argv: Sequence[str]) -> int: ...
 def load_text(text: str) -> NativeModel: ...
 def sweep(
     model: str,
@@ -84,5 +90,50 @@ class PlanarBuilder:
     ) -> None: ...
     def rotational_spring(
         self, name: str, a: Optional[Body], b: Body, *, stiffness: float, damping: float = 0.0
+    ) -> None: ...
+    def build(self) -> NativeModel: ...
+
+
+class SpatialPoint: ...
+
+class SpatialBody:
+    @property
+    def name(self) -> str: ...
+    def at(self, sx: float = 0.0, sy: float = 0.0, sz: float = 0.0) -> SpatialPoint: ...
+
+def spatial_ground(x: float = 0.0, y: float = 0.0, z: float = 0.0) -> SpatialPoint: ...
+
+_Vector = Sequence[float]
+
+class SpatialBuilder:
+    def __init__(self) -> None: ...
+    def gravity(self, g: _Vector) -> None: ...
+    def rigid_body(
+        self,
+        name: str,
+        *,
+        mass: float,
+        inertia: _Vector,
+        position: _Vector,
+        orientation: _Vector,
+        velocity: _Vector,
+        angular_velocity: _Vector,
+        tensor: Optional[Sequence[_Vector]],
+    ) -> SpatialBody: ...
+    def point_mass(self, name: str, *, mass: float, position: _Vector, velocity: _Vector) -> SpatialBody: ...
+    def joint(
+        self, name: str, kind: str, a: SpatialPoint, b: SpatialPoint,
+        axes: Optional[Sequence[_Vector]], length: Optional[float],
+    ) -> None: ...
+    def driver(self, name: str, joint: str, motion: str, f: _Function) -> None: ...
+    def force(self, name: str, at: SpatialPoint, f: Sequence[_Function], axes: str) -> None: ...
+    def torque(self, name: str, body: SpatialBody, n: Sequence[_Function], axes: str) -> None: ...
+    def spring(
+        self, name: str, a: SpatialPoint, b: SpatialPoint, *, stiffness: float, damping: float,
+        rest_length: Optional[float], preload: float,
+    ) -> None: ...
+    def rotational_spring(
+        self, name: str, a: Optional[SpatialBody], b: SpatialBody, axes: Sequence[_Vector], *,
+        stiffness: float, damping: float, angle: float,
     ) -> None: ...
     def build(self) -> NativeModel: ...

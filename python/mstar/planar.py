@@ -19,11 +19,16 @@ are numbers (constants) or :func:`constant`, :func:`linear`, :func:`sine`,
 
 from __future__ import annotations
 
+from typing import Any as _Any
 from typing import Optional, Sequence, Tuple, Union
 
-from . import Model
-from ._native import Body, Point, TimeFunction, ground
+from ._errors import translated as _translated
+from ._literal import number as _number
+from ._literal import numbers_of as _numbers_of
+from ._model import Model
+from ._native import Body, Point, TimeFunction
 from ._native import PlanarBuilder as _PlanarBuilder
+from ._native import ground as _ground
 
 __all__ = ["Body", "Builder", "Point", "TimeFunction", "constant", "ground", "linear", "sine", "table"]
 
@@ -31,25 +36,49 @@ __all__ = ["Body", "Builder", "Point", "TimeFunction", "constant", "ground", "li
 Function = Union[float, TimeFunction]
 
 
+def ground(x: float = 0.0, y: float = 0.0) -> Point:
+    """The fixed point ``(x, y)`` of the ground."""
+    return _ground(_number(x, "x"), _number(y, "y"))
+
+
 def constant(value: float) -> TimeFunction:
     """``f(t) = value``."""
-    return TimeFunction.constant(value)
+    return TimeFunction.constant(_number(value, "value"))
 
 
 def linear(value: float, rate: float) -> TimeFunction:
     """``f(t) = value + rate·t``."""
-    return TimeFunction.linear(value, rate)
+    return TimeFunction.linear(_number(value, "value"), _number(rate, "rate"))
 
 
 def sine(offset: float, amplitude: float, omega: float, phase: float = 0.0) -> TimeFunction:
     """``f(t) = offset + amplitude·sin(omega·t + phase)``."""
-    return TimeFunction.sine(offset, amplitude, omega, phase)
+    return TimeFunction.sine(
+        _number(offset, "offset"), _number(amplitude, "amplitude"), _number(omega, "omega"), _number(phase, "phase")
+    )
 
 
 def table(points: Sequence[Tuple[float, float]]) -> TimeFunction:
     """Piecewise linear through ``(t, value)`` points (times increasing),
-    constant before the first and after the last."""
-    return TimeFunction.table(list(points))
+    constant before the first and after the last; a list of pairs or an
+    ``n × 2`` array."""
+    try:
+        rows = list(points)
+    except TypeError:
+        raise TypeError(f"points: expected (t, value) pairs, got {type(points).__name__}") from None
+    pairs = [tuple(_numbers_of(p, f"points[{i}]", 2)) for i, p in enumerate(rows)]
+    return TimeFunction.table(pairs)
+
+
+def _function(f: _Any, name: str) -> Union[float, TimeFunction]:
+    """A function-of-time argument: a :class:`TimeFunction` or a number."""
+    return f if isinstance(f, TimeFunction) else _number(f, name)
+
+
+def _point(p: _Any, name: str) -> Point:
+    if not isinstance(p, Point):
+        raise TypeError(f"{name}: expected a point (body.at(sx, sy) or ground(x, y)), got {type(p).__name__}")
+    return p
 
 
 class Builder:
@@ -67,7 +96,7 @@ class Builder:
 
     def gravity(self, gx: float, gy: float) -> "Builder":
         """Sets gravity, m/s² (default ``(0, -9.81)``)."""
-        self._b.gravity(gx, gy)
+        self._b.gravity(_number(gx, "gx"), _number(gy, "gy"))
         return self
 
     def rigid_body(
@@ -82,7 +111,13 @@ class Builder:
         """Adds a rigid body: mass (kg), inertia about the centre of mass
         (kg m²; 0 when a joint fixes its angle), pose ``(x, y, theta)`` and
         velocity ``(vx, vy, omega)``."""
-        return self._b.rigid_body(name, mass=mass, inertia=inertia, pose=pose, velocity=velocity)
+        return self._b.rigid_body(
+            name,
+            mass=_number(mass, "mass"),
+            inertia=_number(inertia, "inertia"),
+            pose=_numbers_of(pose, "pose", 3),
+            velocity=tuple(_numbers_of(velocity, "velocity", 3)),
+        )
 
     def point_mass(
         self,
@@ -93,28 +128,33 @@ class Builder:
         velocity: Tuple[float, float] = (0.0, 0.0),
     ) -> Body:
         """Adds a point mass: mass (kg), position ``(x, y)``, velocity."""
-        return self._b.point_mass(name, mass=mass, position=position, velocity=velocity)
+        return self._b.point_mass(
+            name,
+            mass=_number(mass, "mass"),
+            position=_numbers_of(position, "position", 2),
+            velocity=tuple(_numbers_of(velocity, "velocity", 2)),
+        )
 
     def revolute(self, name: str, a: Point, b: Point) -> "Builder":
         """A revolute joint: the points ``a`` and ``b`` coincide (2 rows)."""
-        self._b.revolute(name, a, b)
+        self._b.revolute(name, _point(a, "a"), _point(b, "b"))
         return self
 
     def distance(self, name: str, a: Point, b: Point, length: float) -> "Builder":
         """A distance joint (massless rod): ``a`` and ``b`` stay ``length`` apart."""
-        self._b.distance(name, a, b, length)
+        self._b.distance(name, _point(a, "a"), _point(b, "b"), _number(length, "length"))
         return self
 
     def weld(self, name: str, a: Point, b: Point) -> "Builder":
         """A weld: the points coincide and the relative angle stays."""
-        self._b.weld(name, a, b)
+        self._b.weld(name, _point(a, "a"), _point(b, "b"))
         return self
 
     def prismatic(self, name: str, a: Point, axis: Tuple[float, float], b: Point) -> "Builder":
         """A prismatic joint: ``b`` slides along the line through ``a`` with
         direction ``axis`` (in ``a``'s body frame, or global for the ground);
         a rigid body ``b`` keeps its relative angle."""
-        self._b.prismatic(name, a, axis, b)
+        self._b.prismatic(name, _point(a, "a"), _numbers_of(axis, "axis", 2), _point(b, "b"))
         return self
 
     def driver(self, name: str, body: Body, coordinate: str, f: Function) -> "Builder":
@@ -124,17 +164,17 @@ class Builder:
         Raises:
             ValueError: another coordinate name.
         """
-        self._b.driver(name, body, coordinate, f)
+        self._b.driver(name, body, coordinate, _function(f, "f"))
         return self
 
     def force(self, name: str, at: Point, fx: Function, fy: Function) -> "Builder":
         """A force ``(fx(t), fy(t))`` in global directions at a point, N."""
-        self._b.force(name, at, fx, fy)
+        self._b.force(name, _point(at, "at"), _function(fx, "fx"), _function(fy, "fy"))
         return self
 
     def torque(self, name: str, body: Body, tau: Function) -> "Builder":
         """A torque ``tau(t)`` on a rigid body, N m (counter-clockwise positive)."""
-        self._b.torque(name, body, tau)
+        self._b.torque(name, body, _function(tau, "tau"))
         return self
 
     def spring(
@@ -142,7 +182,14 @@ class Builder:
     ) -> "Builder":
         """A linear spring-damper between two points: tension
         ``stiffness·(l − rest_length) + damping·dl/dt``."""
-        self._b.spring(name, a, b, stiffness=stiffness, rest_length=rest_length, damping=damping)
+        self._b.spring(
+            name,
+            _point(a, "a"),
+            _point(b, "b"),
+            stiffness=_number(stiffness, "stiffness"),
+            rest_length=_number(rest_length, "rest_length"),
+            damping=_number(damping, "damping"),
+        )
         return self
 
     def rotational_spring(
@@ -150,7 +197,9 @@ class Builder:
     ) -> "Builder":
         """A rotational spring-damper between body ``a`` (None: the ground)
         and rigid body ``b``, at rest at their initial relative angle."""
-        self._b.rotational_spring(name, a, b, stiffness=stiffness, damping=damping)
+        self._b.rotational_spring(
+            name, a, b, stiffness=_number(stiffness, "stiffness"), damping=_number(damping, "damping")
+        )
         return self
 
     def build(self) -> Model:
@@ -160,4 +209,5 @@ class Builder:
             mstar.ModelError: the builder's message (duplicate names, a
                 non-positive mass, a driver of a point mass's angle, ...).
         """
-        return Model(self._b.build())
+        with _translated():
+            return Model(self._b.build())

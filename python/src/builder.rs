@@ -101,7 +101,8 @@ pub(crate) enum FunctionArg {
 }
 
 impl FunctionArg {
-    fn get(self) -> planar::TimeFunction {
+    /// The function (a number: a constant).
+    pub(crate) fn get(self) -> planar::TimeFunction {
         match self {
             Self::Function(f) => f.0,
             Self::Number(c) => planar::TimeFunction::Constant(c),

@@ -3,6 +3,7 @@
 
 use std::time::Instant;
 
+use mstar::csv::Columns;
 use mstar::{Observer, RunStats, SampleRef};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
@@ -23,6 +24,8 @@ pub(crate) struct Collect {
     iterations: Vec<i64>,
     residual: Vec<f64>,
     constraint: Vec<f64>,
+    /// The values of the model's further columns ([`Extra`]), row-major.
+    extra: Vec<f64>,
     /// When the initial state was observed: the start of the stepping, as
     /// `mstar run` times it.
     started: Option<Instant>,
@@ -43,6 +46,7 @@ impl Collect {
             iterations: Vec::new(),
             residual: Vec::new(),
             constraint: Vec::new(),
+            extra: Vec::new(),
             started: None,
         }
     }
@@ -115,6 +119,22 @@ impl Observer for Collect {
     }
 }
 
+/// [`Collect`] with the model's further columns (reactions, efforts, ...):
+/// their values at every sample, by whatever [`Columns`] gives them.
+pub(crate) struct Extra<'c> {
+    /// Where the samples go.
+    pub(crate) collect: &'c mut Collect,
+    /// The further columns ([`crate::model::extra_columns`]).
+    pub(crate) columns: &'c dyn Columns,
+}
+
+impl Observer for Extra<'_> {
+    fn observe(&mut self, s: &SampleRef<'_>) {
+        self.collect.observe(s);
+        self.columns.values(s, &mut self.collect.extra);
+    }
+}
+
 /// A run's figures: `mstar run`'s summary (`wall_time`: the stepping, s).
 pub(crate) fn stats_dict<'py>(
     py: Python<'py>,
@@ -149,8 +169,14 @@ fn matrix<'py>(
 
 impl Collect {
     /// The columns as a dict of numpy arrays (`t`, `u`, `v`, `a`, `lam`,
-    /// `energy`, `iterations`, `residual`, `constraint`), moved, not copied.
-    pub(crate) fn into_dict(self, py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    /// `energy`, `iterations`, `residual`, `constraint`), moved, not copied,
+    /// and the further columns: `extra_names` (their CSV names) and `extra`
+    /// (samples × names).
+    pub(crate) fn into_dict(
+        self,
+        py: Python<'_>,
+        extra_names: Vec<String>,
+    ) -> PyResult<Bound<'_, PyDict>> {
         let d = PyDict::new(py);
         let rows = self.t.len();
         d.set_item("t", PyArray1::from_vec(py, self.t))?;
@@ -163,6 +189,13 @@ impl Collect {
         d.set_item("iterations", PyArray1::from_vec(py, self.iterations))?;
         d.set_item("residual", PyArray1::from_vec(py, self.residual))?;
         d.set_item("constraint", PyArray1::from_vec(py, self.constraint))?;
+        // A run stopped inside a sample's columns leaves no partial row.
+        let width = extra_names.len();
+        let mut extra = self.extra;
+        extra.truncate(rows * width);
+        extra.resize(rows * width, f64::NAN);
+        d.set_item("extra", matrix(py, extra, [rows, width])?)?;
+        d.set_item("extra_names", extra_names)?;
         Ok(d)
     }
 }

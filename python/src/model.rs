@@ -6,12 +6,14 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use mstar::System;
+use mstar::columns::{Columns, OutputColumns, ReactionColumns};
 use mstar::file::{FileError, Format, Mechanism, MechanismFile, Simulation};
+use mstar::model::sensor::Sensor;
 use mstar::run::{CheckReport, RunError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::collect::{Collect, stats_dict};
+use crate::collect::{Collect, Extra, stats_dict};
 use crate::{IntegrationError, ModelError};
 
 /// Where a model came from: what a run with settings re-reads.
@@ -34,6 +36,8 @@ pub(crate) struct NativeModel {
     origin: String,
     mechanism: Mechanism,
     simulation: Simulation,
+    /// The model file's `[[sensor]]`s (none for a builder's model).
+    sensors: Vec<Sensor>,
     warnings: Vec<String>,
 }
 
@@ -68,6 +72,7 @@ impl NativeModel {
             origin,
             mechanism: file.mechanism,
             simulation: file.simulation,
+            sensors: file.output.sensors,
             warnings: file.warnings,
         }
     }
@@ -79,6 +84,19 @@ impl NativeModel {
             origin: "<builder>".to_string(),
             mechanism: Mechanism::Planar(system),
             simulation: Simulation::default(),
+            sensors: Vec::new(),
+            warnings: Vec::new(),
+        }
+    }
+
+    /// A spatial builder's system, with the default settings.
+    pub(crate) fn built_spatial(system: mstar::model::spatial::SpatialSystem) -> Self {
+        Self {
+            source: Source::Built,
+            origin: "<builder>".to_string(),
+            mechanism: Mechanism::Spatial(system),
+            simulation: Simulation::default(),
+            sensors: Vec::new(),
             warnings: Vec::new(),
         }
     }
@@ -188,24 +206,40 @@ impl NativeModel {
             collect.reserve(rows);
         }
         let mut raised = None;
-        let outcome = py.detach(|| {
+        // (Checked here, made again where the run is: not `Sync`.)
+        extra_columns(mechanism, &self.sensors)
+            .map_err(|e| ModelError::new_err(format!("{}: {e}", self.origin)))?;
+        let sensors = &self.sensors;
+        let (outcome, extra_names) = py.detach(|| {
             let mut poll = Poll {
                 last: Instant::now(),
                 raised: &mut raised,
             };
+            // (The reactions alone never: checked above.)
+            let columns = extra_columns(mechanism, sensors)
+                .unwrap_or_else(|_| Box::new(ReactionColumns::new(mstar::run::lookup(mechanism))));
+            let mut observer = Extra {
+                collect: &mut collect,
+                columns: &*columns,
+            };
             let sys = mstar::run::lookup(mechanism);
-            mstar::run::simulate_until(sys, &sim, &mut collect, &mut || poll.stop())
+            let outcome = mstar::run::simulate_until(sys, &sim, &mut observer, &mut || poll.stop());
+            (outcome, columns.names())
         });
         let wall = collect.wall();
         let names = |d: &Bound<'py, PyDict>| -> PyResult<()> {
             d.set_item("coords", mstar::model::coord_names(sys))?;
-            d.set_item("constraints", constraint_names(sys))
+            d.set_item("constraints", constraint_names(sys))?;
+            // The standard columns' names as `mstar run --out` writes them.
+            d.set_item("header", mstar::csv::header(sys))
         };
-        let samples = collect.into_dict(py)?;
+        let samples = collect.into_dict(py, extra_names)?;
         names(&samples)?;
         let error = match outcome {
             Ok(stats) => {
-                samples.set_item("stats", stats_dict(py, Some(&stats), wall)?)?;
+                let stats_py = stats_dict(py, Some(&stats), wall)?;
+                stats_py.set_item("warning", accuracy_warning(sys, &sim, &stats))?;
+                samples.set_item("stats", stats_py)?;
                 return Ok(samples);
             }
             Err(RunError::Settings(e)) => return Err(ModelError::new_err(e.to_string())),
@@ -218,6 +252,28 @@ impl NativeModel {
         error.value(py).setattr("partial", samples)?;
         Err(error)
     }
+}
+
+/// The columns a run adds after the standard ones, as `mstar run --out`
+/// writes them: the reactions and efforts of its joints and drivers, then
+/// its sensors ([`OutputColumns`]). Results expose whatever these name,
+/// generically.
+pub(crate) fn extra_columns<'a>(
+    mechanism: &'a Mechanism,
+    sensors: &[Sensor],
+) -> Result<Box<dyn Columns + 'a>, mstar::columns::SensorError> {
+    Ok(Box::new(OutputColumns::new(
+        mstar::run::lookup(mechanism),
+        sensors,
+    )?))
+}
+
+/// The warning `mstar run` prints (and exits 3 for) when a run's steps went
+/// beyond the error tolerance or its energy drifted beyond it: one line
+/// each, after `warning: ` (`None`: within the tolerance).
+fn accuracy_warning(sys: &dyn System, sim: &Simulation, stats: &mstar::RunStats) -> Option<String> {
+    let (config, _) = mstar::run::config(sim).ok()?;
+    mstar::accuracy::warning(stats, &config, &|i| sys.coord_name(i), true)
 }
 
 /// The samples of a run with a fixed step size (`None` with adaptive steps,

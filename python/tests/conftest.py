@@ -11,6 +11,7 @@ from __future__ import annotations
 import csv
 import math
 import os
+import re
 import subprocess
 from pathlib import Path
 from typing import List
@@ -62,6 +63,24 @@ class CliRun:
         assert len(lines) == 1, self.stderr
         return lines[0][len("error: "):]
 
+    def python_error(self, rules=None) -> str:
+        """:meth:`error` as the package words it: the command line's options
+        as Python arguments (mstar._errors), checked to name none."""
+        from mstar._errors import RUN_RULES, python_message
+
+        message = python_message(self.error(), RUN_RULES if rules is None else rules)
+        assert_no_cli_options(message)
+        return message
+
+
+#: The command line's options, which Python messages must not name.
+CLI_OPTIONS = re.compile(r"--(set|out|h|h-max|t-end|adaptive|strict|jobs|shard|zip|grid|output-every)\b")
+
+
+def assert_no_cli_options(message: str) -> None:
+    found = CLI_OPTIONS.search(message)
+    assert found is None, f"{found.group(0)} in {message!r}"
+
 
 @pytest.fixture
 def run_cli(cli: Path, tmp_path: Path):
@@ -97,9 +116,10 @@ def same(a: float, b: float) -> bool:
 
 
 def assert_same_columns(result, cli_run: CliRun) -> None:
-    """Every standard CSV column of the CLI's run equals the result's exactly."""
+    """Every CSV column of the CLI's run (the standard ones, reactions,
+    efforts, ...) equals the result's of the same name exactly."""
     names = result.columns()
-    assert cli_run.header[: len(names)] == names
+    assert cli_run.header == names
     assert len(cli_run.rows) == len(result), (len(cli_run.rows), len(result))
     for name in names:
         ours = [float(x) for x in result[name]]

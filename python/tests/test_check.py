@@ -30,5 +30,5 @@ def test_check_refusing_redundant_constraints(check_cli):
     r = mstar.load(MODELS / "parallelogram-third-crank.toml").check(redundant="refuse")
     assert cli.code == 1 and r["can_run"] is False
     assert r["report"] == cli.stdout
-    assert r["error"] == cli.error()
+    assert r["error"] == cli.python_error()
     assert r["start_error"].startswith("at start-up (t = 0)")

@@ -22,7 +22,7 @@ def test_a_missing_file_is_a_model_error(run_cli, tmp_path):
     with pytest.raises(mstar.ModelError) as e:
         mstar.load(str(tmp_path / "nope.toml"))
     assert cli.code == 2
-    assert str(e.value) == cli.error()
+    assert str(e.value) == cli.python_error()
 
 
 def test_a_value_out_of_range_is_a_model_error(run_cli, tmp_path):
@@ -32,11 +32,11 @@ def test_a_value_out_of_range_is_a_model_error(run_cli, tmp_path):
     with pytest.raises(mstar.ModelError) as e:
         mstar.load(path)
     assert cli.code == 2
-    assert str(e.value) == cli.error()
+    assert str(e.value) == cli.python_error()
     # The same text, not a file: named <string>.
     with pytest.raises(mstar.ModelError) as e:
         mstar.load(BAD_KEY)
-    assert str(e.value) == cli.error().replace(str(path), "<string>")
+    assert str(e.value) == cli.python_error().replace(str(path), "<string>")
 
 
 @pytest.mark.parametrize(
@@ -55,7 +55,7 @@ def test_bad_settings_are_model_errors(run_cli, settings, args):
     with pytest.raises(mstar.ModelError) as e:
         mstar.load(path).run(**settings)
     assert cli.code == 2
-    assert str(e.value) == cli.error()
+    assert str(e.value) == cli.python_error()
 
 
 def test_refused_redundant_constraints_are_an_integration_error(run_cli):
@@ -64,7 +64,7 @@ def test_refused_redundant_constraints_are_an_integration_error(run_cli):
     with pytest.raises(mstar.IntegrationError) as e:
         mstar.load(path).run(redundant="refuse")
     assert cli.code == 1
-    assert str(e.value) == cli.error()
+    assert str(e.value) == cli.python_error()
     assert len(e.value.partial) == 0
 
 
@@ -76,7 +76,7 @@ def test_a_failed_step_keeps_the_samples_before_it(run_cli):
     with pytest.raises(mstar.IntegrationError) as e:
         mstar.load(path).run(integrator="newmark")
     assert cli.code == 1
-    assert str(e.value) == cli.error()
+    assert str(e.value) == cli.python_error()
     message = str(e.value)
     assert message.startswith("step size too small at t = ")
     t_failed = float(message.removeprefix("step size too small at t = ").split(" ")[0])

@@ -37,9 +37,9 @@ def test_a_python_sweep_equals_the_command_line_s(cli: Path, tmp_path: Path) -> 
     for i in range(4):
         assert ours.run_csv(i).read_bytes() == (tmp_path / "cli" / "runs" / f"{i}.csv").read_bytes()
     rows = ours.summary
-    assert [r["body.upper.mass"] for r in rows] == ["1.0", "1.0", "2.0", "2.0"]
+    assert [r["body.upper.mass"] for r in rows] == [1.0, 1.0, 2.0, 2.0]
     # 0.05 s at h = 1e-3 and 5e-4: 50 and 100 steps, whatever the mass.
-    assert [r["steps"] for r in rows] == ["50", "100", "50", "100"]
+    assert [r["steps"] for r in rows] == [50, 100, 50, 100]
 
 
 def test_a_rerun_skips_the_complete_runs(tmp_path: Path) -> None:
@@ -58,5 +58,7 @@ def test_a_key_that_leads_nowhere_is_the_command_line_s_error(cli: Path, tmp_pat
     )
     assert proc.returncode == 2
     cli_error = [l for l in proc.stderr.splitlines() if l.startswith("error: ")][0][len("error: "):]
-    assert str(e.value) == cli_error
+    from mstar._errors import SWEEP_RULES, python_message
+
+    assert str(e.value) == python_message(cli_error, SWEEP_RULES)
     assert not (tmp_path / "py").exists()

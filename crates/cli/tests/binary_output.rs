@@ -160,11 +160,19 @@ fn an_npz_holds_the_csv_columns_to_the_bit() {
     let extra = "\n[[sensor]]\nname = \"tip\"\ntype = \"acceleration\"\nbody = \"coupler\"\npoint = [0.3, 0.0]\n\n[[sensor]]\nname = \"gap\"\ntype = \"distance\"\nbodies = [\"ground\", \"rocker\"]\n";
     std::fs::write(&sensors, format!("{base}{extra}")).expect("written");
     let sensors = sensors.display().to_string();
-    for choice in [None, Some("t,u:crank.*,reaction:O2.*,effort:motor"), Some("t,sensor:*")] {
+    for choice in [
+        None,
+        Some("t,u:crank.*,reaction:O2.*,effort:motor"),
+        Some("t,sensor:*"),
+    ] {
         let mut outputs = Vec::new();
         for ext in ["csv", "npz"] {
             let out = dir.join(format!("run.{ext}"));
-            let file = if choice == Some("t,sensor:*") { sensors.clone() } else { model("four-bar.toml") };
+            let file = if choice == Some("t,sensor:*") {
+                sensors.clone()
+            } else {
+                model("four-bar.toml")
+            };
             let (m, o) = (file, out.display().to_string());
             let mut args = vec!["run", m.as_str(), "--t-end", "0.05", "--out", o.as_str()];
             if let Some(c) = choice {
@@ -186,7 +194,10 @@ fn an_npz_holds_the_csv_columns_to_the_bit() {
             assert!(same, "{a:?}\n{b:?}");
         }
         match choice {
-            Some("t,sensor:*") => assert_eq!(npz_names, ["t", "sensor:tip.x", "sensor:tip.y", "sensor:gap"]),
+            Some("t,sensor:*") => assert_eq!(
+                npz_names,
+                ["t", "sensor:tip.x", "sensor:tip.y", "sensor:gap"]
+            ),
             Some(_) => assert_eq!(npz_names.len(), 1 + 3 + 3 + 1),
             None => {}
         }

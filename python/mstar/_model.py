@@ -1,0 +1,201 @@
+"""Models: :func:`load` (a model file or TOML text) and :class:`Model`
+(its runs and checks)."""
+
+from __future__ import annotations
+
+import os
+import warnings
+from typing import Any, Dict, List, Optional, Union
+
+from ._errors import RUN_RULES, IntegrationError, python_message, translated
+from ._literal import integer, number, toml_literal
+from ._native import load_path as _load_path
+from ._native import load_text as _load_text
+from ._result import Result
+
+#: The ``[simulation]`` keys that take a real number and an integer.
+_REAL_KEYS = frozenset({"t_end", "h", "h_min", "h_max", "rho", "alpha", "beta", "gamma", "tol", "rtol", "atol"})
+_INTEGER_KEYS = frozenset({"max_iterations"})
+
+
+class AccuracyWarning(UserWarning):
+    """A run that reached its end with steps beyond the error tolerance, or
+    an energy drift beyond it (``mstar run`` warns and exits 3): the message
+    says where and what to rerun with."""
+
+
+class ModelWarning(UserWarning):
+    """A value the model reader changed (``mstar run`` prints ``warning: ...``)."""
+
+
+def _setting(key: str, value: Any) -> str:
+    """``value`` of the ``[simulation]`` key ``key`` as a TOML literal: a
+    number for the numeric keys (numpy's included), else a bool, number or
+    string.
+
+    Raises:
+        TypeError: naming the argument (``t_end: expected a number, got str 'abc'``).
+    """
+    if key in _REAL_KEYS:
+        return repr(number(value, key))
+    if key in _INTEGER_KEYS:
+        return repr(integer(value, key))
+    return toml_literal(value, key)
+
+
+def _overrides(settings: Dict[str, Any], overrides: Optional[Dict[str, Any]] = None) -> List[str]:
+    """``simulation.key=value`` for each setting that is not None, then
+    ``key=value`` for each of ``overrides`` (any dotted key of the file)."""
+    given = [f"simulation.{k}={_setting(k, v)}" for k, v in settings.items() if v is not None]
+    for key, value in (overrides or {}).items():
+        if not isinstance(key, str):
+            raise TypeError(f"overrides: expected str keys, got {type(key).__name__} {key!r}")
+        given.append(f"{key}={toml_literal(value, f'overrides[{key!r}]', lists=True)}")
+    return given
+
+
+class Model:
+    """A model to run: a model file's mechanism and ``[simulation]``, or a
+    planar builder's (with the default settings).
+
+    Made by :func:`load` or :meth:`mstar.planar.Builder.build`.
+    """
+
+    def __init__(self, native: Any, source: Optional[str] = None, is_path: bool = False) -> None:
+        self._native = native
+        #: The model file's path (``is_path``) or TOML text; None for a builder's.
+        self._source = source
+        self._is_path = is_path
+
+    @property
+    def origin(self) -> str:
+        """What names the model in messages: the path, ``<string>`` or ``<builder>``."""
+        return self._native.origin
+
+    @property
+    def kind(self) -> str:
+        """``"planar"`` or ``"spatial"``."""
+        return self._native.kind
+
+    @property
+    def coords(self) -> List[str]:
+        """The coordinates' names, in the order of the columns of ``Result.u``."""
+        return self._native.coords
+
+    @property
+    def constraints(self) -> List[str]:
+        """The constraint rows' names, in the order of ``Result.lam``'s columns."""
+        return self._native.constraints
+
+    @property
+    def warnings(self) -> List[str]:
+        """The reader's warnings (also issued as :class:`ModelWarning` by :func:`load`)."""
+        return self._native.warnings
+
+    def check(self, overrides: Optional[Dict[str, Any]] = None, **settings: Any) -> Dict[str, Any]:
+        """What ``mstar check`` reports, as a dict.
+
+        Keys: ``coordinates``, ``constraints``, ``rank`` and
+        ``degrees_of_freedom`` (None when the rank was not computed: the sparse elimination past its fill budget),
+        ``redundant_constraints`` (joint names), ``minimum_norm``,
+        ``position_violation`` and ``velocity_violation`` (``(owner, row,
+        value)`` or None), ``projection`` (``{"position": (coordinate, by),
+        "velocity": ...}`` or None when the start fails), ``start_error``,
+        ``can_run``, ``error`` (the refusal of redundant constraints, as
+        ``mstar check`` prints it, or None) and ``report`` (its text).
+        ``settings`` override ``[simulation]`` keys, ``overrides`` any key
+        (as :meth:`run`).
+
+        Raises:
+            ModelError: a setting out of range, with ``mstar check``'s message.
+            TypeError: a setting of the wrong type.
+        """
+        given = _overrides(settings, overrides)
+        with translated(RUN_RULES):
+            report = self._native.check(given)
+        for key in ("error", "start_error"):
+            if isinstance(report.get(key), str):
+                report[key] = python_message(report[key], RUN_RULES)
+        return report
+
+    def run(
+        self,
+        t_end: Optional[float] = None,
+        h: Optional[float] = None,
+        overrides: Optional[Dict[str, Any]] = None,
+        **settings: Any,
+    ) -> Result:
+        """Runs the model, every accepted step a sample, with the GIL released.
+
+        ``t_end``, ``h`` and ``settings`` override the keys of ``[simulation]``
+        (``rho=0.8``, ``integrator="hht"``, ``error_control="adaptive"``, ...),
+        as ``mstar run --set simulation.key=value`` does; None keeps the file's.
+        Numbers may be numpy's (``np.float64``, ``np.int64``, 0-d arrays ...).
+        ``overrides`` sets any key of a model file by its dotted path, as
+        ``--set`` does: ``{"body.bob.mass": 2.0, "output.every": 1}``.
+
+        Raises:
+            TypeError: a number setting that is not a number (``t_end:
+                expected a number, got str 'abc'``), a value of another type.
+            ModelError: a setting that is unknown or out of range.
+            IntegrationError: the start or a step failed, or redundant
+                constraints were refused; ``e.partial`` is the :class:`Result`
+                of the samples before.
+            KeyboardInterrupt: Ctrl-C; ``e.partial`` as above.
+
+        Warns:
+            AccuracyWarning: the run went beyond the error tolerance (``mstar
+                run``'s warning, in ``result.stats.warning`` too).
+        """
+        given = _overrides({"t_end": t_end, "h": h, **settings}, overrides)
+        try:
+            with translated(RUN_RULES):
+                raw = self._native.run(given)
+        except (IntegrationError, KeyboardInterrupt) as e:
+            partial = getattr(e, "partial", None)
+            if isinstance(partial, dict):
+                e.partial = Result(partial)  # type: ignore[union-attr]
+            raise
+        stats = raw["stats"]
+        if isinstance(stats.get("warning"), str):
+            lines = [python_message(l.removeprefix("warning: "), RUN_RULES) for l in stats["warning"].splitlines()]
+            stats["warning"] = "\n".join(lines)
+            for line in lines:
+                warnings.warn(line, AccuracyWarning, stacklevel=2)
+        return Result(raw, model=self, overrides=given)
+
+    def __repr__(self) -> str:
+        return f"<mstar.Model {self.origin!r}: {self.kind}, {len(self.coords)} coordinates, {len(self.constraints)} constraints>"
+
+
+def _is_path(source: Union[str, "os.PathLike[str]"]) -> bool:
+    if not isinstance(source, str):
+        return True
+    if os.path.isfile(source):
+        return True
+    # A one-line name of a model file that is not there: read as a path, so
+    # that the error says the file cannot be read (as `mstar run` does).
+    one_line = "\n" not in source and "=" not in source
+    return one_line and source.endswith((".toml", ".json", ".urdf"))
+
+
+def load(source: Union[str, "os.PathLike[str]"]) -> Model:
+    """Reads a model: a path (``str`` or ``os.PathLike``) when it names an
+    existing file, or a one-line name ending in ``.toml`` / ``.json``; else
+    the TOML text of a model (named ``<string>`` in messages).
+
+    Raises:
+        ModelError: the file cannot be read, or the model is not valid, with
+            the message ``mstar run`` prints.
+    """
+    if not isinstance(source, (str, os.PathLike)):
+        raise TypeError(f"source: expected a path or TOML text, got {type(source).__name__}")
+    is_path = _is_path(source)
+    with translated(RUN_RULES):
+        if is_path:
+            native = _load_path(os.fspath(source))
+        else:
+            native = _load_text(source)
+    for w in native.warnings:
+        warnings.warn(w, ModelWarning, stacklevel=2)
+    return Model(native, os.fspath(source), is_path)
