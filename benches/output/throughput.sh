@@ -30,6 +30,6 @@ echo "no output: wall time (s):${times[none]} (median $base)"
 for ext in csv npz; do
   m=$(echo "${times[$ext]}" | median)
   awk -v ext="$ext" -v t="${times[$ext]}" -v m="$m" -v b="$base" -v s="${sizes[$ext]}" 'BEGIN {
-    d = m - b; printf "%s: wall time (s):%s (median %s); %.1f MB; writing %.2f s, %.0f MB/s\n",
+    d = m - b; printf "%s: wall time (s):%s (median %s); %.3f MB; writing %.2f s, %.0f MB/s\n",
       ext, t, m, s / 1e6, d, (d > 0 ? s / 1e6 / d : 0) }'
 done

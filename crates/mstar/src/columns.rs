@@ -21,6 +21,15 @@ pub trait Columns {
 
     /// Their values at a sample, appended to `out` (as many as `names`).
     fn values(&self, s: &SampleRef<'_>, out: &mut Vec<f64>);
+
+    /// [`values`](Self::values) where only the columns `wanted[i]` are
+    /// needed: the others may be NaN, unworked (a column choice of a large
+    /// model saves working out what it does not write). As many values as
+    /// `names` either way.
+    fn values_wanted(&self, s: &SampleRef<'_>, wanted: &[bool], out: &mut Vec<f64>) {
+        let _ = wanted;
+        self.values(s, out);
+    }
 }
 
 /// The reaction and effort columns of a model's CSV
@@ -90,6 +99,25 @@ impl Columns for ReactionColumns<'_> {
     fn values(&self, s: &mstar_model::SampleRef<'_>, out: &mut Vec<f64>) {
         for i in 0..self.joints {
             self.sys.reaction_into(i, s.t, s.u, s.lambda, out);
+        }
+        out.extend(
+            self.drivers
+                .iter()
+                .map(|&(_, row)| s.lambda.get(row).map_or(f64::NAN, |l| -l)),
+        );
+    }
+
+    fn values_wanted(&self, s: &SampleRef<'_>, wanted: &[bool], out: &mut Vec<f64>) {
+        let c = self.sys.reaction_components().len();
+        for i in 0..self.joints {
+            if wanted
+                .get(i * c..(i + 1) * c)
+                .is_none_or(|w| w.contains(&true))
+            {
+                self.sys.reaction_into(i, s.t, s.u, s.lambda, out);
+            } else {
+                out.extend(std::iter::repeat_n(f64::NAN, c));
+            }
         }
         out.extend(
             self.drivers
@@ -267,6 +295,20 @@ impl Columns for SensorColumns<'_> {
             self.value(r, &state, out);
         }
     }
+
+    fn values_wanted(&self, s: &SampleRef<'_>, wanted: &[bool], out: &mut Vec<f64>) {
+        let state = s.state();
+        let mut at = 0;
+        for (_, r) in &self.sensors {
+            let c = self.components(r).len().max(1);
+            if wanted.get(at..at + c).is_none_or(|w| w.contains(&true)) {
+                self.value(r, &state, out);
+            } else {
+                out.extend(std::iter::repeat_n(f64::NAN, c));
+            }
+            at += c;
+        }
+    }
 }
 
 /// Every column a model file's run writes after the state: reactions and
@@ -312,6 +354,12 @@ impl Columns for OutputColumns<'_> {
     fn values(&self, s: &SampleRef<'_>, out: &mut Vec<f64>) {
         self.reactions.values(s, out);
         self.sensors.values(s, out);
+    }
+
+    fn values_wanted(&self, s: &SampleRef<'_>, wanted: &[bool], out: &mut Vec<f64>) {
+        let (first, second) = wanted.split_at(self.reactions.count().min(wanted.len()));
+        self.reactions.values_wanted(s, first, out);
+        self.sensors.values_wanted(s, second, out);
     }
 }
 
@@ -408,12 +456,17 @@ fn closest(pattern: &str, names: &[String]) -> Vec<String> {
 /// characters (none included) and every other character itself.
 #[must_use]
 pub fn glob(pattern: &str, name: &str) -> bool {
-    let (p, n): (Vec<char>, Vec<char>) = (pattern.chars().collect(), name.chars().collect());
+    // Bytes of UTF-8: `*` is never part of another character's bytes, and
+    // equal characters are equal bytes.
+    let (p, n) = (pattern.as_bytes(), name.as_bytes());
+    if !p.contains(&b'*') {
+        return p == n;
+    }
     // Greedy matching with one back-track point (the last `*`).
     let (mut i, mut j) = (0, 0);
     let mut star: Option<(usize, usize)> = None;
     while j < n.len() {
-        if i < p.len() && p[i] == '*' {
+        if i < p.len() && p[i] == b'*' {
             star = Some((i, j));
             i += 1;
         } else if i < p.len() && p[i] == n[j] {
@@ -427,7 +480,7 @@ pub fn glob(pattern: &str, name: &str) -> bool {
             return false;
         }
     }
-    p[i..].iter().all(|&c| c == '*')
+    p[i..].iter().all(|&c| c == b'*')
 }
 
 #[cfg(test)]
@@ -443,6 +496,8 @@ mod tests {
         assert!(!glob("u:*.theta", "u:crank.x"));
         assert!(glob("a*b*c", "aXbYbZc"));
         assert!(!glob("t", "theta"));
+        assert!(glob("sensor:é*", "sensor:éa"));
+        assert!(!glob("sensor:é*", "sensor:ea"));
         assert!(glob("t", "t"));
     }
 

@@ -556,6 +556,20 @@ impl CsvStream {
         }
     }
 
+    /// Which extra columns the rows write (`None`: all of them), for
+    /// [`Columns::values_wanted`](crate::columns::Columns::values_wanted).
+    #[must_use]
+    pub fn extra_wanted(&self, extra: usize) -> Option<Vec<bool>> {
+        let chosen = self.selection.as_ref()?;
+        let mut wanted = vec![false; extra];
+        for &i in chosen {
+            if let Some(w) = i.checked_sub(self.standard).and_then(|k| wanted.get_mut(k)) {
+                *w = true;
+            }
+        }
+        Some(wanted)
+    }
+
     /// Whether the rows need the extra columns' values (a selection may
     /// leave them all out, and save computing them).
     #[must_use]

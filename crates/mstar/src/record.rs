@@ -101,6 +101,9 @@ pub struct Recorder<'a> {
     last_u: Vec<f64>,
     /// The whole last state observed, when asked to keep it.
     last_state: Option<mstar_model::Sample>,
+    /// Which extra columns the stream writes (worked out at the first row;
+    /// inner `None`: all).
+    wanted: Option<Option<Vec<bool>>>,
 }
 
 impl std::fmt::Debug for Recorder<'_> {
@@ -137,6 +140,7 @@ impl<'a> Recorder<'a> {
             max_constraint: 0.0,
             last_u: Vec::new(),
             last_state: None,
+            wanted: None,
         }
     }
 
@@ -197,11 +201,16 @@ impl<'a> Recorder<'a> {
             return;
         };
         let columns = self.columns.filter(|_| stream.needs_extra());
+        let wanted = self
+            .wanted
+            .get_or_insert_with(|| columns.and_then(|c| stream.extra_wanted(c.count())));
         let extra = &mut self.extra;
         self.grid.rows(s, &mut |row| {
             extra.clear();
-            if let Some(columns) = columns {
-                columns.values(row, extra);
+            match (columns, wanted.as_deref()) {
+                (Some(columns), Some(wanted)) => columns.values_wanted(row, wanted, extra),
+                (Some(columns), None) => columns.values(row, extra),
+                (None, _) => {}
             }
             stream.push_with(row, extra);
         });
@@ -215,10 +224,13 @@ impl<'a> Recorder<'a> {
             return;
         };
         let columns = columns.filter(|_| stream.needs_extra());
+        let wanted = columns.and_then(|c| stream.extra_wanted(c.count()));
         grid.finish(&mut |row| {
             extra.clear();
-            if let Some(columns) = columns {
-                columns.values(row, extra);
+            match (columns, wanted.as_deref()) {
+                (Some(columns), Some(wanted)) => columns.values_wanted(row, wanted, extra),
+                (Some(columns), None) => columns.values(row, extra),
+                (None, _) => {}
             }
             stream.push_with(row, extra);
         });
