@@ -105,7 +105,7 @@ class Result:
     def columns(self) -> List[str]:
         """The names of the columns ``mstar run --out`` writes, in its
         order: ``t``, ``u:<coord>``, ``v:<coord>``, ``a:<coord>``,
-        ``lambda:<i>``, ``energy``, ``iterations``, ``residual``,
+        ``lambda:<row>``, ``energy``, ``iterations``, ``residual``,
         ``constraint`` (as the library names them, ``mstar::csv::header``),
         then :attr:`extra_names`."""
         if self._header is not None:
@@ -113,7 +113,10 @@ class Result:
         names = ["t"]
         for prefix in ("u", "v", "a"):
             names += [f"{prefix}:{c}" for c in self.coords]
-        names += [f"lambda:{i}" for i in range(len(self.constraints))]
+        rows = [f"lambda:{c}" for c in self.constraints]
+        if len(set(rows)) < len(rows):  # (the library's rule for repeated row names)
+            rows = [f"lambda:{i}" for i in range(len(self.constraints))]
+        names += rows
         return names + ["energy", "iterations", "residual", "constraint"] + self.extra_names
 
     def _group(self, prefix: str, what: str) -> Dict[str, np.ndarray]:

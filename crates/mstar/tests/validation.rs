@@ -104,9 +104,11 @@ fn the_spatial_slider_crank_converges_to_the_index1_reference_at_second_order() 
 #[test]
 fn every_model_with_a_reference_is_validated() {
     // A model file in models/ is a reference case, or the reference of one
-    // (parallelogram.toml), or an example (crank-and-spring, the JSON copy).
+    // (parallelogram.toml), or an example (crank-and-spring, the sensors of
+    // the four-bar, the JSON copy).
     let examples = [
         "crank-and-spring.toml",
+        "four-bar-sensors.toml",
         "double-pendulum.json",
         "parallelogram.toml",
     ];
