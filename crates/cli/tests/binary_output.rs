@@ -269,3 +269,34 @@ fn an_npz_to_a_fifo_is_refused() {
         "{err}"
     );
 }
+
+/// `mstar animate` reads a run's `.npz` as it reads its CSV file: the same
+/// picture, byte for byte.
+#[test]
+fn animate_draws_an_npz_as_its_csv() {
+    let dir = scratch("npz-animate");
+    let mut pictures = Vec::new();
+    for ext in ["csv", "npz"] {
+        let out = dir.join(format!("run.{ext}"));
+        let r = mstar(&[
+            "run",
+            &model("four-bar.toml"),
+            "--t-end",
+            "0.2",
+            "--out",
+            &out.display().to_string(),
+        ]);
+        assert!(r.status.success(), "{}", text(&r.stderr));
+        let png = dir.join(format!("{ext}.png"));
+        let r = mstar(&[
+            "animate",
+            &model("four-bar.toml"),
+            &out.display().to_string(),
+            "--png",
+            &png.display().to_string(),
+        ]);
+        assert!(r.status.success(), "{}", text(&r.stderr));
+        pictures.push(std::fs::read(&png).expect("the picture"));
+    }
+    assert!(pictures[0] == pictures[1], "the pictures differ");
+}

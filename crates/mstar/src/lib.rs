@@ -41,7 +41,7 @@ pub mod accuracy;
 pub mod analysis;
 pub mod columns;
 pub mod csv;
-mod npz;
+pub mod npz;
 pub mod pendulum;
 pub mod record;
 pub mod redundant;

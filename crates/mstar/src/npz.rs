@@ -181,6 +181,160 @@ impl Npz {
     }
 }
 
+/// The `columns` and `data` arrays of an `.npz` as [`Npz`] writes it (or
+/// `numpy.savez(f, columns=names, data=rows)`, stored, not compressed): the
+/// names and the rows (row-major), as read back by `mstar animate`.
+///
+/// # Errors
+/// A file that is not such an archive, with what is missing or malformed.
+pub fn read(path: &std::path::Path) -> io::Result<(Vec<String>, Vec<f64>)> {
+    let zip = std::fs::read(path)?;
+    let bad = |what: &str| io::Error::new(io::ErrorKind::InvalidData, what.to_string());
+    let entries =
+        entries(&zip).ok_or_else(|| bad("not a ZIP archive (no end of central directory)"))?;
+    let find = |name: &str| {
+        entries
+            .iter()
+            .find(|(n, ..)| n == name)
+            .and_then(|&(_, at, size, method)| (method == 0).then_some((at, size)))
+            .and_then(|(at, size)| zip.get(at..at.checked_add(size)?))
+            .ok_or_else(|| {
+                bad(&format!(
+                    "no stored {name} (write it with mstar run --out FILE.npz)"
+                ))
+            })
+    };
+    let (descr, shape, bytes) =
+        npy(find("columns.npy")?).ok_or_else(|| bad("columns.npy is not an .npy array"))?;
+    let width: usize = descr
+        .strip_prefix("<U")
+        .and_then(|w| w.parse().ok())
+        .filter(|&w: &usize| w > 0)
+        .ok_or_else(|| bad("columns.npy is not an array of text (<U…)"))?;
+    if shape.len() != 1 || bytes.len() != 4 * width * shape[0] {
+        return Err(bad("columns.npy has the wrong shape"));
+    }
+    let names = bytes
+        .chunks(4 * width)
+        .map(|name| {
+            name.chunks(4)
+                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .take_while(|&c| c != 0)
+                .map(|c| char::from_u32(c).unwrap_or(char::REPLACEMENT_CHARACTER))
+                .collect()
+        })
+        .collect::<Vec<String>>();
+    let (descr, shape, bytes) =
+        npy(find("data.npy")?).ok_or_else(|| bad("data.npy is not an .npy array"))?;
+    if descr != "<f8"
+        || shape.len() != 2
+        || shape[1] != names.len()
+        || bytes.len() != 8 * shape[0] * shape[1]
+    {
+        return Err(bad(
+            "data.npy is not a (rows, columns) array of <f8 matching columns.npy",
+        ));
+    }
+    let data = bytes
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]))
+        .collect();
+    Ok((names, data))
+}
+
+/// Little-endian integers of `b` at `at` (`None` past the end).
+fn le(b: &[u8], at: usize, n: usize) -> Option<u64> {
+    let bytes = b.get(at..at.checked_add(n)?)?;
+    Some(
+        bytes
+            .iter()
+            .rev()
+            .fold(0, |x, &byte| (x << 8) | u64::from(byte)),
+    )
+}
+
+/// The entries of a ZIP archive: name, data offset, size, method (APPNOTE
+/// §4.3.12-§4.3.16, ZIP64 where a field says `0xFFFFFFFF`).
+fn entries(zip: &[u8]) -> Option<Vec<(String, usize, usize, u64)>> {
+    let eocd = (0..=zip.len().checked_sub(22)?)
+        .rev()
+        .find(|&i| le(zip, i, 4) == Some(0x0605_4b50))?;
+    let (mut count, mut cd) = (le(zip, eocd + 10, 2)?, le(zip, eocd + 16, 4)?);
+    if cd == u64::from(ZIP64_MARK) || count == 0xFFFF {
+        let locator = eocd.checked_sub(20)?;
+        let end64 = usize::try_from(le(zip, locator + 8, 8)?).ok()?;
+        count = le(zip, end64 + 32, 8)?;
+        cd = le(zip, end64 + 48, 8)?;
+    }
+    let mut at = usize::try_from(cd).ok()?;
+    let mut out = Vec::new();
+    for _ in 0..count {
+        if le(zip, at, 4)? != 0x0201_4b50 {
+            return None;
+        }
+        let method = le(zip, at + 10, 2)?;
+        let (name_len, extra_len, comment) = (
+            le(zip, at + 28, 2)?,
+            le(zip, at + 30, 2)?,
+            le(zip, at + 32, 2)?,
+        );
+        let (name_len, extra_len) = (
+            usize::try_from(name_len).ok()?,
+            usize::try_from(extra_len).ok()?,
+        );
+        let name = String::from_utf8_lossy(zip.get(at + 46..at + 46 + name_len)?).into_owned();
+        let mut size = le(zip, at + 24, 4)?;
+        let mut offset = le(zip, at + 42, 4)?;
+        let extra = zip.get(at + 46 + name_len..at + 46 + name_len + extra_len)?;
+        if le(extra, 0, 2) == Some(1) {
+            // ZIP64: the sizes, then the offset, each only where marked.
+            let mut k = 4;
+            if size == u64::from(ZIP64_MARK) {
+                size = le(extra, k, 8)?;
+                k += 16;
+            }
+            if offset == u64::from(ZIP64_MARK) {
+                offset = le(extra, k, 8)?;
+            }
+        }
+        let local = usize::try_from(offset).ok()?;
+        let skip = usize::try_from(le(zip, local + 26, 2)? + le(zip, local + 28, 2)?).ok()?;
+        out.push((name, local + 30 + skip, usize::try_from(size).ok()?, method));
+        at += 46 + name_len + extra_len + usize::try_from(comment).ok()?;
+    }
+    Some(out)
+}
+
+/// An `.npy` array's `descr`, shape and data (version 1, 2 or 3, C order).
+fn npy(bytes: &[u8]) -> Option<(String, Vec<usize>, &[u8])> {
+    if bytes.get(..6)? != b"\x93NUMPY" {
+        return None;
+    }
+    let (len, start) = match bytes.get(6)? {
+        1 => (le(bytes, 8, 2)?, 10),
+        _ => (le(bytes, 8, 4)?, 12),
+    };
+    let end = start + usize::try_from(len).ok()?;
+    let header = std::str::from_utf8(bytes.get(start..end)?).ok()?;
+    let value = |key: &str| {
+        let from = header.find(key)? + key.len();
+        Some(header[from..].trim_start_matches([':', ' ', '\'']))
+    };
+    let descr = value("'descr'")?.split('\'').next()?.to_string();
+    if !value("'fortran_order'")?.starts_with("False") {
+        return None;
+    }
+    let shape = value("'shape'")?;
+    let shape = shape.get(1..shape.find(')')?)?;
+    let shape = shape
+        .split(',')
+        .map(str::trim)
+        .filter(|s| !s.is_empty())
+        .map(|s| s.parse().ok())
+        .collect::<Option<Vec<usize>>>()?;
+    Some((descr, shape, bytes.get(end..)?))
+}
+
 /// The CRC-32 of the bytes `from..to` of `file`.
 fn crc_of(file: &mut std::fs::File, from: u64, to: u64) -> io::Result<crc32fast::Hasher> {
     let mut crc = crc32fast::Hasher::new();
@@ -324,6 +478,33 @@ mod tests {
         assert_eq!(h.last(), Some(&b'\n'));
         let text = std::str::from_utf8(&h[10..]).expect("ASCII");
         assert!(text.starts_with("{'descr': '<f8', 'fortran_order': False, 'shape': (3, 2), }"));
+    }
+
+    /// What [`Npz`] writes, [`read`] reads back: the names and the rows.
+    #[test]
+    fn an_archive_reads_back() {
+        let names: Vec<String> = ["t", "u:é.x"].map(String::from).to_vec();
+        let (mut npz, mut bytes) = Npz::head(&names);
+        let rows = [[0.0, 1.5], [0.1, -2.25]];
+        let mut data = Vec::new();
+        for row in rows {
+            Npz::encode(row.into_iter(), &mut data);
+        }
+        npz.written(&data);
+        bytes.extend_from_slice(&data);
+        let path = std::env::temp_dir().join(format!("mstar-npz-{}.npz", std::process::id()));
+        std::fs::write(&path, &bytes).expect("written");
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(&path)
+            .expect("open");
+        npz.finish(&mut file, 2, false).expect("finished");
+        drop(file);
+        let (got_names, got) = read(&path).expect("read back");
+        let _ = std::fs::remove_file(&path);
+        assert_eq!(got_names, names);
+        assert_eq!(got, vec![0.0, 1.5, 0.1, -2.25]);
     }
 
     /// A layout's head ends where its rows begin, and its row count has

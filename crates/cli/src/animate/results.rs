@@ -1,4 +1,4 @@
-//! The CSV file of `mstar run` read back for a model: the times and, per row,
+//! The CSV (or `.npz`) file of `mstar run` read back for a model: the times and, per row,
 //! the coordinates of the model's bodies, found by column name
 //! (`u:<body>.x`, `.y`, `.theta` of a planar model, `.x` … `.z`, `.e0` …
 //! `.e3` of a spatial one) so that the column order does not matter.
@@ -37,6 +37,9 @@ struct Column {
 /// has a field that is not a finite number (named by line and column), or
 /// goes back in time.
 pub fn read(path: &Path, wanted: &[(String, usize)], n_coords: usize) -> Result<Results> {
+    if mstar::csv::is_npz(path) {
+        return read_npz(path, wanted, n_coords);
+    }
     let file =
         std::fs::File::open(path).with_context(|| format!("could not read {}", path.display()))?;
     parse(std::io::BufReader::new(file), path, wanted, n_coords)
@@ -100,6 +103,49 @@ pub fn parse(
     }
     if out.times.is_empty() {
         bail!("{name}: no rows after the header");
+    }
+    Ok(out)
+}
+
+/// [`read`] of an `.npz` (`mstar run --out FILE.npz`): the same columns by
+/// name, the same checks, rows counted from 1.
+fn read_npz(path: &Path, wanted: &[(String, usize)], n_coords: usize) -> Result<Results> {
+    let name = path.display();
+    let (names, data) = mstar::npz::read(path).with_context(|| format!("could not read {name}"))?;
+    let header = csv::StringRecord::from(names.clone());
+    let (time, columns) =
+        columns(&header, wanted, n_coords).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
+    let mut out = Results {
+        times: Vec::new(),
+        states: Vec::new(),
+    };
+    for (k, row) in data.chunks_exact(names.len().max(1)).enumerate() {
+        let number = |field: usize, column: &str| -> Result<f64> {
+            match row.get(field) {
+                Some(&x) if x.is_finite() => Ok(x),
+                x => bail!(
+                    "{name}: row {}: column '{column}': {x:?} is not a finite number",
+                    k + 1
+                ),
+            }
+        };
+        let t = number(time, "t")?;
+        if out.times.last().is_some_and(|&before| t < before) {
+            bail!(
+                "{name}: row {}: t = {} comes before the previous row's",
+                k + 1,
+                mstar::newmark::Short(t)
+            );
+        }
+        let mut u = vec![0.0; n_coords];
+        for c in &columns {
+            u[c.coord] = number(c.field, &c.name)?;
+        }
+        out.times.push(t);
+        out.states.push(u);
+    }
+    if out.times.is_empty() {
+        bail!("{name}: no rows");
     }
     Ok(out)
 }
