@@ -36,8 +36,8 @@ pub trait Columns {
 /// (`docs/model-format.md`, "Output"): per joint and driver, in the order of
 /// the file, `reaction:<name>.fx`, `.fy`, `.tau` (planar) or `.fx`, `.fy`,
 /// `.fz`, `.tx`, `.ty`, `.tz` (spatial) — the constraint force `−Bᵀλ` its
-/// rows put on its body ([`PlanarSystem::reaction`],
-/// [`SpatialSystem::reaction`]) — then per driver `effort:<name>` = `−λ`,
+/// rows put on its body ([`PlanarSystem::reaction`](mstar_model::planar::PlanarSystem::reaction),
+/// [`SpatialSystem::reaction`](mstar_model::spatial::SpatialSystem::reaction)) — then per driver `effort:<name>` = `−λ`,
 /// the force (N) or torque (N m) the driver applies along the coordinate
 /// (or joint motion) it drives, positive in that coordinate's direction.
 pub struct ReactionColumns<'a> {

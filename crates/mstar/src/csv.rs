@@ -557,7 +557,7 @@ impl CsvStream {
     }
 
     /// Which extra columns the rows write (`None`: all of them), for
-    /// [`Columns::values_wanted`](crate::columns::Columns::values_wanted).
+    /// [`Columns::values_wanted`].
     #[must_use]
     pub fn extra_wanted(&self, extra: usize) -> Option<Vec<bool>> {
         let chosen = self.selection.as_ref()?;

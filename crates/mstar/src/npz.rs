@@ -7,7 +7,7 @@
 //!
 //! so that `numpy.load("run.npz")` reads it without mstar. Rows are appended
 //! as the run makes them; the `.npy` shape, the entry's CRC-32 and sizes and
-//! the central directory are written at the end ([`Npz::finish`]), which is
+//! the central directory are written at the end (`Npz::finish`), which is
 //! why the file must be seekable. ZIP64 fields are always used for
 //! `data.npy`, so a run may write more than 4 GiB.
 //!
@@ -181,7 +181,7 @@ impl Npz {
     }
 }
 
-/// The `columns` and `data` arrays of an `.npz` as [`Npz`] writes it (or
+/// The `columns` and `data` arrays of an `.npz` as `mstar run` writes it (or
 /// `numpy.savez(f, columns=names, data=rows)`, stored, not compressed): the
 /// names and the rows (row-major), as read back by `mstar animate`.
 ///
