@@ -46,6 +46,7 @@ mod planar;
 mod sensors;
 mod settings;
 mod spatial;
+pub mod pose;
 mod urdf;
 
 use std::path::Path;
