@@ -140,6 +140,8 @@ struct Statics<'a, S: System + ?Sized> {
     zeros: Vec<f64>,
     /// Force and length scales of the merit function.
     force: f64,
+    /// The largest force scale of the iterates, for the convergence test.
+    force_seen: f64,
     length: f64,
     /// `ω²_ref = F / (L m_max)`, 1/s², the unit of `μ`.
     omega2: f64,
@@ -171,6 +173,7 @@ impl<'a, S: System + ?Sized> Statics<'a, S> {
             t0,
             zeros,
             force,
+            force_seen: force,
             length,
             omega2,
         })
@@ -186,10 +189,13 @@ impl<'a, S: System + ?Sized> Statics<'a, S> {
         r2 / (self.force * self.force) + p2 / (self.length * self.length)
     }
 
-    /// Whether the last evaluation meets the tolerance.
-    fn converged(&self, tol: f64) -> bool {
-        let f = self.lin.force_scale().max(self.force * f64::EPSILON);
-        self.lin.residual_norm() <= tol * f && self.lin.constraint_norm() <= tol * self.length
+    /// Whether the last evaluation meets the tolerance. The force scale is
+    /// the largest seen so far, not the current one: where a spring balances
+    /// gravity the net forces `g` vanish, but their parts do not.
+    fn converged(&mut self, tol: f64) -> bool {
+        self.force_seen = self.force_seen.max(self.lin.force_scale());
+        self.lin.residual_norm() <= tol * self.force_seen
+            && self.lin.constraint_norm() <= tol * self.length
     }
 
     /// The multipliers of the acceleration problem `M ü + Bᵀλ = g`, `B ü =
