@@ -17,7 +17,7 @@ mod common;
 use std::collections::HashMap;
 use std::path::Path;
 
-use common::{mstar, model, scratch, text};
+use common::{model, mstar, scratch, text};
 
 /// The one row of an equilibrium CSV, by column name.
 fn read_row(path: &Path) -> HashMap<String, f64> {
@@ -131,7 +131,10 @@ stiffness = {k}
     ]);
     let err = text(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("bar.theta") && err.contains("initial pose"), "{err}");
+    assert!(
+        err.contains("bar.theta") && err.contains("initial pose"),
+        "{err}"
+    );
     assert!(!eq.exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -186,7 +189,10 @@ fn no_equilibrium_and_neutral_directions_are_named() {
     let o = mstar(&["equilibrium", &free.display().to_string()]);
     let err = text(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.contains("no equilibrium found") && err.contains("slider.y"), "{err}");
+    assert!(
+        err.contains("no equilibrium found") && err.contains("slider.y"),
+        "{err}"
+    );
     assert!(!err.contains("slider.x"), "x is balanced: {err}");
 
     let guided = dir.join("guided.toml");
@@ -198,7 +204,10 @@ fn no_equilibrium_and_neutral_directions_are_named() {
     assert!(err.contains("neutral") && err.contains("slider.x"), "{err}");
     assert!(!err.contains("slider.y"), "y is held by the guide: {err}");
 
-    let o = mstar(&["equilibrium", &dir.join("missing.toml").display().to_string()]);
+    let o = mstar(&[
+        "equilibrium",
+        &dir.join("missing.toml").display().to_string(),
+    ]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -43,10 +43,10 @@ mod fields;
 mod functions;
 mod node;
 mod planar;
+pub mod pose;
 mod sensors;
 mod settings;
 mod spatial;
-pub mod pose;
 mod urdf;
 
 use std::path::Path;

@@ -70,7 +70,10 @@ mod tests {
             ("p".to_string(), vec![2.0, 3.5]),
         ];
         let out = with_initial_pose(text, &poses).unwrap_or_default();
-        assert!(out.contains("# a comment") && out.contains("# the bob"), "{out}");
+        assert!(
+            out.contains("# a comment") && out.contains("# the bob"),
+            "{out}"
+        );
         assert!(out.contains("pose = [0.0, -1.0, 0.25]"), "{out}");
         assert!(out.contains("position = [2.0, 3.5]"), "{out}");
         assert!(out.contains("mass = 1.0"), "{out}");

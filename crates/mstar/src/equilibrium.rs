@@ -165,7 +165,11 @@ impl<'a, S: System + ?Sized> Statics<'a, S> {
         let force = lin.force_scale().max(f64::MIN_POSITIVE);
         let length = u0.iter().fold(1.0_f64, |l, x| l.max(x.abs()));
         let m_max = lin.mass().iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-        let omega2 = if m_max > 0.0 { force / (length * m_max) } else { 1.0 };
+        let omega2 = if m_max > 0.0 {
+            force / (length * m_max)
+        } else {
+            1.0
+        };
         Ok(Self {
             sys,
             lin,
@@ -393,8 +397,7 @@ fn line_search<S: System + ?Sized>(
             .map(|(x, d)| x + alpha * d)
             .collect();
         let l1 = if st.project(&mut u1) {
-            st.acceleration_multipliers(&u1)
-                .map_or(newton, |(l, _)| l)
+            st.acceleration_multipliers(&u1).map_or(newton, |(l, _)| l)
         } else {
             newton
         };
@@ -458,7 +461,9 @@ fn null_direction<S: System + ?Sized>(
     }
     // A start with every coordinate in it (a null vector orthogonal to it
     // would be missed; the golden-ratio sequence avoids symmetric ties).
-    let mut w: Vec<f64> = (0..n).map(|i| 0.5 + (i as f64 * 0.618_034).fract()).collect();
+    let mut w: Vec<f64> = (0..n)
+        .map(|i| 0.5 + (i as f64 * 0.618_034).fract())
+        .collect();
     for _ in 0..3 {
         let mut rhs = vec![0.0; n + m];
         rhs[..n].copy_from_slice(&w);

@@ -6,11 +6,11 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
+use mstar::SampleRef;
 use mstar::columns::{Columns, OutputColumns};
 use mstar::equilibrium::{Equilibrium, EquilibriumOptions};
 use mstar::file::MechanismFile;
 use mstar::run::ModelLookup;
-use mstar::SampleRef;
 
 /// Arguments of `mstar equilibrium`.
 #[derive(clap::Args, Debug)]
@@ -79,7 +79,11 @@ fn report(sys: &dyn ModelLookup, eq: &Equilibrium) {
         eq.constraint
     );
     for (i, u) in eq.u.iter().enumerate().take(LISTED) {
-        say!("  {} = {}", sys.coord_name(i), mstar::csv::format_number(*u));
+        say!(
+            "  {} = {}",
+            sys.coord_name(i),
+            mstar::csv::format_number(*u)
+        );
     }
     if eq.u.len() > LISTED {
         say!("  … ({} coordinates in all)", eq.u.len());
@@ -168,7 +172,10 @@ fn write_model(args: &EquilibriumArgs, sys: &dyn ModelLookup, eq: &Equilibrium) 
         let _ = std::fs::remove_file(path);
         return Err(e);
     }
-    say!("wrote {} (its initial pose is the equilibrium)", path.display());
+    say!(
+        "wrote {} (its initial pose is the equilibrium)",
+        path.display()
+    );
     Ok(())
 }
 
@@ -203,12 +210,18 @@ fn same_mechanism(path: &Path, old: &dyn ModelLookup, eq: &Equilibrium) -> Resul
     };
     for i in 0..m {
         if (phi_old[i] - phi_new[i]).abs() > 1e-9 * length {
-            return Err(pose_dependent(format!("the constraint {}", old.constraint_name(i))));
+            return Err(pose_dependent(format!(
+                "the constraint {}",
+                old.constraint_name(i)
+            )));
         }
     }
     for i in 0..n {
         if (g_old[i] - g_new[i]).abs() > 1e-9 * force {
-            return Err(pose_dependent(format!("the force on {}", old.coord_name(i))));
+            return Err(pose_dependent(format!(
+                "the force on {}",
+                old.coord_name(i)
+            )));
         }
     }
     Ok(())
