@@ -253,3 +253,38 @@ fn written_model_starts_at_the_equilibrium() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A spatial bar (`models/spatial/tilted-hinge.toml`: 1 m, on a hinge at
+/// its end whose axis `a = (cos 30°, 0, sin 30°)` is tilted 30° from the
+/// horizontal) under gravity along −z: its centre, 0.5 m from the axis on
+/// the circle in the plane normal to `a`, comes to rest at the circle's
+/// lowest point, `0.5 d / |d|` with `d = −ẑ + (ẑ·a) a` (−ẑ without its part
+/// along the axis) = (0.25, 0, −0.25 √3).
+#[test]
+fn spatial_bar_on_tilted_hinge_hangs_at_its_lowest_point() {
+    let dir = scratch("eq-spatial");
+    let file = dir.join("hinge.toml");
+    let original = std::fs::read_to_string(model("spatial/tilted-hinge.toml")).expect("read");
+    let with_gravity = original.replacen(
+        "format = \"mstar.spatial/1\"",
+        "format = \"mstar.spatial/1\"\ngravity = [0.0, 0.0, -9.81]",
+        1,
+    );
+    std::fs::write(&file, with_gravity).expect("written");
+    let row = solve(&dir, &file);
+    let (s, c) = (0.5_f64, 3.0_f64.sqrt() / 2.0); // sin 30°, cos 30°
+    let a = [c, 0.0, s];
+    let d = [s * a[0], 0.0, -1.0 + s * a[2]];
+    let norm = (d[0] * d[0] + d[2] * d[2]).sqrt();
+    close("u:bar.x", row["u:bar.x"], 0.5 * d[0] / norm, 1e-10);
+    close("u:bar.y", row["u:bar.y"], 0.0, 1e-10);
+    close("u:bar.z", row["u:bar.z"], 0.5 * d[2] / norm, 1e-10);
+    close("hand check x", 0.5 * d[0] / norm, 0.25, 1e-15);
+    // The hinge carries the weight, m g = 9.81 N upward, and no moment
+    // about the centre-line through it (the weight passes through it).
+    close("reaction:hinge.fz", row["reaction:hinge.fz"], 9.81, 1e-9);
+    for k in ["fx", "fy", "tx", "ty", "tz"] {
+        close(k, row[&format!("reaction:hinge.{k}")], 0.0, 1e-9);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
