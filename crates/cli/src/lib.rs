@@ -148,6 +148,7 @@ fn dispatch(cli: Cli) -> ExitCode {
         Command::Run(args) => args.out.as_deref(),
         Command::Pendulum(args) => args.out.as_deref(),
         Command::Chain(args) => args.out.as_deref(),
+        Command::Equilibrium(args) => args.out(),
         _ => None,
     };
     if output::is_stdout(out) {

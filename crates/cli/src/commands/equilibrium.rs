@@ -31,6 +31,13 @@ pub struct EquilibriumArgs {
     set: Vec<String>,
 }
 
+impl EquilibriumArgs {
+    /// `--out`, for the report to move to standard error when it is `-`.
+    pub fn out(&self) -> Option<&Path> {
+        self.out.as_deref()
+    }
+}
+
 /// `mstar equilibrium`: exit 0 when an equilibrium is found (and written),
 /// 1 when none is found, it is neutral, or an output cannot be written, 2
 /// when the model file cannot be read.
