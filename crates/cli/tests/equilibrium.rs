@@ -253,6 +253,18 @@ fn written_model_starts_at_the_equilibrium() {
             || out.starts_with("equilibrium found: 1 Newton steps"),
         "{out}"
     );
+    // A JSON model is not rewritten: said so, nothing written.
+    let json = dir.join("eq-from-json.toml");
+    let o = mstar(&[
+        "equilibrium",
+        &model("double-pendulum.json"),
+        "--write-model",
+        &json.display().to_string(),
+    ]);
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("TOML model files only"), "{err}");
+    assert!(!json.exists());
     let _ = std::fs::remove_dir_all(&dir);
 }
 
