@@ -165,7 +165,8 @@ impl<'a, S: System + ?Sized> Statics<'a, S> {
         let force = lin.force_scale().max(f64::MIN_POSITIVE);
         let length = u0.iter().fold(1.0_f64, |l, x| l.max(x.abs()));
         let m_max = lin.mass().iter().fold(0.0_f64, |m, x| m.max(x.abs()));
-        let omega2 = if m_max > 0.0 {
+        // Without forces or masses there is no natural scale: 1/s².
+        let omega2 = if m_max > 0.0 && force > f64::MIN_POSITIVE {
             force / (length * m_max)
         } else {
             1.0
@@ -507,5 +508,68 @@ fn not_found<S: System + ?Sized>(
         residual: st.lin.residual_norm(),
         constraint: st.lin.constraint_norm(),
         unbalanced,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mstar_model::{Link, PendulumChain};
+
+    /// A chain of three point masses on rods released at angles up to 80°
+    /// hangs straight down: every `θ_k = 0`, the masses at `y_k = −Σ l_j`,
+    /// each rod carrying the weight below it, `λ` for its `y` row being
+    /// `−g₀ Σ_{j ≥ k} m_j` (the rod pulls up: `Bᵀλ = g` with `B`'s `y`
+    /// entry `+1` for the mass at the rod's end). Tolerance: the solver's
+    /// `10⁻¹¹` of forces ~ 60 N over a stiffness ≥ `g₀ m l` ~ 10, with room
+    /// for the round-off of lengths of order one.
+    #[test]
+    fn chain_hangs_straight_down() {
+        let links = vec![
+            Link { m: 1.0, l: 1.0 },
+            Link { m: 2.0, l: 0.5 },
+            Link { m: 3.0, l: 0.8 },
+        ];
+        let g0 = 9.81;
+        let sys = PendulumChain::new(links.clone(), g0);
+        let u0 = sys.position(&[1.4, -0.6, 0.9]);
+        let eq = solve(&sys, &u0, &EquilibriumOptions::default()).expect("an equilibrium");
+        let mut y = 0.0;
+        for (k, link) in links.iter().enumerate() {
+            y -= link.l;
+            let theta = eq.u[3 * k + 2].rem_euclid(std::f64::consts::TAU);
+            let theta = theta.min(std::f64::consts::TAU - theta);
+            assert!(eq.u[3 * k].abs() < 1e-9, "x_{k} = {}", eq.u[3 * k]);
+            assert!(
+                (eq.u[3 * k + 1] - y).abs() < 1e-9,
+                "y_{k} = {}",
+                eq.u[3 * k + 1]
+            );
+            assert!(theta < 1e-9, "θ_{k} = {theta}");
+            let below: f64 = links[k..].iter().map(|l| l.m).sum();
+            let want = -g0 * below;
+            assert!(
+                (eq.lambda[2 * k + 1] - want).abs() < 1e-8,
+                "λ_{k}.y = {} (want {want})",
+                eq.lambda[2 * k + 1]
+            );
+        }
+    }
+
+    /// Without gravity nothing acts: any pose is an equilibrium, and the
+    /// swing of the pendulum is a neutral direction.
+    #[test]
+    fn weightless_pendulum_is_neutral() {
+        let sys = PendulumChain::paper(1.0, 1.0, 0.0);
+        let u0 = sys.position(&[0.3]);
+        match solve(&sys, &u0, &EquilibriumOptions::default()) {
+            Err(EquilibriumError::Neutral { direction, .. }) => {
+                assert!(
+                    direction.iter().any(|(name, _)| name == "theta"),
+                    "{direction:?}"
+                );
+            }
+            other => panic!("{other:?}"),
+        }
     }
 }
