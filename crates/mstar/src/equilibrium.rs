@@ -306,6 +306,9 @@ fn statics(mu: f64) -> Coefficients {
 /// tolerance, naming the coordinates with the largest unbalanced
 /// generalized forces; [`EquilibriumError::Neutral`] when the tangent is
 /// singular at the solution; `Structure`/`Kkt` for a malformed model.
+///
+/// # Panics
+/// If `u0` does not have one value per coordinate.
 pub fn solve<S: System + ?Sized>(
     sys: &S,
     u0: &[f64],
