@@ -59,6 +59,12 @@ enum Command {
     /// initial state is from the constraints. Exit 0 when it can run as
     /// written, 1 when it cannot, 2 when the file cannot be read or holds a value out of range (an unknown KKT solver too).
     Check(commands::check::CheckArgs),
+    /// Find the static equilibrium of a model file (velocities zero, drivers
+    /// held at t = 0) by damped Newton on the KKT system of statics, from
+    /// its initial pose; --out writes it as one CSV row, --write-model as a
+    /// model file starting there (docs/analysis.md). Exit 0 when found, 1
+    /// when none is found or it is neutral, 2 when the file cannot be read.
+    Equilibrium(commands::equilibrium::EquilibriumArgs),
     /// Write a URDF robot (`.urdf`) as the mstar.spatial/1 model file it
     /// means (docs/model-format.md, "URDF robots"); `run`, `check` and
     /// `animate` also read a `.urdf` directly. Exit 0 when written, 2 when
@@ -142,6 +148,7 @@ fn dispatch(cli: Cli) -> ExitCode {
         Command::Run(args) => args.out.as_deref(),
         Command::Pendulum(args) => args.out.as_deref(),
         Command::Chain(args) => args.out.as_deref(),
+        Command::Equilibrium(args) => args.out(),
         _ => None,
     };
     if output::is_stdout(out) {
@@ -150,6 +157,7 @@ fn dispatch(cli: Cli) -> ExitCode {
     let result = match cli.command {
         Command::Run(args) => return commands::run::run(&args),
         Command::Check(args) => return commands::check::check(&args),
+        Command::Equilibrium(args) => return commands::equilibrium::equilibrium(&args),
         Command::Convert(args) => return commands::convert::convert(&args),
         Command::Sweep(args) => return commands::sweep::sweep(&args),
         Command::Animate(args) => return commands::animate::animate(&args),

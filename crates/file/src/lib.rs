@@ -43,6 +43,7 @@ mod fields;
 mod functions;
 mod node;
 mod planar;
+pub mod pose;
 mod sensors;
 mod settings;
 mod spatial;

@@ -41,6 +41,7 @@ pub mod accuracy;
 pub mod analysis;
 pub mod columns;
 pub mod csv;
+pub mod equilibrium;
 pub mod npz;
 pub mod pendulum;
 pub mod record;

@@ -5,6 +5,7 @@ pub mod animate;
 pub mod chain;
 pub mod check;
 pub mod convert;
+pub mod equilibrium;
 pub mod options;
 pub mod pendulum;
 pub mod run;
