@@ -62,7 +62,7 @@ pub fn equilibrium(args: &EquilibriumArgs) -> ExitCode {
         }
     };
     report(sys, &eq);
-    let written = write_csv(args.out.as_deref(), sys, &file.output.sensors, &eq)
+    let written = write_csv(args.out.as_deref(), sys, &file.output, &eq)
         .and_then(|()| write_model(args, sys, &eq));
     match written {
         Ok(()) => ExitCode::SUCCESS,
@@ -97,19 +97,31 @@ fn report(sys: &dyn ModelLookup, eq: &Equilibrium) {
     }
 }
 
-/// The one CSV row of the equilibrium: the state at rest at t = 0.
+/// The one CSV row of the equilibrium: the state at rest at t = 0, the
+/// columns `[output] columns` chooses.
 fn write_csv(
     out: Option<&Path>,
     sys: &dyn ModelLookup,
-    sensors: &[mstar::model::sensor::Sensor],
+    output: &mstar::file::Output,
     eq: &Equilibrium,
 ) -> Result<()> {
     let Some(path) = out else {
         return Ok(());
     };
-    let columns = OutputColumns::new(sys, sensors)?;
+    let columns = OutputColumns::new(sys, &output.sensors)?;
     let extra = columns.names();
-    let Some(mut stream) = super::open_output(Some(path), sys, &extra, None)? else {
+    // `[output] columns` chooses as for `mstar run`.
+    let selection = match &output.columns {
+        Some(patterns) => {
+            let mut names = mstar::csv::header(sys);
+            names.extend_from_slice(&extra);
+            let chosen = mstar::columns::Selection::new(&names, patterns)
+                .map_err(|e| crate::output::usage(format!("[output] columns: {e}")))?;
+            Some(chosen)
+        }
+        None => None,
+    };
+    let Some(mut stream) = super::open_output(Some(path), sys, &extra, selection.as_ref())? else {
         return Ok(());
     };
     let zeros = vec![0.0; eq.u.len()];
