@@ -18,6 +18,13 @@ pub struct ConvertArgs {
 /// `mstar convert`: exit 0 when written, 2 when the URDF cannot be read or
 /// converted, 1 when the output cannot be written.
 pub fn convert(args: &ConvertArgs) -> ExitCode {
+    if let Some(out) = args.out.as_deref().filter(|p| p.as_os_str() != "-")
+        && let Err(e) =
+            crate::output::refuse_overwrites(&[("the URDF file", &args.urdf)], &[("--out", out)])
+    {
+        note!("error: {e}");
+        return ExitCode::from(2);
+    }
     let origin = args.urdf.display().to_string();
     let text = match std::fs::read_to_string(&args.urdf) {
         Ok(text) => text,
@@ -37,8 +44,10 @@ pub fn convert(args: &ConvertArgs) -> ExitCode {
         note!("warning: {n}");
     }
     let written = match args.out.as_deref() {
-        Some(path) if path.as_os_str() != "-" => std::fs::write(path, &document)
-            .map_err(|e| format!("{}: cannot write the model file: {e}", path.display())),
+        Some(path) if path.as_os_str() != "-" => {
+            mstar::csv::write_atomically(path, document.as_bytes())
+                .map_err(|e| format!("{}: cannot write the model file: {e}", path.display()))
+        }
         _ => std::io::stdout()
             .write_all(document.as_bytes())
             .map_err(|e| format!("standard output: {e}")),

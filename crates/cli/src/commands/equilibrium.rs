@@ -42,6 +42,15 @@ impl EquilibriumArgs {
 /// 1 when none is found, it is neutral, or an output cannot be written, 2
 /// when the model file cannot be read.
 pub fn equilibrium(args: &EquilibriumArgs) -> ExitCode {
+    let outputs: Vec<(&str, &Path)> = [("--out", &args.out), ("--write-model", &args.write_model)]
+        .into_iter()
+        .filter_map(|(option, path)| Some((option, path.as_deref()?)))
+        .filter(|(_, path)| path.as_os_str() != "-")
+        .collect();
+    if let Err(e) = crate::output::refuse_overwrites(&[("the model file", &args.model)], &outputs) {
+        note!("error: {e}");
+        return ExitCode::from(2);
+    }
     let file = match MechanismFile::load_with(&args.model, &args.set) {
         Ok(file) => file,
         Err(e) => {
