@@ -400,6 +400,27 @@ fn names_array(names: &[String]) -> Vec<u8> {
 /// `zip64`.
 fn local_header(out: &mut Vec<u8>, e: &Entry, zip64: bool) {
     put32(out, 0x0403_4b50);
+    common_fields(out, e, zip64);
+    name_and_extra(out, e, zip64);
+}
+
+/// A central directory header (APPNOTE §4.3.12).
+fn central_header(out: &mut Vec<u8>, e: &Entry, zip64: bool) {
+    put32(out, 0x0201_4b50);
+    put16(out, 45); // made by
+    common_fields(out, e, zip64);
+    put16(out, 0); // comment
+    put16(out, 0); // disk
+    put16(out, 0); // internal attributes
+    put32(out, 0); // external attributes
+    put32(out, u32::try_from(e.offset).unwrap_or(ZIP64_MARK));
+    name_and_extra(out, e, zip64);
+}
+
+/// The fields both headers share, from "version needed" to the extra
+/// field's length: stored, no flags, [`DOS_DATE`], the CRC-32 and sizes (in
+/// the ZIP64 field when `zip64`).
+fn common_fields(out: &mut Vec<u8>, e: &Entry, zip64: bool) {
     put16(out, if zip64 { 45 } else { 20 });
     put16(out, 0); // flags
     put16(out, 0); // stored
@@ -412,36 +433,10 @@ fn local_header(out: &mut Vec<u8>, e: &Entry, zip64: bool) {
     put32(out, size);
     put16(out, e.name.len() as u16);
     put16(out, if zip64 { 20 } else { 0 });
-    out.extend_from_slice(e.name.as_bytes());
-    if zip64 {
-        put16(out, 0x0001);
-        put16(out, 16);
-        put64(out, e.size);
-        put64(out, e.size);
-    }
 }
 
-/// A central directory header (APPNOTE §4.3.12).
-fn central_header(out: &mut Vec<u8>, e: &Entry, zip64: bool) {
-    put32(out, 0x0201_4b50);
-    put16(out, 45); // made by
-    put16(out, if zip64 { 45 } else { 20 });
-    put16(out, 0);
-    put16(out, 0);
-    put16(out, 0);
-    put16(out, DOS_DATE);
-    put32(out, e.crc);
-    let small = u32::try_from(e.size).unwrap_or(ZIP64_MARK);
-    let size = if zip64 { ZIP64_MARK } else { small };
-    put32(out, size);
-    put32(out, size);
-    put16(out, e.name.len() as u16);
-    put16(out, if zip64 { 20 } else { 0 });
-    put16(out, 0); // comment
-    put16(out, 0); // disk
-    put16(out, 0); // internal attributes
-    put32(out, 0); // external attributes
-    put32(out, u32::try_from(e.offset).unwrap_or(ZIP64_MARK));
+/// The entry's name, then its ZIP64 extra field (both sizes) when `zip64`.
+fn name_and_extra(out: &mut Vec<u8>, e: &Entry, zip64: bool) {
     out.extend_from_slice(e.name.as_bytes());
     if zip64 {
         put16(out, 0x0001);

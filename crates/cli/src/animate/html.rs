@@ -31,6 +31,20 @@ pub fn escape(text: &str) -> String {
     out
 }
 
+/// The page's legend: one item per body, its colour and its name (escaped).
+pub(crate) fn legend<'a>(names: impl Iterator<Item = &'a str>) -> String {
+    names
+        .enumerate()
+        .map(|(i, name)| {
+            format!(
+                "<li><span class=\"swatch\" style=\"background:{}\"></span>{}</li>",
+                body_colour(i).hex(),
+                escape(name)
+            )
+        })
+        .collect()
+}
+
 /// A pixel coordinate to 0.1 px, in its shortest form.
 fn coord(out: &mut String, x: f64) {
     let r = (x * 10.0).round() / 10.0;
@@ -51,19 +65,7 @@ pub fn page(scene: &Scene, view: &View, frames: &Results, title: &str) -> String
         element(&mut svg, item, dynamic, scene);
     }
     let data = data(frames, &items, &moving);
-    let legend: String = scene
-        .sketch()
-        .bodies
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            format!(
-                "<li><span class=\"swatch\" style=\"background:{}\"></span>{}</li>",
-                body_colour(i).hex(),
-                escape(&b.name)
-            )
-        })
-        .collect();
+    let legend = legend(scene.sketch().bodies.iter().map(|b| b.name.as_str()));
     let font = (18.0 * view.unit).max(10.0);
     fill(
         TEMPLATE,

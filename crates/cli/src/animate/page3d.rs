@@ -64,19 +64,7 @@ pub fn page(
             element(&mut svg, &item, false, scene);
         }
     }
-    let legend: String = model
-        .sketch
-        .bodies
-        .iter()
-        .enumerate()
-        .map(|(i, b)| {
-            format!(
-                "<li><span class=\"swatch\" style=\"background:{}\"></span>{}</li>",
-                body_colour(i).hex(),
-                escape(&b.name)
-            )
-        })
-        .collect();
+    let legend = super::html::legend(model.sketch.bodies.iter().map(|b| b.name.as_str()));
     fill(
         TEMPLATE,
         &[
