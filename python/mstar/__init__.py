@@ -9,6 +9,7 @@ and get numpy arrays::
     result = model.run(t_end=2.0)
     result["crank.theta"]          # a coordinate's column (u:crank.theta)
     result.reaction("O2")["fx"]    # a joint's load (reaction:O2.fx)
+    rest = model.equilibrium()      # the static equilibrium (mstar equilibrium)
 
 The runs are those of ``mstar run`` bit for bit, and the errors carry the
 messages it prints after ``error:``, with its options named as Python
@@ -16,6 +17,8 @@ arguments. The full API is in ``docs/python.md``.
 """
 
 from ._animate import animate as animate
+from ._equilibrium import Equilibrium as Equilibrium
+from ._errors import EquilibriumError as EquilibriumError
 from ._errors import Error as Error
 from ._errors import IntegrationError as IntegrationError
 from ._errors import ModelError as ModelError
@@ -31,6 +34,8 @@ from ._sweep import sweep as sweep
 
 __all__ = [
     "AccuracyWarning",
+    "Equilibrium",
+    "EquilibriumError",
     "Error",
     "IntegrationError",
     "Model",
@@ -47,6 +52,6 @@ __all__ = [
 
 # Python's own exceptions and classes report the package, not the private
 # module that defines them.
-for _name in ("AccuracyWarning", "Model", "ModelWarning", "Result", "Stats", "Sweep", "animate", "load", "sweep"):
+for _name in ("AccuracyWarning", "Equilibrium", "Model", "ModelWarning", "Result", "Stats", "Sweep", "animate", "load", "sweep"):
     globals()[_name].__module__ = __name__
 del _name

@@ -12,7 +12,7 @@ import re
 from contextlib import contextmanager
 from typing import Iterator, List, Tuple
 
-from ._native import Error, IntegrationError, ModelError
+from ._native import EquilibriumError, Error, IntegrationError, ModelError
 
 #: ``(pattern, replacement)`` in order, for every call (``re.sub`` syntax).
 RULES: List[Tuple[str, str]] = [
@@ -72,4 +72,4 @@ def translated(extra: List[Tuple[str, str]] = ()) -> Iterator[None]:  # type: ig
         raise
 
 
-__all__ = ["Error", "IntegrationError", "ModelError", "python_message", "translated"]
+__all__ = ["EquilibriumError", "Error", "IntegrationError", "ModelError", "python_message", "translated"]

@@ -7,10 +7,11 @@ import os
 import warnings
 from typing import Any, Dict, List, Optional, Union
 
-from ._errors import RUN_RULES, IntegrationError, python_message, translated
+from ._errors import RUN_RULES, EquilibriumError, IntegrationError, python_message, translated
 from ._literal import integer, number, toml_literal
 from ._native import load_path as _load_path
 from ._native import load_text as _load_text
+from ._equilibrium import Equilibrium
 from ._result import Result
 
 #: The ``[simulation]`` keys that take a real number and an integer.
@@ -163,6 +164,33 @@ class Model:
             for line in lines:
                 warnings.warn(line, AccuracyWarning, stacklevel=2)
         return Result(raw, model=self, overrides=given)
+
+    def equilibrium(self, overrides: Optional[Dict[str, Any]] = None) -> Equilibrium:
+        """The static equilibrium from the model's initial pose, velocities
+        zero and drivers held at ``t = 0``, as ``mstar equilibrium`` finds it
+        (damped Newton on the KKT system of statics; ``docs/analysis.md``),
+        with the GIL released. ``overrides`` sets any key of the model file,
+        as for :meth:`run`.
+
+        Raises:
+            EquilibriumError: none was found (``e.kind == "not_found"``;
+                ``e.unbalanced`` lists ``(coordinate, force)`` with the
+                largest unbalanced generalized forces), or the one found is
+                neutral (``e.kind == "neutral"``; ``e.direction`` lists
+                ``(coordinate, component)`` of the free direction and
+                ``e.equilibrium`` is the :class:`Equilibrium` found).
+            ModelError: an override that is unknown or out of range.
+        """
+        given = _overrides({}, overrides)
+        try:
+            with translated(RUN_RULES):
+                raw = self._native.equilibrium(given)
+        except EquilibriumError as e:
+            found = getattr(e, "equilibrium", None)
+            if isinstance(found, dict):
+                e.equilibrium = Equilibrium(found, self, given)  # type: ignore[attr-defined]
+            raise
+        return Equilibrium(raw, self, given)
 
     def __repr__(self) -> str:
         return f"<mstar.Model {self.origin!r}: {self.kind}, {len(self.coords)} coordinates, {len(self.constraints)} constraints>"

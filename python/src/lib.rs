@@ -18,6 +18,7 @@ use pyo3::prelude::*;
 mod builder;
 mod cli;
 mod collect;
+mod equilibrium;
 mod model;
 mod spatial;
 mod sweep;
@@ -41,6 +42,13 @@ create_exception!(
     "A run that fails: its start, a step, or refused redundant constraints (`mstar run` exits 1). `partial` holds the samples so far."
 );
 
+create_exception!(
+    mstar,
+    EquilibriumError,
+    Error,
+    "No static equilibrium: none found (`kind` \"not_found\", `unbalanced` the coordinates with the largest unbalanced force), or a neutral one (`kind` \"neutral\", `direction`, `equilibrium`); `mstar equilibrium` exits 1."
+);
+
 /// The message of a library error as the command line prints it.
 pub(crate) fn message(e: &(dyn std::error::Error + 'static)) -> String {
     mstar::run::error_message(e)
@@ -54,6 +62,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("Error", py.get_type::<Error>())?;
     m.add("ModelError", py.get_type::<ModelError>())?;
     m.add("IntegrationError", py.get_type::<IntegrationError>())?;
+    m.add("EquilibriumError", py.get_type::<EquilibriumError>())?;
     m.add_class::<model::NativeModel>()?;
     m.add_class::<builder::PlanarBuilder>()?;
     m.add_class::<builder::Body>()?;

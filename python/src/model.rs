@@ -252,6 +252,48 @@ impl NativeModel {
         error.value(py).setattr("partial", samples)?;
         Err(error)
     }
+
+    /// The static equilibrium from the initial pose with `overrides`
+    /// applied, as `mstar equilibrium` finds it: a one-sample run's dict
+    /// with `equilibrium` (see `crate::equilibrium::solve`).
+    fn equilibrium<'py>(
+        &self,
+        py: Python<'py>,
+        overrides: Vec<String>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let (fresh, _) = self.settings(&overrides).map_err(|e| model_error(&e))?;
+        let mechanism = fresh.as_ref().unwrap_or(&self.mechanism);
+        crate::equilibrium::solve(py, mechanism, &self.sensors, &self.origin)
+    }
+
+    /// The model file's TOML text with the pose `u` as its initial pose,
+    /// checked to be the same mechanism (`mstar equilibrium
+    /// --write-model`).
+    fn text_with_pose(&self, u: Vec<f64>) -> PyResult<String> {
+        let text = match &self.source {
+            Source::Text(text) => text.clone(),
+            Source::Path(path) if is_toml(path) => std::fs::read_to_string(path)
+                .map_err(|e| ModelError::new_err(format!("cannot read {}: {e}", path.display())))?,
+            Source::Path(path) => {
+                return Err(ModelError::new_err(format!(
+                    "{}: only a TOML model file can be rewritten (a URDF with `mstar convert` first)",
+                    path.display()
+                )));
+            }
+            Source::Built => {
+                return Err(ModelError::new_err(
+                    "a builder's model has no model file to rewrite",
+                ));
+            }
+        };
+        crate::equilibrium::model_text(&self.mechanism, &text, &self.origin, &u)
+    }
+}
+
+/// Whether `path` names a TOML file (by its extension).
+fn is_toml(path: &std::path::Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
 }
 
 /// The columns a run adds after the standard ones, as `mstar run --out`
@@ -287,7 +329,7 @@ fn expected_rows(sim: &Simulation) -> Option<usize> {
     (rows.is_finite() && rows < 1e8).then_some(rows as usize)
 }
 
-fn constraint_names(sys: &dyn System) -> Vec<String> {
+pub(crate) fn constraint_names(sys: &dyn System) -> Vec<String> {
     (0..sys.n_constraints())
         .map(|i| sys.constraint_name(i))
         .collect()

@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
-use mstar::SampleRef;
 use mstar::columns::{Columns, OutputColumns};
 use mstar::equilibrium::{Equilibrium, EquilibriumOptions};
 use mstar::file::MechanismFile;
@@ -134,18 +133,7 @@ fn write_csv(
         return Ok(());
     };
     let zeros = vec![0.0; eq.u.len()];
-    let sample = SampleRef {
-        t: 0.0,
-        u: &eq.u,
-        v: &zeros,
-        a: &zeros,
-        lambda: &eq.lambda,
-        kinetic: 0.0,
-        potential: sys.potential_energy(0.0, &eq.u),
-        iterations: eq.iterations,
-        residual: eq.residual,
-        constraint: eq.constraint,
-    };
+    let sample = eq.at_rest(0.0, &zeros, sys.potential_energy(0.0, &eq.u));
     let mut values = Vec::with_capacity(extra.len());
     columns.values(&sample, &mut values);
     stream.push_with(&sample, &values);
@@ -159,23 +147,9 @@ fn write_csv(
     Ok(())
 }
 
-/// The elements' coordinates by name: `body.x, body.y, body.theta` →
-/// `("body", [x, y, θ])`, in the model's order.
-fn poses(sys: &dyn ModelLookup, u: &[f64]) -> Vec<(String, Vec<f64>)> {
-    let mut out: Vec<(String, Vec<f64>)> = Vec::new();
-    for (i, &x) in u.iter().enumerate() {
-        let name = sys.coord_name(i);
-        let element = name.rsplit_once('.').map_or(name.as_str(), |(e, _)| e);
-        match out.last_mut() {
-            Some((last, values)) if last == element => values.push(x),
-            _ => out.push((element.to_string(), vec![x])),
-        }
-    }
-    out
-}
-
 /// `--write-model`: the file's text with the equilibrium as its initial
-/// pose, checked to be the same mechanism once read back.
+/// pose, checked to be the same mechanism once read back
+/// ([`mstar::equilibrium::model_text`]).
 fn write_model(args: &EquilibriumArgs, sys: &dyn ModelLookup, eq: &Equilibrium) -> Result<()> {
     let Some(path) = args.write_model.as_deref() else {
         return Ok(());
@@ -192,65 +166,10 @@ fn write_model(args: &EquilibriumArgs, sys: &dyn ModelLookup, eq: &Equilibrium) 
     }
     let text = std::fs::read_to_string(&args.model)
         .with_context(|| format!("cannot read {}", args.model.display()))?;
-    let written = mstar::file::pose::with_initial_pose(&text, &poses(sys, &eq.u))
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.model.display()))?;
-    std::fs::write(path, written).with_context(|| format!("cannot write {}", path.display()))?;
-    if let Err(e) = same_mechanism(path, sys, eq) {
-        // A file that means another mechanism is not left behind.
-        let _ = std::fs::remove_file(path);
-        return Err(e);
-    }
-    say!(
-        "wrote {} (its initial pose is the equilibrium)",
-        path.display()
-    );
-    Ok(())
-}
-
-/// Reads the written model back and compares its constraints and forces at
-/// the equilibrium with the original's: an element defined from the
-/// initial pose (a joint's `at`, a default length or rest angle) would
-/// change with it.
-fn same_mechanism(path: &Path, old: &dyn ModelLookup, eq: &Equilibrium) -> Result<()> {
-    let file = MechanismFile::load_with(path, &[])
-        .map_err(|e| anyhow::anyhow!("the written model cannot be read back: {e}"))?;
-    let new = mstar::run::lookup(&file.mechanism);
-    let (n, m) = (old.n_coords(), old.n_constraints());
-    if new.n_coords() != n || new.n_constraints() != m {
-        bail!("the written model {} has other dimensions", path.display());
-    }
-    let u = &eq.u;
-    let zeros = vec![0.0; n];
-    let (mut phi_old, mut phi_new) = (vec![0.0; m], vec![0.0; m]);
-    old.phi_into(0.0, u, &mut phi_old);
-    new.phi_into(0.0, u, &mut phi_new);
-    let (mut g_old, mut g_new) = (vec![0.0; n], vec![0.0; n]);
-    old.forces_into(0.0, u, &zeros, &mut g_old);
-    new.forces_into(0.0, u, &zeros, &mut g_new);
-    // Round-off of the pose written and read back, relative to the sizes.
-    let length = u.iter().fold(1.0_f64, |a, x| a.max(x.abs()));
-    let force = g_old.iter().fold(f64::MIN_POSITIVE, |a, x| a.max(x.abs()));
-    let pose_dependent = |what: String| {
-        anyhow::anyhow!(
-            "{what} is not the same in the written model: an element of {} is defined from the initial pose (a joint's `at` or `axis`, a default `length` or `rest_length`, a rotational spring's rest angle); give it explicitly in the file and run again",
-            path.display()
-        )
-    };
-    for i in 0..m {
-        if (phi_old[i] - phi_new[i]).abs() > 1e-9 * length {
-            return Err(pose_dependent(format!(
-                "the constraint {}",
-                old.constraint_name(i)
-            )));
-        }
-    }
-    for i in 0..n {
-        if (g_old[i] - g_new[i]).abs() > 1e-9 * force {
-            return Err(pose_dependent(format!(
-                "the force on {}",
-                old.coord_name(i)
-            )));
-        }
-    }
+    let origin = path.display().to_string();
+    let written = mstar::equilibrium::model_text(&text, &origin, sys, &eq.u)
+        .with_context(|| format!("{origin} not written"))?;
+    std::fs::write(path, written).with_context(|| format!("cannot write {origin}"))?;
+    say!("wrote {origin} (its initial pose is the equilibrium)");
     Ok(())
 }

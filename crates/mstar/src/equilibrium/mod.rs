@@ -35,6 +35,10 @@
 //! is singular the equilibrium is neutral along the null vector, found by
 //! inverse iteration, and reported as such.
 
+mod rewrite;
+
+pub use rewrite::{RewriteError, model_text};
+
 use mstar_kkt::{KktError, KktOptions, KktSolver};
 use mstar_linearize::{Coefficients, Linearization, LinearizeError};
 use mstar_model::{StateRef, System};
@@ -77,6 +81,31 @@ pub struct Equilibrium {
     pub residual: f64,
     /// `‖Φ‖∞` at the solution.
     pub constraint: f64,
+}
+
+impl Equilibrium {
+    /// The state at rest as a sample at `t₀` (velocities and accelerations
+    /// `zeros`, one per coordinate; energy the potential `potential`), for
+    /// the columns `mstar run` writes.
+    pub fn at_rest<'a>(
+        &'a self,
+        t0: f64,
+        zeros: &'a [f64],
+        potential: f64,
+    ) -> crate::SampleRef<'a> {
+        crate::SampleRef {
+            t: t0,
+            u: &self.u,
+            v: zeros,
+            a: zeros,
+            lambda: &self.lambda,
+            kinetic: 0.0,
+            potential,
+            iterations: self.iterations,
+            residual: self.residual,
+            constraint: self.constraint,
+        }
+    }
 }
 
 /// Why [`solve`] found no equilibrium.
