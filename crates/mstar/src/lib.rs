@@ -42,6 +42,7 @@ pub mod analysis;
 pub mod columns;
 pub mod csv;
 pub mod equilibrium;
+pub mod modes;
 pub mod npz;
 pub mod pendulum;
 pub mod record;
