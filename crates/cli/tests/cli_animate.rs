@@ -263,3 +263,102 @@ fn errors_say_what_and_where() {
     assert_eq!(left, 0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Two equal point masses (1 kg) on two 1 m distance joints, hanging:
+/// the modes' angular frequencies are `ω² = (g/l)(2 ∓ √2)`, the roots of
+/// `det(K − ω² M) = 0` for the small angles `(θ₁, θ₂)` with `M = m l² [[2,
+/// 1], [1, 1]]` and `K = m g l [[2, 0], [0, 1]]`.
+const DOUBLE_PENDULUM: &str = r#"format = "mstar.planar/1"
+gravity = [0.0, -9.81]
+
+[[point_mass]]
+name = "p1"
+mass = 1.0
+position = [0.0, -1.0]
+
+[[point_mass]]
+name = "p2"
+mass = 1.0
+position = [0.0, -2.0]
+
+[[joint]]
+name = "rod1"
+type = "distance"
+bodies = ["ground", "p1"]
+points = [[0.0, 0.0], [0.0, 0.0]]
+length = 1.0
+
+[[joint]]
+name = "rod2"
+type = "distance"
+bodies = ["p1", "p2"]
+points = [[0.0, 0.0], [0.0, 0.0]]
+length = 1.0
+"#;
+
+/// `--mode K` draws two periods of mode K: the page's last time is
+/// `2 · 2π/ω_K` (ω_K from the closed form, to the eigensolver's round-off),
+/// the GIF has a frame per 1/30 s of the (slowed, ≥ 1 s) motion; a mode
+/// past the degrees of freedom is exit 1 naming them; a results file and
+/// `--mode` together are exit 2.
+#[test]
+fn a_vibration_mode_is_drawn_moving() {
+    let dir = scratch("animate-mode");
+    let file = dir.join("double.toml");
+    std::fs::write(&file, DOUBLE_PENDULUM).expect("written");
+    for (k, sign) in [(1, -1.0), (2, 1.0)] {
+        let page = dir.join(format!("mode{k}.html"));
+        let gif = dir.join(format!("mode{k}.gif"));
+        let o = mstar(&[
+            "animate",
+            &path(&file),
+            "--mode",
+            &k.to_string(),
+            "--html",
+            &path(&page),
+            "--gif",
+            &path(&gif),
+        ]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let html = std::fs::read_to_string(&page).expect("the page");
+        let times: Vec<f64> = html
+            .split("\"t\":[")
+            .nth(1)
+            .and_then(|s| s.split(']').next())
+            .expect("a time list")
+            .split(',')
+            .map(|s| s.parse().expect("a time"))
+            .collect();
+        let omega = (9.81_f64 * (2.0 + sign * 2.0_f64.sqrt())).sqrt();
+        let want = 2.0 * std::f64::consts::TAU / omega;
+        let last = times.last().copied().unwrap_or(f64::NAN);
+        assert!(
+            (last - want).abs() <= 1e-9 * want,
+            "mode {k}: {last} vs {want}"
+        );
+        assert_eq!(times.len(), 97, "48 frames a period and the last");
+        assert!(gif_frames(&gif) > 1);
+    }
+    let o = mstar(&[
+        "animate",
+        &path(&file),
+        "--mode",
+        "3",
+        "--gif",
+        &path(&dir.join("m3.gif")),
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(text(&o.stderr).contains("at most 2"), "{}", text(&o.stderr));
+    assert!(!dir.join("m3.gif").exists());
+    let o = mstar(&[
+        "animate",
+        &path(&file),
+        "r.csv",
+        "--mode",
+        "1",
+        "--gif",
+        "x.gif",
+    ]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}

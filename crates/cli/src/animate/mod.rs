@@ -11,6 +11,7 @@
 pub mod figure;
 pub mod geometry;
 pub mod html;
+pub mod mode_shape;
 pub mod page3d;
 pub mod picture;
 pub mod results;

@@ -10,6 +10,7 @@ use mstar::newmark::Short;
 
 use crate::animate::figure::{Figure, PlanarFigure};
 use crate::animate::html;
+use crate::animate::mode_shape;
 use crate::animate::page3d::{self, Model3d};
 use crate::animate::picture::{self, Canvas};
 use crate::animate::results::{self, Results};
@@ -29,8 +30,19 @@ pub struct AnimateArgs {
     /// The model file the results were computed with.
     model: PathBuf,
     /// The CSV file of `mstar run MODEL --out FILE` (or the
-    /// `<name>.partial.csv` of a run that failed).
-    results: PathBuf,
+    /// `<name>.partial.csv` of a run that failed); not with --mode.
+    #[arg(required_unless_present = "mode")]
+    results: Option<PathBuf>,
+    /// Draw vibration mode K (1 = the lowest, as `mstar modes` numbers
+    /// them) moving about the state it was found at, instead of a run.
+    #[arg(long, value_name = "K", conflicts_with = "results",
+          value_parser = clap::value_parser!(u32).range(1..))]
+    mode: Option<u32>,
+    /// The state of --mode: `equilibrium` (found from the file's pose, as
+    /// `mstar equilibrium`) or `initial` (the file's pose, held by the
+    /// constraint forces of that instant).
+    #[arg(long, value_enum, default_value_t = About::Equilibrium, requires = "mode")]
+    about: About,
     /// Write an animated GIF (looping) to this file.
     #[arg(long, value_name = "OUT.gif")]
     gif: Option<PathBuf>,
@@ -83,6 +95,15 @@ pub struct AnimateArgs {
     /// Override a key of the model file (as for `mstar run`).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+}
+
+/// The state a mode is drawn about (`--about`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum About {
+    /// The static equilibrium found from the file's pose.
+    Equilibrium,
+    /// The file's initial pose.
+    Initial,
 }
 
 /// A picture size, px.
@@ -139,8 +160,14 @@ pub fn animate(args: &AnimateArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let n_coords = file.mechanism.system().n_coords();
-    match render(args, drawing, n_coords) {
+    let run = match results_to_draw(args, &file.mechanism, &drawing.0.columns()) {
+        Ok(run) => run,
+        Err(e) => {
+            note!("error: {e:#}");
+            return ExitCode::from(1);
+        }
+    };
+    match render(args, drawing, &run) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if e.downcast_ref::<crate::signals::Interrupted>().is_some() => {
             ExitCode::from(crate::output::exit_code(Err(e), false, 1))
@@ -164,13 +191,11 @@ fn check_outputs(args: &AnimateArgs) -> Result<()> {
     .into_iter()
     .filter_map(|(option, path)| path.as_deref().map(|p| (option, p)))
     .collect();
-    crate::output::refuse_overwrites(
-        &[
-            ("the model file", &args.model),
-            ("the results file", &args.results),
-        ],
-        &outputs,
-    )?;
+    let mut inputs = vec![("the model file", args.model.as_path())];
+    if let Some(results) = &args.results {
+        inputs.push(("the results file", results));
+    }
+    crate::output::refuse_overwrites(&inputs, &outputs)?;
     if let Some(png) = &args.png {
         picture::check_picture_name(png)?;
     }
@@ -221,13 +246,74 @@ fn figure(
     }
 }
 
-/// Reads the results and writes each output asked for.
+/// The frames to draw: the results file's rows, or two periods of
+/// `--mode K` ([`mode_shape`]).
+fn results_to_draw(
+    args: &AnimateArgs,
+    mechanism: &Mechanism,
+    columns: &[(String, usize)],
+) -> Result<Results> {
+    let sys = mstar::run::lookup(mechanism);
+    match (&args.results, args.mode) {
+        (Some(path), _) => results::read(path, columns, sys.n_coords()),
+        (None, Some(k)) => mode_frames(args, sys, k as usize),
+        (None, None) => bail!("give a results file or --mode K"),
+    }
+}
+
+/// Mode `k` (1-based) about the state `--about` names, as frames.
+fn mode_frames(args: &AnimateArgs, sys: &dyn mstar::run::ModelLookup, k: usize) -> Result<Results> {
+    let u0 = sys.initial_position();
+    let (u, lambda) = match args.about {
+        About::Equilibrium => {
+            let options = mstar::equilibrium::EquilibriumOptions::default();
+            match mstar::equilibrium::solve(sys, &u0, &options) {
+                Ok(eq) => (eq.u, eq.lambda),
+                // A neutral direction is a mode of zero frequency.
+                Err(mstar::equilibrium::EquilibriumError::Neutral { equilibrium, .. }) => {
+                    (equilibrium.u, equilibrium.lambda)
+                }
+                Err(e) => bail!(
+                    "{}: {e}; or draw the mode about the file's pose with --about initial",
+                    args.model.display()
+                ),
+            }
+        }
+        About::Initial => {
+            let lambda = mstar::modes::rest_multipliers(sys, &u0, 0.0)
+                .map_err(|e| anyhow::anyhow!("{}: {e}", args.model.display()))?;
+            (u0, lambda)
+        }
+    };
+    let options = mstar::modes::ModesOptions {
+        count: k,
+        ..mstar::modes::ModesOptions::default()
+    };
+    let found = mstar::modes::modes(sys, &u, &lambda, &options)
+        .map_err(|e| anyhow::anyhow!("{}: --mode {k}: {e}", args.model.display()))?;
+    let Some(mode) = found.modes.get(k - 1) else {
+        bail!(
+            "{}: --mode {k}: the model has {} modes",
+            args.model.display(),
+            found.modes.len()
+        );
+    };
+    let names = mstar::model::coord_names(sys);
+    say!(
+        "mode {k}: f = {} Hz, ζ = {}, drawn over two periods (amplitude {} × the unit-modal-mass shape)",
+        Short(mode.frequency_hz),
+        Short(mode.damping_ratio),
+        Short(mode_shape::amplitude(&names, &u, mode))
+    );
+    Ok(mode_shape::frames(&names, &u, mode))
+}
+
+/// Writes each output asked for, of the frames `run`.
 fn render(
     args: &AnimateArgs,
     (figure, model3d): (Box<dyn Figure>, Option<Spatial3d>),
-    n_coords: usize,
+    run: &Results,
 ) -> Result<()> {
-    let run = results::read(&args.results, &figure.columns(), n_coords)?;
     let scene = Scene::new(figure, &run.states);
     let view = View::fit(scene.bounds(&run.states), args.size.width, args.size.height);
     let canvas = Canvas {
@@ -239,7 +325,7 @@ fn render(
         GifPlan::new(t1 - t0, args).check(view.width, view.height)?;
     }
     if let Some(path) = &args.html {
-        write_html(path, args, &canvas, model3d.as_ref(), &run)?;
+        write_html(path, args, &canvas, model3d.as_ref(), run)?;
     }
     if let Some(path) = &args.png {
         let (t0, t1) = run.span();
@@ -261,7 +347,7 @@ fn render(
         );
     }
     if let Some(path) = &args.gif {
-        write_gif(path, args, &canvas, &run)?;
+        write_gif(path, args, &canvas, run)?;
     }
     Ok(())
 }
@@ -282,10 +368,13 @@ fn write_html(
 ) -> Result<()> {
     let frames = run.at_most(html::MAX_FRAMES);
     let (t0, t1) = run.span();
+    let what = match (&args.results, args.mode) {
+        (Some(results), _) => file_name(results),
+        (None, mode) => format!("mode {}", mode.unwrap_or(1)),
+    };
     let title = format!(
-        "mstar animate: {} with {} (t = {} … {} s, {} frames)",
+        "mstar animate: {} with {what} (t = {} … {} s, {} frames)",
         file_name(&args.model),
-        file_name(&args.results),
         Short(t0),
         Short(t1),
         frames.times.len()
