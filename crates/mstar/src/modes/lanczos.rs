@@ -96,6 +96,14 @@ pub(super) fn modes(mut lin: Linearization, count: usize) -> Result<Modes, Modes
         });
     }
     let k_max = check_symmetric(&mut lin)?;
+    if count == 0 {
+        return Ok(Modes {
+            modes: Vec::new(),
+            dof,
+            damped: false,
+            method: Method::Sparse,
+        });
+    }
     let m_max = lin.mass().iter().fold(0.0_f64, |a, x| a.max(x.abs()));
     let omega2 = omega2_ref(k_max, m_max);
     let start = start_vector(n);

@@ -90,7 +90,8 @@ impl System for Line {
 }
 
 /// `ω_j = 2 √(k/m) sin(jπ / (2(n + 1)))`, the fixed–fixed chain's modes
-/// (e.g. Rao, *Mechanical Vibrations*, the discrete string), rad/s.
+/// (`k/m` times the eigenvalues `2 − 2 cos(jπ/(n+1))` of the tridiagonal
+/// matrix `(−1, 2, −1)`), rad/s.
 fn chain_omega(j: usize, n: usize, k: f64, m: f64) -> f64 {
     2.0 * (k / m).sqrt() * (j as f64 * std::f64::consts::PI / (2.0 * (n as f64 + 1.0))).sin()
 }
