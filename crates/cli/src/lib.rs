@@ -87,7 +87,8 @@ enum Command {
     /// (110: 100 or more), 2 for a bad model file or command line (nothing
     /// ran), 1 when a file cannot be written.
     Sweep(commands::sweep::SweepArgs),
-    /// Draw a model moving through the results of `mstar run`: an animated
+    /// Draw a model moving through the results of `mstar run`, or one of its
+    /// vibration modes (--mode K): an animated
     /// GIF, a self-contained HTML page (play/pause, time slider) or one frame
     /// as a PNG; a spatial model projected onto the picture (--view). Exit 0
     /// when written, 1 when the results do not fit the model or a file cannot

@@ -2,7 +2,7 @@
 //! (`ω² = (g/l)(2 ∓ √2)`), the fixed–fixed spring chain (`ω_j = 2 √(k/m)
 //! sin(jπ/(2(n+1)))`), a damped single mode (`s = −c/2m ± i √(k/m −
 //! (c/2m)²)`); the sparse eigensolver against the dense one on a hanging
-//! chain; a rigid mode; the errors and exit codes.
+//! chain; a rigid mode; the errors and exit codes; `mstar animate --mode`.
 //!
 //! Tolerances: the equilibrium is found to `‖r‖∞ ≤ 10⁻¹¹ F`, which moves
 //! the stiffness (and `ω²`) by about `10⁻¹¹` relative; the eigensolvers add
@@ -268,5 +268,37 @@ fn errors_say_what_to_try() {
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert!(err.contains("names the model file"), "{err}");
     assert_eq!(std::fs::read(&copy).expect("read"), before);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `mstar animate MODEL --mode 2` draws the double pendulum's upper mode:
+/// the amplitude makes the largest coordinate change a tenth of the
+/// equilibrium's extent — `u = (0, −1, 0, −2)`, extent 2, largest shape
+/// component `cos(π/8) = 0.92388` (mode 2's `u:upper.x`, unit modal
+/// mass) — so `a = 0.2 / cos(π/8) = 2.165e-1`. `--mode 3` is beyond the two
+/// degrees of freedom (exit 1); `--mode` with a results file is refused (exit 2).
+#[test]
+fn animate_draws_a_mode() {
+    let dir = scratch("modes-animate");
+    let html = dir.join("mode.html");
+    let m = model("double-pendulum-modes.toml");
+    let h = html.display().to_string();
+    let o = mstar(&["animate", &m, "--mode", "2", "--html", &h]);
+    let out = text(&o.stdout);
+    assert!(o.status.success(), "{out}{}", text(&o.stderr));
+    let a = 0.2 / (std::f64::consts::PI / 8.0).cos();
+    assert!(out.contains(&format!("at {a:.3e} ×")), "{out}");
+    assert!(out.contains("121 frames"), "{out}");
+    assert!(
+        std::fs::read_to_string(&html)
+            .expect("page")
+            .contains("mode 2")
+    );
+    let o = mstar(&["animate", &m, "--mode", "3", "--html", &h]);
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.contains("give --mode 1 to 2"), "{err}");
+    let o = mstar(&["animate", &m, "results.csv", "--mode", "1", "--html", &h]);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }

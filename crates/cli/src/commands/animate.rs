@@ -29,8 +29,15 @@ pub struct AnimateArgs {
     /// The model file the results were computed with.
     model: PathBuf,
     /// The CSV file of `mstar run MODEL --out FILE` (or the
-    /// `<name>.partial.csv` of a run that failed).
-    results: PathBuf,
+    /// `<name>.partial.csv` of a run that failed); not with --mode.
+    #[arg(required_unless_present = "mode", conflicts_with = "mode")]
+    results: Option<PathBuf>,
+    /// Draw vibration mode K of `mstar modes MODEL` (1 the lowest) about the
+    /// equilibrium instead of results: two periods of `u + a φ sin(2π f t)`,
+    /// `a` making the largest coordinate change a tenth of the pose's
+    /// extent (linear: long rods stretch a little).
+    #[arg(long, value_name = "K", value_parser = clap::value_parser!(usize))]
+    mode: Option<usize>,
     /// Write an animated GIF (looping) to this file.
     #[arg(long, value_name = "OUT.gif")]
     gif: Option<PathBuf>,
@@ -140,7 +147,12 @@ pub fn animate(args: &AnimateArgs) -> ExitCode {
         }
     };
     let n_coords = file.mechanism.system().n_coords();
-    match render(args, drawing, n_coords) {
+    let run = match (args.mode, &args.results) {
+        (Some(k), _) => super::modes::motion(mstar::run::lookup(&file.mechanism), k),
+        (None, Some(path)) => results::read(path, &drawing.0.columns(), n_coords),
+        (None, None) => Err(anyhow::anyhow!("give a results file or --mode")),
+    };
+    match run.and_then(|run| render(args, drawing, &run)) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) if e.downcast_ref::<crate::signals::Interrupted>().is_some() => {
             ExitCode::from(crate::output::exit_code(Err(e), false, 1))
@@ -165,10 +177,10 @@ fn check_outputs(args: &AnimateArgs) -> Result<()> {
     .filter_map(|(option, path)| path.as_deref().map(|p| (option, p)))
     .collect();
     crate::output::refuse_overwrites(
-        &[
-            ("the model file", &args.model),
-            ("the results file", &args.results),
-        ],
+        &[("the model file", args.model.as_path())]
+            .into_iter()
+            .chain(args.results.as_deref().map(|r| ("the results file", r)))
+            .collect::<Vec<_>>(),
         &outputs,
     )?;
     if let Some(png) = &args.png {
@@ -221,13 +233,12 @@ fn figure(
     }
 }
 
-/// Reads the results and writes each output asked for.
+/// Writes each output asked for from the results `run`.
 fn render(
     args: &AnimateArgs,
     (figure, model3d): (Box<dyn Figure>, Option<Spatial3d>),
-    n_coords: usize,
+    run: &Results,
 ) -> Result<()> {
-    let run = results::read(&args.results, &figure.columns(), n_coords)?;
     let scene = Scene::new(figure, &run.states);
     let view = View::fit(scene.bounds(&run.states), args.size.width, args.size.height);
     let canvas = Canvas {
@@ -239,7 +250,7 @@ fn render(
         GifPlan::new(t1 - t0, args).check(view.width, view.height)?;
     }
     if let Some(path) = &args.html {
-        write_html(path, args, &canvas, model3d.as_ref(), &run)?;
+        write_html(path, args, &canvas, model3d.as_ref(), run)?;
     }
     if let Some(path) = &args.png {
         let (t0, t1) = run.span();
@@ -261,7 +272,7 @@ fn render(
         );
     }
     if let Some(path) = &args.gif {
-        write_gif(path, args, &canvas, &run)?;
+        write_gif(path, args, &canvas, run)?;
     }
     Ok(())
 }
@@ -285,7 +296,10 @@ fn write_html(
     let title = format!(
         "mstar animate: {} with {} (t = {} … {} s, {} frames)",
         file_name(&args.model),
-        file_name(&args.results),
+        args.results.as_deref().map_or_else(
+            || format!("mode {}", args.mode.unwrap_or_default()),
+            file_name
+        ),
         Short(t0),
         Short(t1),
         frames.times.len()

@@ -87,7 +87,7 @@ pub fn modes(args: &ModesArgs) -> ExitCode {
         note!("warning: {w}");
     }
     let sys = mstar::run::lookup(&file.mechanism);
-    let result = state(args, sys)
+    let result = state(args.about, sys)
         .and_then(|(u, lambda)| solve(args, sys, &u, &lambda))
         .and_then(|found| {
             report(args, &found);
@@ -103,9 +103,9 @@ pub fn modes(args: &ModesArgs) -> ExitCode {
 }
 
 /// The state at rest `(u, λ)` to linearize about.
-fn state(args: &ModesArgs, sys: &dyn ModelLookup) -> Result<(Vec<f64>, Vec<f64>)> {
+fn state(about: About, sys: &dyn ModelLookup) -> Result<(Vec<f64>, Vec<f64>)> {
     let u0 = sys.initial_position();
-    if args.about == About::Initial {
+    if about == About::Initial {
         let lambda = mstar::modes::rest_multipliers(sys, &u0, 0.0)
             .map_err(|e| anyhow::anyhow!("at the initial pose: {e}"))?;
         return Ok((u0, lambda));
@@ -154,6 +154,65 @@ fn solve(args: &ModesArgs, sys: &dyn ModelLookup, u: &[f64], lambda: &[f64]) -> 
         // (The message alone: it already names its cause.)
         found => found.map_err(|e| anyhow::anyhow!("{e}")),
     }
+}
+
+/// `mstar animate MODEL --mode K`: two periods of mode `k` (from 1) about
+/// the equilibrium, `u(t) = u_eq + a φ sin(2π f t)` (the real shape, no
+/// decay; a rigid mode over 2 s with `f = 1/2 Hz`), 60 rows a period, `a`
+/// such that the largest coordinate change is a tenth of the extent of
+/// `u_eq` (its largest minus smallest coordinate, at least 1).
+///
+/// # Errors
+/// No equilibrium, `k` outside `1 ..= dof`, or the eigenproblem failing.
+pub fn motion(sys: &dyn ModelLookup, k: usize) -> Result<crate::animate::results::Results> {
+    let (u, lambda) = state(About::Equilibrium, sys)?;
+    let options = ModesOptions {
+        count: k,
+        ..ModesOptions::default()
+    };
+    let found = match mstar::modes::modes(sys, &u, &lambda, &options) {
+        Ok(found) => found,
+        Err(ModesError::TooMany { dof, .. }) => anyhow::bail!(
+            "--mode {k}: the model has {} of freedom; give --mode 1 to {dof}",
+            plural(dof, "degree")
+        ),
+        Err(e) => anyhow::bail!("{e}"),
+    };
+    let Some(mode) = k.checked_sub(1).and_then(|i| found.modes.get(i)) else {
+        anyhow::bail!("--mode {k}: modes are numbered from 1 (the lowest)");
+    };
+    let f = if mode.frequency_hz > 0.0 {
+        mode.frequency_hz
+    } else {
+        0.5
+    };
+    let (lo, hi) = u
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+            (a.min(x), b.max(x))
+        });
+    let extent = (hi - lo).max(1.0);
+    let largest = mode.shape.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
+    let a = if largest > 0.0 {
+        0.1 * extent / largest
+    } else {
+        0.0
+    };
+    let rows = 121;
+    let (times, states) = (0..rows)
+        .map(|r| {
+            let t = 2.0 / f * r as f64 / (rows - 1) as f64;
+            let w = a * (std::f64::consts::TAU * f * t).sin();
+            let state = u.iter().zip(&mode.shape).map(|(x, p)| x + w * p).collect();
+            (t, state)
+        })
+        .unzip();
+    say!(
+        "mode {k}: f = {:.9e} Hz, drawn over two periods at {:.3e} × the unit-modal-mass shape",
+        mode.frequency_hz,
+        a
+    );
+    Ok(crate::animate::results::Results { times, states })
 }
 
 /// One line a mode: `mode K: f = … Hz, ζ = …` and what it does.
