@@ -191,6 +191,10 @@ fn shifted(
     match op.apply(start) {
         Ok(q) => {
             let norm = op.inner(&q, &q).sqrt();
+            // A start with no mass in the tangent space: M vanishes there.
+            if !(norm > 0.0 && norm.is_finite()) {
+                return Err(Box::new((op.lin, ModesError::SingularMass)));
+            }
             Ok((op, q.iter().map(|x| x / norm).collect()))
         }
         Err(e) => Err(Box::new((op.lin, e))),
