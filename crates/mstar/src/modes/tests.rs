@@ -291,3 +291,32 @@ fn free_mass_is_rigid() {
     assert_eq!(found.modes[0].kind, ModeKind::Rigid);
     assert_eq!(found.modes[0].frequency_hz, 0.0);
 }
+
+/// Springs of negative stiffness (an inverted, unstable state): `ω² =
+/// −ω_j²` of the chain with `|k|`, so each mode is a real `s = ω_j > 0`,
+/// reported unstable with `ζ = −1` and `f = ω_j/2π`, by both methods.
+#[test]
+fn negative_stiffness_is_unstable() {
+    let (n, m, k) = (4, 1.5, -30.0);
+    let sys = Line { n, m, k, c: 0.0 };
+    for method in [Method::Dense, Method::Sparse] {
+        let options = ModesOptions {
+            count: n,
+            method,
+            ..ModesOptions::default()
+        };
+        let found = modes(&sys, &[0.0; 8], &[0.0; 4], &options).expect("modes");
+        for (j, mode) in found.modes.iter().enumerate() {
+            let omega = chain_omega(j + 1, n, -k, m);
+            assert_eq!(mode.kind, ModeKind::Unstable, "{method:?}");
+            assert!(
+                (mode.s.0 - omega).abs() <= 1e-9 * omega,
+                "{method:?}: {:?}",
+                mode.s
+            );
+            assert_eq!(mode.damping_ratio, -1.0);
+            let f = omega / std::f64::consts::TAU;
+            assert!((mode.frequency_hz - f).abs() <= 1e-9 * f);
+        }
+    }
+}
