@@ -18,6 +18,8 @@
 //! - `cargo xtask setup`: the time from the command line to the first step
 //!   on the N-four-bar at 10³, 10⁴, 10⁵ bodies; `cargo xtask n-four-bar-file`
 //!   writes one such file ([`setup`]).
+//! - `cargo xtask hanging-chain-file`: a planar bar chain hanging at its
+//!   equilibrium as a model file, for `mstar modes` ([`setup`]).
 //! - `cargo xtask animate-check`: `mstar animate`'s page in headless Chromium,
 //!   a screenshot and a check that its script plays ([`animate_check`]).
 
@@ -125,6 +127,17 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
     },
+    /// Writes a planar bar chain hanging straight down (its equilibrium) as
+    /// a model file, for `mstar modes` (docs/performance.md, "Vibration
+    /// modes").
+    HangingChainFile {
+        /// The number of bars.
+        #[arg(long)]
+        links: usize,
+        /// The file to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 fn main() -> Result<()> {
@@ -152,6 +165,7 @@ fn main() -> Result<()> {
             duplicate,
         } => setup::write_file(bars, duplicate, &out),
         Command::SpatialChainFile { links, out } => setup::write_spatial_chain(links, &out),
+        Command::HangingChainFile { links, out } => setup::write_hanging_chain(links, &out),
     }
 }
 

@@ -149,6 +149,57 @@ pub fn spatial_chain(links: usize) -> String {
     s
 }
 
+/// A planar chain of `links` uniform bars (1 kg, 1 m, `J = m l²/12`, as
+/// `mstar chain`) on revolute joints, hanging straight down from the origin
+/// at rest: its static equilibrium, for `mstar modes` (docs/performance.md,
+/// "Vibration modes").
+#[must_use]
+pub fn hanging_chain(links: usize) -> String {
+    let mut s = String::with_capacity(250 * links + 200);
+    s.push_str(
+        "# A hanging bar chain (cargo xtask hanging-chain-file).
+",
+    );
+    s.push_str("format = \"mstar.planar/1\"\ngravity = [0.0, -9.81]\n\n");
+    for k in 0..links {
+        let _ = writeln!(
+            s,
+            "[[body]]\nname = \"bar{}\"\nmass = 1.0\ninertia = {:?}\npose = [0.0, {:?}, {:?}]\n",
+            k + 1,
+            1.0 / 12.0,
+            -(k as f64 + 0.5),
+            -std::f64::consts::FRAC_PI_2
+        );
+    }
+    for k in 0..links {
+        let (a, at) = if k == 0 {
+            ("ground".to_string(), "[0.0, 0.0]")
+        } else {
+            (format!("bar{k}"), "[0.5, 0.0]")
+        };
+        let _ = writeln!(
+            s,
+            "[[joint]]\nname = \"joint{}\"\ntype = \"revolute\"\nbodies = [\"{a}\", \"bar{}\"]\n\
+             points = [{at}, [-0.5, 0.0]]\n",
+            k + 1,
+            k + 1
+        );
+    }
+    s.push_str("[simulation]\nh = 1e-3\n");
+    s
+}
+
+/// Writes [`hanging_chain`] to `out`.
+///
+/// # Errors
+/// If the file cannot be written.
+pub fn write_hanging_chain(links: usize, out: &Path) -> Result<()> {
+    std::fs::write(out, hanging_chain(links))
+        .with_context(|| format!("could not write {}", out.display()))?;
+    println!("{}: a hanging bar chain, {links} bars", out.display());
+    Ok(())
+}
+
 /// Writes [`spatial_chain`] to `out`.
 ///
 /// # Errors

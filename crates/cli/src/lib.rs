@@ -65,6 +65,14 @@ enum Command {
     /// model file starting there (docs/analysis.md). Exit 0 when found, 1
     /// when none is found or it is neutral, 2 when the file cannot be read.
     Equilibrium(commands::equilibrium::EquilibriumArgs),
+    /// The constrained vibration modes of a model file about its static
+    /// equilibrium (or --about initial: its initial pose at rest): one line
+    /// a mode, `mode K: f = … Hz, ζ = …` (f = |s|/2π, ζ = −Re(s)/|s|);
+    /// --out writes the frequencies, damping ratios and shapes (unit modal
+    /// mass) as CSV (docs/analysis.md). Exit 0 when found, 1 when there is
+    /// no equilibrium or the eigenproblem fails, 2 when the file cannot be
+    /// read.
+    Modes(commands::modes::ModesArgs),
     /// Write a URDF robot (`.urdf`) as the mstar.spatial/1 model file it
     /// means (docs/model-format.md, "URDF robots"); `run`, `check` and
     /// `animate` also read a `.urdf` directly. Exit 0 when written, 2 when
@@ -79,7 +87,8 @@ enum Command {
     /// (110: 100 or more), 2 for a bad model file or command line (nothing
     /// ran), 1 when a file cannot be written.
     Sweep(commands::sweep::SweepArgs),
-    /// Draw a model moving through the results of `mstar run`: an animated
+    /// Draw a model moving through the results of `mstar run`, or one of its
+    /// vibration modes (--mode K): an animated
     /// GIF, a self-contained HTML page (play/pause, time slider) or one frame
     /// as a PNG; a spatial model projected onto the picture (--view). Exit 0
     /// when written, 1 when the results do not fit the model or a file cannot
@@ -149,6 +158,7 @@ fn dispatch(cli: Cli) -> ExitCode {
         Command::Pendulum(args) => args.out.as_deref(),
         Command::Chain(args) => args.out.as_deref(),
         Command::Equilibrium(args) => args.out(),
+        Command::Modes(args) => args.out(),
         _ => None,
     };
     if output::is_stdout(out) {
@@ -158,6 +168,7 @@ fn dispatch(cli: Cli) -> ExitCode {
         Command::Run(args) => return commands::run::run(&args),
         Command::Check(args) => return commands::check::check(&args),
         Command::Equilibrium(args) => return commands::equilibrium::equilibrium(&args),
+        Command::Modes(args) => return commands::modes::modes(&args),
         Command::Convert(args) => return commands::convert::convert(&args),
         Command::Sweep(args) => return commands::sweep::sweep(&args),
         Command::Animate(args) => return commands::animate::animate(&args),

@@ -348,7 +348,11 @@ fn a_vibration_mode_is_drawn_moving() {
         &path(&dir.join("m3.gif")),
     ]);
     assert_eq!(o.status.code(), Some(1));
-    assert!(text(&o.stderr).contains("at most 2"), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("give --mode 1 to 2"),
+        "{}",
+        text(&o.stderr)
+    );
     assert!(!dir.join("m3.gif").exists());
     let o = mstar(&[
         "animate",

@@ -150,6 +150,11 @@ pub enum ModesError {
         "the KKT matrix [K − σM, Bᵀ; B, 0] cannot be factored ({0}): redundant constraints (see `mstar check`) or a mass matrix singular on the constraints' tangent space; try the dense method"
     )]
     Kkt(#[from] KktError),
+    /// The acceleration problem at the pose is singular.
+    #[error(
+        "the acceleration problem [M + BᵀB, Bᵀ; B, 0] at the pose cannot be solved for the multipliers ({0}): redundant constraints (see `mstar check`) or a mass matrix singular on the constraints' tangent space"
+    )]
+    Multipliers(KktError),
     /// The sparse method cannot take a damped or unsymmetric model.
     #[error(
         "the sparse eigensolver takes undamped models with a symmetric stiffness only, and this one {0}: use the dense method (fine up to a few thousand coordinates) or remove the dampers"
@@ -214,7 +219,7 @@ pub fn modes<S: System + ?Sized>(
 /// instant of release.
 ///
 /// # Errors
-/// [`ModesError::Kkt`] when the acceleration problem is singular,
+/// [`ModesError::Multipliers`] when the acceleration problem is singular,
 /// [`ModesError::Structure`] for a malformed model.
 pub fn rest_multipliers<S: System + ?Sized>(
     sys: &S,
@@ -229,11 +234,14 @@ pub fn rest_multipliers<S: System + ?Sized>(
         c_bb: 1.0,
         ..Coefficients::acceleration()
     });
-    let mut solver = KktSolver::new(lin.kkt(), &KktOptions::default())?;
-    solver.factor(&lin.kkt().values)?;
     let mut rhs = vec![0.0; n + m];
     rhs[..n].copy_from_slice(lin.g());
-    solver.solve_in_place(&mut rhs)?;
+    KktSolver::new(lin.kkt(), &KktOptions::default())
+        .and_then(|mut solver| {
+            solver.factor(&lin.kkt().values)?;
+            solver.solve_in_place(&mut rhs)
+        })
+        .map_err(ModesError::Multipliers)?;
     Ok(rhs[n..].to_vec())
 }
 
@@ -320,7 +328,8 @@ fn mode(s: (f64, f64), omega2_zero: f64, shape: (Vec<f64>, Vec<f64>)) -> Mode {
         ModeKind::Rigid => (0.0, 0.0),
         ModeKind::Overdamped => (abs / std::f64::consts::TAU, 1.0),
         ModeKind::Unstable => (abs / std::f64::consts::TAU, -1.0),
-        ModeKind::Oscillating => (abs / std::f64::consts::TAU, -s.0 / abs),
+        // (`s.0 = 0`: ζ = +0, not −0.)
+        ModeKind::Oscillating => (abs / std::f64::consts::TAU, 0.0 - s.0 / abs),
     };
     let (re, im) = shape;
     let big = (0..re.len())

@@ -102,6 +102,21 @@ fn the_spatial_slider_crank_converges_to_the_index1_reference_at_second_order() 
 }
 
 #[test]
+fn the_double_pendulum_of_point_masses_vibrates_at_the_closed_form_frequencies() {
+    check("double-pendulum-modes.toml");
+}
+
+#[test]
+fn the_fixed_fixed_spring_chain_vibrates_at_the_closed_form_frequencies() {
+    check("spring-chain-modes.toml");
+}
+
+#[test]
+fn the_damped_mode_has_the_closed_form_eigenvalue() {
+    check("damped-mode.toml");
+}
+
+#[test]
 fn every_model_with_a_reference_is_validated() {
     // A model file in models/ is a reference case, or the reference of one
     // (parallelogram.toml), or an example (crank-and-spring, the sensors of

@@ -41,8 +41,8 @@ pub struct AnimateArgs {
     /// The state of --mode: `equilibrium` (found from the file's pose, as
     /// `mstar equilibrium`) or `initial` (the file's pose, held by the
     /// constraint forces of that instant).
-    #[arg(long, value_enum, default_value_t = About::Equilibrium, requires = "mode")]
-    about: About,
+    #[arg(long, value_enum, default_value_t = super::modes::About::Equilibrium, requires = "mode")]
+    about: super::modes::About,
     /// Write an animated GIF (looping) to this file.
     #[arg(long, value_name = "OUT.gif")]
     gif: Option<PathBuf>,
@@ -95,15 +95,6 @@ pub struct AnimateArgs {
     /// Override a key of the model file (as for `mstar run`).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
-}
-
-/// The state a mode is drawn about (`--about`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum About {
-    /// The static equilibrium found from the file's pose.
-    Equilibrium,
-    /// The file's initial pose.
-    Initial,
 }
 
 /// A picture size, px.
@@ -263,34 +254,20 @@ fn results_to_draw(
 
 /// Mode `k` (1-based) about the state `--about` names, as frames.
 fn mode_frames(args: &AnimateArgs, sys: &dyn mstar::run::ModelLookup, k: usize) -> Result<Results> {
-    let u0 = sys.initial_position();
-    let (u, lambda) = match args.about {
-        About::Equilibrium => {
-            let options = mstar::equilibrium::EquilibriumOptions::default();
-            match mstar::equilibrium::solve(sys, &u0, &options) {
-                Ok(eq) => (eq.u, eq.lambda),
-                // A neutral direction is a mode of zero frequency.
-                Err(mstar::equilibrium::EquilibriumError::Neutral { equilibrium, .. }) => {
-                    (equilibrium.u, equilibrium.lambda)
-                }
-                Err(e) => bail!(
-                    "{}: {e}; or draw the mode about the file's pose with --about initial",
-                    args.model.display()
-                ),
-            }
-        }
-        About::Initial => {
-            let lambda = mstar::modes::rest_multipliers(sys, &u0, 0.0)
-                .map_err(|e| anyhow::anyhow!("{}: {e}", args.model.display()))?;
-            (u0, lambda)
-        }
-    };
+    let (u, lambda) = super::modes::state(args.about, sys)
+        .map_err(|e| anyhow::anyhow!("{}: {e:#}", args.model.display()))?;
     let options = mstar::modes::ModesOptions {
         count: k,
         ..mstar::modes::ModesOptions::default()
     };
-    let found = mstar::modes::modes(sys, &u, &lambda, &options)
-        .map_err(|e| anyhow::anyhow!("{}: --mode {k}: {e}", args.model.display()))?;
+    let found = match mstar::modes::modes(sys, &u, &lambda, &options) {
+        Ok(found) => found,
+        Err(mstar::modes::ModesError::TooMany { dof, .. }) => bail!(
+            "{}: --mode {k}: the model has {dof} degree(s) of freedom; give --mode 1 to {dof}",
+            args.model.display()
+        ),
+        Err(e) => bail!("{}: --mode {k}: {e}", args.model.display()),
+    };
     let Some(mode) = found.modes.get(k - 1) else {
         bail!(
             "{}: --mode {k}: the model has {} modes",

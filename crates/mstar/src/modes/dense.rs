@@ -29,6 +29,14 @@ pub(super) fn modes(mut lin: Linearization, count: usize) -> Result<Modes, Modes
             rank: n - dof,
         });
     }
+    if count == 0 {
+        return Ok(Modes {
+            modes: Vec::new(),
+            dof,
+            damped: false,
+            method: Method::Dense,
+        });
+    }
     let zt = z.transpose();
     let mut m_r = &zt * &mass * &z;
     m_r = (&m_r + m_r.transpose()) * 0.5;

@@ -23,6 +23,9 @@ use super::{Method, Mode, Modes, ModesError, RIGID, blocks, mode, omega2_ref, to
 /// square (`10⁻²⁰`) relative to the gap, far below the solves' round-off.
 const TOL: f64 = 1e-10;
 
+/// A failed shift: the linearization back, for another, and why.
+type Retry = Box<(Linearization, ModesError)>;
+
 /// The shift-invert operator: the KKT matrix at `σ`, factored.
 struct ShiftInvert {
     lin: Linearization,
@@ -33,11 +36,11 @@ struct ShiftInvert {
 
 impl ShiftInvert {
     /// Factors `[K − σM, Bᵀ; B, 0]`.
-    fn new(mut lin: Linearization, sigma: f64) -> Result<Self, (Linearization, ModesError)> {
+    fn new(mut lin: Linearization, sigma: f64) -> Result<Self, Retry> {
         lin.assemble(&blocks(1.0, 0.0, -sigma));
         let solver = match KktSolver::new(lin.kkt(), &KktOptions::default()) {
             Ok(s) => s,
-            Err(e) => return Err((lin, e.into())),
+            Err(e) => return Err(Box::new((lin, e.into()))),
         };
         let mut op = Self {
             rhs: vec![0.0; lin.kkt().n],
@@ -46,7 +49,7 @@ impl ShiftInvert {
             sigma,
         };
         if let Err(e) = op.solver.factor(&op.lin.kkt().values) {
-            return Err((op.lin, e.into()));
+            return Err(Box::new((op.lin, e.into())));
         }
         Ok(op)
     }
@@ -96,6 +99,14 @@ pub(super) fn modes(mut lin: Linearization, count: usize) -> Result<Modes, Modes
         });
     }
     let k_max = check_symmetric(&mut lin)?;
+    if count == 0 {
+        return Ok(Modes {
+            modes: Vec::new(),
+            dof,
+            damped: false,
+            method: Method::Sparse,
+        });
+    }
     let m_max = lin.mass().iter().fold(0.0_f64, |a, x| a.max(x.abs()));
     let omega2 = omega2_ref(k_max, m_max);
     let start = start_vector(n);
@@ -103,7 +114,7 @@ pub(super) fn modes(mut lin: Linearization, count: usize) -> Result<Modes, Modes
     // modes); then slightly below zero, where K − σM is regular.
     let (mut op, q0) = match shifted(lin, 0.0, &start) {
         Ok(found) => found,
-        Err((lin, _)) => shifted(lin, -1e-6 * omega2, &start).map_err(|(_, e)| e)?,
+        Err(retry) => shifted(retry.0, -1e-6 * omega2, &start).map_err(|retry| retry.1)?,
     };
     let ritz = lanczos(&mut op, q0, count, dof)?;
     let zero = RIGID * omega2;
@@ -175,14 +186,18 @@ fn shifted(
     lin: Linearization,
     sigma: f64,
     start: &[f64],
-) -> Result<(ShiftInvert, Vec<f64>), (Linearization, ModesError)> {
+) -> Result<(ShiftInvert, Vec<f64>), Retry> {
     let mut op = ShiftInvert::new(lin, sigma)?;
     match op.apply(start) {
         Ok(q) => {
             let norm = op.inner(&q, &q).sqrt();
+            // A start with no mass in the tangent space: M vanishes there.
+            if !(norm > 0.0 && norm.is_finite()) {
+                return Err(Box::new((op.lin, ModesError::SingularMass)));
+            }
             Ok((op, q.iter().map(|x| x / norm).collect()))
         }
-        Err(e) => Err((op.lin, e)),
+        Err(e) => Err(Box::new((op.lin, e))),
     }
 }
 
@@ -247,7 +262,7 @@ fn converged(
     beta: f64,
 ) -> Result<Vec<(f64, Vec<f64>)>, usize> {
     let hj = h.view((0, 0), (dim, dim));
-    let sym = (&hj + hj.transpose()) * 0.5;
+    let sym = (hj + hj.transpose()) * 0.5;
     let eig = SymmetricEigen::new(sym);
     let mut order: Vec<usize> = (0..dim).collect();
     order.sort_by(|&a, &b| {

@@ -90,7 +90,8 @@ impl System for Line {
 }
 
 /// `ω_j = 2 √(k/m) sin(jπ / (2(n + 1)))`, the fixed–fixed chain's modes
-/// (e.g. Rao, *Mechanical Vibrations*, the discrete string), rad/s.
+/// (`k/m` times the eigenvalues `2 − 2 cos(jπ/(n+1))` of the tridiagonal
+/// matrix `(−1, 2, −1)`), rad/s.
 fn chain_omega(j: usize, n: usize, k: f64, m: f64) -> f64 {
     2.0 * (k / m).sqrt() * (j as f64 * std::f64::consts::PI / (2.0 * (n as f64 + 1.0))).sin()
 }
@@ -289,4 +290,33 @@ fn free_mass_is_rigid() {
     .expect("modes");
     assert_eq!(found.modes[0].kind, ModeKind::Rigid);
     assert_eq!(found.modes[0].frequency_hz, 0.0);
+}
+
+/// Springs of negative stiffness (an inverted, unstable state): `ω² =
+/// −ω_j²` of the chain with `|k|`, so each mode is a real `s = ω_j > 0`,
+/// reported unstable with `ζ = −1` and `f = ω_j/2π`, by both methods.
+#[test]
+fn negative_stiffness_is_unstable() {
+    let (n, m, k) = (4, 1.5, -30.0);
+    let sys = Line { n, m, k, c: 0.0 };
+    for method in [Method::Dense, Method::Sparse] {
+        let options = ModesOptions {
+            count: n,
+            method,
+            ..ModesOptions::default()
+        };
+        let found = modes(&sys, &[0.0; 8], &[0.0; 4], &options).expect("modes");
+        for (j, mode) in found.modes.iter().enumerate() {
+            let omega = chain_omega(j + 1, n, -k, m);
+            assert_eq!(mode.kind, ModeKind::Unstable, "{method:?}");
+            assert!(
+                (mode.s.0 - omega).abs() <= 1e-9 * omega,
+                "{method:?}: {:?}",
+                mode.s
+            );
+            assert_eq!(mode.damping_ratio, -1.0);
+            let f = omega / std::f64::consts::TAU;
+            assert!((mode.frequency_hz - f).abs() <= 1e-9 * f);
+        }
+    }
 }

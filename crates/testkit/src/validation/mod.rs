@@ -3,7 +3,8 @@
 //! `crates/mstar/tests/validation.rs`.
 //!
 //! Each case loads its model file, runs it through [`mstar::run::simulate`]
-//! (what `mstar run` does) and compares with a reference that shares no code
+//! (what `mstar run` does; the vibration modes through [`mstar::modes`], what
+//! `mstar modes` does) and compares with a reference that shares no code
 //! with the integration path: a closed form, a loop-closure solve, the RK4
 //! oracle on minimal coordinates (`mstar-rk4`), published values. Tolerances
 //! come from the method (second order: errors fall by 4 when `h` halves) or
@@ -12,6 +13,7 @@
 pub mod andrews;
 mod crank_and_spring;
 mod kinematics;
+mod modes;
 mod n_four_bar;
 mod order;
 mod parallelogram;
@@ -88,6 +90,9 @@ pub const CASES: &[Case] = &[
     spatial::DOUBLE_PENDULUM,
     spatial::BRICARD,
     spatial::SLIDER_CRANK,
+    modes::DOUBLE_PENDULUM,
+    modes::SPRING_CHAIN,
+    modes::DAMPED,
 ];
 
 /// A model file of `models`, with overrides (`simulation.h=…`).
