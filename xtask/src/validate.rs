@@ -1,20 +1,30 @@
 //! `cargo xtask validate`: every model of `models/` against its independent
-//! reference at the published spans (`mstar_testkit::validation`, level `Tight`);
-//! prints the table and writes it to `docs/validation.md`. Fails when a row
-//! does.
+//! reference at the published spans (`mstar_testkit::validation`, level `Tight`),
+//! then the studies too long for `cargo test` or about analyses rather than
+//! runs ([`STUDIES`]: IFToMM A01 over 2000 s, the torsional spring's
+//! equilibrium); prints the table and writes it to `docs/validation.md`.
+//! Fails when a row does.
+
+mod a01;
+mod elliptic;
+mod torsion;
 
 use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Result, bail};
-use mstar_testkit::validation::{CASES, Level, Row, markdown};
+use mstar_testkit::validation::{CASES, Case, Level, Row, markdown};
+
+/// The cases run here only: their references live in this crate, and A01's
+/// 2000 s span is a study, not a test (each has a short test of its own).
+pub const STUDIES: &[Case] = &[a01::CASE, torsion::CASE];
 
 /// Runs the validation and writes `docs/validation.md`.
 pub fn run() -> Result<()> {
     let models = Path::new("models");
     let mut rows: Vec<Row> = Vec::new();
     let mut errors = Vec::new();
-    for case in CASES {
+    for case in CASES.iter().chain(STUDIES) {
         let clock = Instant::now();
         match (case.run)(models, Level::Tight) {
             Ok(r) => {
@@ -52,10 +62,33 @@ pub fn run() -> Result<()> {
     Ok(())
 }
 
-/// `docs/validation.md`: what each reference is, then the table.
+/// `docs/validation.md`: what each reference is, then the table with the
+/// machine its CPU times were measured on.
 fn page(table: &str) -> String {
     format!(
-        "{}\n## The table\n\nWritten by `cargo xtask validate` (release build; a few seconds).\n\n{table}",
-        include_str!("validation_intro.md")
+        "{}\n## The table\n\nWritten by `cargo xtask validate` on {} ({}; CPU times are the wall \
+         clock of one run on one thread; about a minute in all, most of it A01).\n\n{table}",
+        include_str!("validation_intro.md"),
+        crate::bench::machine(),
+        today(),
     )
+}
+
+/// Today's date (UTC), `YYYY-MM-DD`, from the system clock: the civil date
+/// of a day count since 1970-01-01 (H. Hinnant, "chrono-compatible low-level
+/// date algorithms", `civil_from_days`).
+fn today() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let z = i64::try_from(secs / 86_400).unwrap_or(0) + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!("{year:04}-{month:02}-{day:02}")
 }
