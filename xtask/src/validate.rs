@@ -1,30 +1,20 @@
 //! `cargo xtask validate`: every model of `models/` against its independent
-//! reference at the published spans (`mstar_testkit::validation`, level `Tight`),
-//! then the studies too long for `cargo test` or about analyses rather than
-//! runs ([`STUDIES`]: IFToMM A01 over 2000 s, the torsional spring's
-//! equilibrium); prints the table and writes it to `docs/validation.md`.
-//! Fails when a row does.
-
-mod a01;
-mod elliptic;
-mod torsion;
+//! reference at the published spans (`mstar_testkit::validation`, level `Tight`:
+//! IFToMM A01's 2000 s run only here); prints the table and writes it to
+//! `docs/validation.md`. Fails when a row does.
 
 use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{Result, bail};
-use mstar_testkit::validation::{CASES, Case, Level, Row, markdown};
-
-/// The cases run here only: their references live in this crate, and A01's
-/// 2000 s span is a study, not a test (each has a short test of its own).
-pub const STUDIES: &[Case] = &[a01::CASE, torsion::CASE];
+use mstar_testkit::validation::{CASES, Level, Row, markdown};
 
 /// Runs the validation and writes `docs/validation.md`.
 pub fn run() -> Result<()> {
     let models = Path::new("models");
     let mut rows: Vec<Row> = Vec::new();
     let mut errors = Vec::new();
-    for case in CASES.iter().chain(STUDIES) {
+    for case in CASES {
         let clock = Instant::now();
         match (case.run)(models, Level::Tight) {
             Ok(r) => {

@@ -5,12 +5,17 @@
 //! Each case loads its model file, runs it through [`mstar::run::simulate`]
 //! (what `mstar run` does) and compares with a reference that shares no code
 //! with the integration path: a closed form, a loop-closure solve, the RK4
-//! oracle on minimal coordinates (`mstar-rk4`), published values. Tolerances
+//! oracle on minimal coordinates (`mstar-rk4`), published values, a closed
+//! form in elliptic functions, a scalar root for a static equilibrium
+//! (through `mstar::equilibrium::solve`, what `mstar equilibrium` runs).
+//! Tolerances
 //! come from the method (second order: errors fall by 4 when `h` halves) or
 //! from the source (the test set's digits, the benchmark's threshold).
 
 pub mod andrews;
 mod crank_and_spring;
+mod elliptic;
+mod iftomm_a01;
 mod kinematics;
 mod n_four_bar;
 mod order;
@@ -19,6 +24,7 @@ mod pendulums;
 mod slider_crank;
 mod spatial;
 mod top;
+mod torsion_bar;
 
 use std::path::Path;
 
@@ -88,6 +94,8 @@ pub const CASES: &[Case] = &[
     spatial::DOUBLE_PENDULUM,
     spatial::BRICARD,
     spatial::SLIDER_CRANK,
+    iftomm_a01::CASE,
+    torsion_bar::CASE,
 ];
 
 /// A model file of `models`, with overrides (`simulation.h=…`).

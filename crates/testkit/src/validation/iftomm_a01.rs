@@ -8,20 +8,20 @@
 //! is a time history computed by a high-order integrator; the pendulum
 //! released at rest from `θ₀` has the exact solution
 //! `sin(θ/2) = k sn(K(k) − ω t, k)`, `k = sin(θ₀/2)`, `ω = √(g/l)`, which is
-//! used here (`super::elliptic`), so the reference carries no integration
+//! used here (`elliptic.rs`, no mstar code), so the reference carries no integration
 //! error at all.
 
 use std::path::Path;
 use std::time::Instant;
 
+use super::{Case, Level, Row};
 use mstar::file::{Mechanism, MechanismFile};
 use mstar::model::SampleRef;
-use mstar_testkit::validation::{Case, Level, Row};
 
 use super::elliptic::{complete_k, jacobi};
 
 /// `models/iftomm-a01-pendulum.toml`.
-pub const CASE: Case = Case {
+pub(super) const CASE: Case = Case {
     model: "iftomm-a01-pendulum.toml",
     run: a01,
 };
@@ -39,7 +39,7 @@ const HIGH_PRECISION: f64 = 1e-3;
 /// The position of P1 at `t`: with `sn`, `dn` of `K − ω t`,
 /// `sin θ = 2 k sn dn`, `cos θ = 1 − 2 k² sn²` (θ from the downward
 /// vertical, positive towards +x), so `P1 = l (sin θ, −cos θ)`.
-pub fn p1_exact(t: f64) -> [f64; 2] {
+fn p1_exact(t: f64) -> [f64; 2] {
     let k = (THETA0 / 2.0).sin();
     let m = k * k;
     let quarter = complete_k(m);
@@ -176,7 +176,7 @@ mod tests {
 
     #[test]
     fn the_model_follows_the_closed_form_over_its_first_20_s() {
-        let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models");
+        let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
         let rows = a01(&models, Level::Quick).unwrap_or_else(|e| panic!("{e}"));
         assert!(rows.iter().all(Row::pass), "{rows:#?}");
     }

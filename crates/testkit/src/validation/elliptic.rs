@@ -21,7 +21,7 @@ fn agm(m: f64) -> (Vec<f64>, Vec<f64>) {
 
 /// The complete elliptic integral of the first kind `K(m) = π / (2 a_N)`,
 /// parameter `m = k²` in `[0, 1)` (A&S 17.6.1).
-pub fn complete_k(m: f64) -> f64 {
+pub(super) fn complete_k(m: f64) -> f64 {
     let (a, _) = agm(m);
     std::f64::consts::FRAC_PI_2 / a[a.len() - 1]
 }
@@ -31,7 +31,7 @@ pub fn complete_k(m: f64) -> f64 {
 /// sin φ_n))/2`: `sn = sin φ₀`, `cn = cos φ₀` (A&S 16.4.3), and
 /// `dn = √(1 − m sn²)` (positive for `m < 1`; A&S's `cos φ₀ / cos(φ₁ − φ₀)`
 /// is 0/0 at `u = K`).
-pub fn jacobi(u: f64, m: f64) -> (f64, f64, f64) {
+pub(super) fn jacobi(u: f64, m: f64) -> (f64, f64, f64) {
     let (a, c) = agm(m);
     let n = a.len() - 1;
     let mut phi = 2f64.powi(i32::try_from(n).unwrap_or(i32::MAX)) * a[n] * u;

@@ -5,12 +5,12 @@
 
 use std::path::Path;
 
+use super::{Case, Level, Row};
 use mstar::equilibrium::EquilibriumOptions;
 use mstar::file::{Mechanism, MechanismFile};
-use mstar_testkit::validation::{Case, Level, Row};
 
 /// `models/torsion-bar.toml`.
-pub const CASE: Case = Case {
+pub(super) const CASE: Case = Case {
     model: "torsion-bar.toml",
     run: torsion,
 };
@@ -25,7 +25,7 @@ const K: f64 = 5.0;
 /// The droop `φ` below the horizontal: the root in `(0, π/2)` of
 /// `f(φ) = k φ − m g (l/2) cos φ` (`f(0) < 0 < f(π/2)`, `f' > 0`), by Newton
 /// steps kept inside a shrinking bracket (bisection when a step leaves it).
-pub fn droop(k: f64, m: f64, g: f64, l: f64) -> f64 {
+fn droop(k: f64, m: f64, g: f64, l: f64) -> f64 {
     let w = m * g * l / 2.0;
     let f = |phi: f64| k * phi - w * phi.cos();
     let (mut lo, mut hi) = (0.0, std::f64::consts::FRAC_PI_2);
@@ -127,7 +127,7 @@ mod tests {
 
     #[test]
     fn mstar_equilibrium_finds_the_root_and_the_weight() {
-        let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../models");
+        let models = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models");
         let rows = torsion(&models, Level::Quick).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(rows.len(), 2);
         assert!(rows.iter().all(Row::pass), "{rows:#?}");
