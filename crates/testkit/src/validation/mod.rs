@@ -6,11 +6,11 @@
 //! (what `mstar run` does) and compares with a reference that shares no code
 //! with the integration path: a closed form, a loop-closure solve, the RK4
 //! oracle on minimal coordinates (`mstar-rk4`), published values, a closed
-//! form in elliptic functions, a scalar root for a static equilibrium
-//! (through `mstar::equilibrium::solve`, what `mstar equilibrium` runs).
-//! Tolerances
-//! come from the method (second order: errors fall by 4 when `h` halves) or
-//! from the source (the test set's digits, the benchmark's threshold).
+//! form in elliptic functions; the static equilibrium of `torsion-bar.toml`
+//! is found by `mstar::equilibrium::solve` (what `mstar equilibrium` runs)
+//! and compared with a scalar root. Tolerances come from the method (second
+//! order: errors fall by 4 when `h` halves) or from the source (the test
+//! set's digits, the benchmark's threshold).
 
 pub mod andrews;
 mod crank_and_spring;
