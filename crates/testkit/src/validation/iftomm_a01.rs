@@ -56,9 +56,10 @@ const PUBLISHED: [[f64; 3]; 11] = [
     [2000.0, 8.14603e-1, -5.80019e-1],
 ];
 
-/// The published values' rounding: half a unit of the sixth digit of each
-/// coordinate (at most 5e-6 m), √2 times that in the distance.
-const PUBLISHED_ROUNDING: f64 = 7.1e-6;
+/// The published values' rounding: half a unit of the sixth significant
+/// digit of each coordinate, at most 5e-7 m for the values above (all below
+/// 1 m in magnitude), √2 times that in the distance.
+const PUBLISHED_ROUNDING: f64 = 7.1e-7;
 
 /// The position of P1 at `t`: with `sn`, `dn` of `K − ω t`,
 /// `sin θ = 2 k sn dn`, `cos θ = 1 − 2 k² sn²` (θ from the downward
