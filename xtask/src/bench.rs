@@ -30,7 +30,7 @@ fn median_us(id: &str) -> Option<f64> {
 }
 
 /// The machine, for the record.
-fn machine() -> String {
+pub(crate) fn machine() -> String {
     let cpu = std::fs::read_to_string("/proc/cpuinfo")
         .ok()
         .and_then(|s| {

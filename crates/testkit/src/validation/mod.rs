@@ -6,12 +6,17 @@
 //! (what `mstar run` does; the vibration modes through [`mstar::modes`], what
 //! `mstar modes` does) and compares with a reference that shares no code
 //! with the integration path: a closed form, a loop-closure solve, the RK4
-//! oracle on minimal coordinates (`mstar-rk4`), published values. Tolerances
-//! come from the method (second order: errors fall by 4 when `h` halves) or
-//! from the source (the test set's digits, the benchmark's threshold).
+//! oracle on minimal coordinates (`mstar-rk4`), published values, a closed
+//! form in elliptic functions; the static equilibrium of `torsion-bar.toml`
+//! is found by `mstar::equilibrium::solve` (what `mstar equilibrium` runs)
+//! and compared with a scalar root. Tolerances come from the method (second
+//! order: errors fall by 4 when `h` halves) or from the source (the test
+//! set's digits, the benchmark's threshold).
 
 pub mod andrews;
 mod crank_and_spring;
+mod elliptic;
+mod iftomm_a01;
 mod kinematics;
 mod modes;
 mod n_four_bar;
@@ -21,6 +26,7 @@ mod pendulums;
 mod slider_crank;
 mod spatial;
 mod top;
+mod torsion_bar;
 
 use std::path::Path;
 
@@ -93,6 +99,8 @@ pub const CASES: &[Case] = &[
     modes::DOUBLE_PENDULUM,
     modes::SPRING_CHAIN,
     modes::DAMPED,
+    iftomm_a01::CASE,
+    torsion_bar::CASE,
 ];
 
 /// A model file of `models`, with overrides (`simulation.h=…`).
