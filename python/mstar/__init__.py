@@ -10,6 +10,7 @@ and get numpy arrays::
     result["crank.theta"]          # a coordinate's column (u:crank.theta)
     result.reaction("O2")["fx"]    # a joint's load (reaction:O2.fx)
     rest = model.equilibrium()      # the static equilibrium (mstar equilibrium)
+    model.modes(count=4)            # vibration modes about it (mstar modes)
 
 The runs are those of ``mstar run`` bit for bit, and the errors carry the
 messages it prints after ``error:``, with its options named as Python
@@ -25,6 +26,7 @@ from ._errors import ModelError as ModelError
 from ._model import AccuracyWarning as AccuracyWarning
 from ._model import Model as Model
 from ._model import ModelWarning as ModelWarning
+from ._modes import Modes as Modes
 from ._model import load as load
 from ._native import __version__ as __version__
 from ._result import Result as Result
@@ -41,6 +43,7 @@ __all__ = [
     "Model",
     "ModelError",
     "ModelWarning",
+    "Modes",
     "Result",
     "Stats",
     "Sweep",
@@ -52,6 +55,6 @@ __all__ = [
 
 # Python's own exceptions and classes report the package, not the private
 # module that defines them.
-for _name in ("AccuracyWarning", "Equilibrium", "Model", "ModelWarning", "Result", "Stats", "Sweep", "animate", "load", "sweep"):
+for _name in ("AccuracyWarning", "Equilibrium", "Model", "ModelWarning", "Modes", "Result", "Stats", "Sweep", "animate", "load", "sweep"):
     globals()[_name].__module__ = __name__
 del _name

@@ -34,6 +34,14 @@ RUN_RULES: List[Tuple[str, str]] = [
     (r"--set (?!simulation\.)([^=\s]+)=", r'overrides["\1"]='),
 ]
 
+#: Further rules for :meth:`mstar.Model.modes`: its options as arguments.
+MODES_RULES: List[Tuple[str, str]] = [
+    (r"--about initial", 'about="initial"'),
+    (r"--count (\d+)", r"count=\1"),
+    (r"use the dense method", 'use method="dense"'),
+    (r"try the dense method", 'try method="dense"'),
+]
+
 #: Further rules for :func:`mstar.sweep`: its ``--set KEY=V1,V2`` is an entry
 #: of ``params``, ``--out``, ``--jobs``, ``--shard``, ``--zip`` arguments.
 SWEEP_RULES: List[Tuple[str, str]] = [
@@ -72,4 +80,4 @@ def translated(extra: List[Tuple[str, str]] = ()) -> Iterator[None]:  # type: ig
         raise
 
 
-__all__ = ["EquilibriumError", "Error", "IntegrationError", "ModelError", "python_message", "translated"]
+__all__ = ["EquilibriumError", "Error", "IntegrationError", "MODES_RULES", "ModelError", "python_message", "translated"]

@@ -7,11 +7,12 @@ import os
 import warnings
 from typing import Any, Dict, List, Optional, Union
 
-from ._errors import RUN_RULES, EquilibriumError, IntegrationError, python_message, translated
+from ._errors import MODES_RULES, RUN_RULES, EquilibriumError, IntegrationError, python_message, translated
 from ._literal import integer, number, toml_literal
 from ._native import load_path as _load_path
 from ._native import load_text as _load_text
 from ._equilibrium import Equilibrium
+from ._modes import Modes
 from ._result import Result
 
 #: The ``[simulation]`` keys that take a real number and an integer.
@@ -191,6 +192,42 @@ class Model:
                 e.equilibrium = Equilibrium(found, self, given)  # type: ignore[attr-defined]
             raise
         return Equilibrium(raw, self, given)
+
+    def modes(
+        self,
+        count: Optional[int] = None,
+        about: str = "equilibrium",
+        method: str = "auto",
+        overrides: Optional[Dict[str, Any]] = None,
+    ) -> Modes:
+        """The lowest ``count`` vibration modes (None: 10, or the degrees of
+        freedom when fewer), as ``mstar modes`` finds them, with the GIL
+        released: the motion linearized about the state ``about`` names,
+        ``"equilibrium"`` (the static equilibrium :meth:`equilibrium` finds;
+        a neutral one is used as it is, its free direction a rigid mode) or
+        ``"initial"`` (the model's initial pose at rest), on the constraints'
+        tangent space. ``method``: ``"auto"`` (dense up to 600 coordinates,
+        sparse above), ``"dense"`` (any damping) or ``"sparse"``
+        (shift-invert Lanczos; undamped, symmetric stiffness).
+        ``overrides`` as for :meth:`run`.
+
+        Raises:
+            EquilibriumError: ``about="equilibrium"`` and none was found.
+            ModelError: more modes asked for than there are degrees of
+                freedom; a mass matrix singular on the constraints' tangent
+                space; the sparse method on a damped model or not
+                converging; an override unknown or out of range.
+            ValueError: an unknown ``about`` or ``method``.
+            TypeError: ``count`` not an integer.
+        """
+        if count is not None:
+            count = integer(count, "count")
+            if count < 1:
+                raise ValueError(f"count: expected 1 or more, got {count}")
+        given = _overrides({}, overrides)
+        with translated(RUN_RULES + MODES_RULES):
+            raw = self._native.modes(given, count, about, method)
+        return Modes(raw, self.coords, about)
 
     def __repr__(self) -> str:
         return f"<mstar.Model {self.origin!r}: {self.kind}, {len(self.coords)} coordinates, {len(self.constraints)} constraints>"

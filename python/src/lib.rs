@@ -20,6 +20,7 @@ mod cli;
 mod collect;
 mod equilibrium;
 mod model;
+mod modes;
 mod spatial;
 mod sweep;
 

@@ -266,6 +266,23 @@ impl NativeModel {
         crate::equilibrium::solve(py, mechanism, &self.sensors, &self.origin)
     }
 
+    /// The lowest vibration modes about the state `about` names, with
+    /// `overrides` applied, as `mstar modes` finds them (see
+    /// `crate::modes::solve`).
+    #[pyo3(signature = (overrides, count, about, method))]
+    fn modes<'py>(
+        &self,
+        py: Python<'py>,
+        overrides: Vec<String>,
+        count: Option<usize>,
+        about: &str,
+        method: &str,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let (fresh, _) = self.settings(&overrides).map_err(|e| model_error(&e))?;
+        let mechanism = fresh.as_ref().unwrap_or(&self.mechanism);
+        crate::modes::solve(py, mechanism, &self.origin, count, about, method)
+    }
+
     /// The model file's TOML text with the pose `u` as its initial pose,
     /// checked to be the same mechanism (`mstar equilibrium
     /// --write-model`).

@@ -212,6 +212,75 @@ pub fn modes<S: System + ?Sized>(
     }
 }
 
+/// The state at rest a model's modes are found about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum About {
+    /// The static equilibrium [`crate::equilibrium::solve`] finds from the
+    /// initial pose (a neutral one as it is: its free direction is a rigid
+    /// mode).
+    Equilibrium,
+    /// The initial pose, at rest, with the multipliers of the acceleration
+    /// problem there ([`rest_multipliers`]).
+    Initial,
+}
+
+/// A state at rest `(u, u̇ = 0, λ)` ([`rest_state`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RestState {
+    /// Coordinates.
+    pub u: Vec<f64>,
+    /// Multipliers.
+    pub lambda: Vec<f64>,
+    /// The equilibrium found is neutral (a direction without stiffness).
+    pub neutral: bool,
+}
+
+/// Why [`rest_state`] found no state.
+#[derive(Debug, thiserror::Error)]
+pub enum RestStateError {
+    /// No equilibrium was found.
+    #[error("{0}; or linearize about the file's pose with --about initial")]
+    Equilibrium(crate::equilibrium::EquilibriumError),
+    /// The acceleration problem at the initial pose is singular.
+    #[error("at the initial pose: {0}")]
+    Initial(ModesError),
+}
+
+/// The state at rest `about` names for `sys` from the pose `u0` (drivers
+/// held at `t = 0`): what `mstar modes --about` and Python's
+/// `model.modes(about=…)` linearize about.
+///
+/// # Errors
+/// [`RestStateError`] when there is no such state.
+pub fn rest_state<S: System + ?Sized>(
+    sys: &S,
+    u0: &[f64],
+    about: About,
+) -> Result<RestState, RestStateError> {
+    use crate::equilibrium::{EquilibriumError, EquilibriumOptions};
+    if about == About::Initial {
+        let lambda = rest_multipliers(sys, u0, 0.0).map_err(RestStateError::Initial)?;
+        return Ok(RestState {
+            u: u0.to_vec(),
+            lambda,
+            neutral: false,
+        });
+    }
+    match crate::equilibrium::solve(sys, u0, &EquilibriumOptions::default()) {
+        Ok(eq) => Ok(RestState {
+            u: eq.u,
+            lambda: eq.lambda,
+            neutral: false,
+        }),
+        Err(EquilibriumError::Neutral { equilibrium, .. }) => Ok(RestState {
+            u: equilibrium.u,
+            lambda: equilibrium.lambda,
+            neutral: true,
+        }),
+        Err(e) => Err(RestStateError::Equilibrium(e)),
+    }
+}
+
 /// The multipliers of a state at rest at `u`: those of the acceleration
 /// problem `M ü + Bᵀλ = g(u, 0, t₀)`, `B ü = 0` (solved with `M + BᵀB`,
 /// regular when `M` is on the tangent space). At an equilibrium `ü = 0`

@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
-use mstar::equilibrium::{EquilibriumError, EquilibriumOptions};
 use mstar::file::MechanismFile;
 use mstar::modes::{Method, ModeKind, Modes, ModesError, ModesOptions};
 use mstar::run::ModelLookup;
@@ -102,27 +101,22 @@ pub fn modes(args: &ModesArgs) -> ExitCode {
     }
 }
 
-/// The state at rest `(u, λ)` to linearize about.
+/// The state at rest `(u, λ)` to linearize about
+/// ([`mstar::modes::rest_state`]).
 pub fn state(about: About, sys: &dyn ModelLookup) -> Result<(Vec<f64>, Vec<f64>)> {
-    let u0 = sys.initial_position();
-    if about == About::Initial {
-        let lambda = mstar::modes::rest_multipliers(sys, &u0, 0.0)
-            .map_err(|e| anyhow::anyhow!("at the initial pose: {e}"))?;
-        return Ok((u0, lambda));
-    }
-    match mstar::equilibrium::solve(sys, &u0, &EquilibriumOptions::default()) {
-        Ok(eq) => Ok((eq.u, eq.lambda)),
+    let about = match about {
+        About::Equilibrium => mstar::modes::About::Equilibrium,
+        About::Initial => mstar::modes::About::Initial,
+    };
+    let found = mstar::modes::rest_state(sys, &sys.initial_position(), about)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    if found.neutral {
         // A neutral direction is a rigid mode: the modes say so.
-        Err(EquilibriumError::Neutral { equilibrium, .. }) => {
-            note!(
-                "note: the equilibrium is neutral (a direction without stiffness): it appears as a rigid mode"
-            );
-            Ok((equilibrium.u, equilibrium.lambda))
-        }
-        Err(e) => Err(anyhow::anyhow!(
-            "{e}; or linearize about the file's pose with --about initial"
-        )),
+        note!(
+            "note: the equilibrium is neutral (a direction without stiffness): it appears as a rigid mode"
+        );
     }
+    Ok((found.u, found.lambda))
 }
 
 /// The modes; without `--count`, 10 or the degrees of freedom when fewer.
