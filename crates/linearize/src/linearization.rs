@@ -172,6 +172,9 @@ pub struct Linearization {
     mass_diagonal: bool,
     mass_pattern: Pattern,
     b_pattern: Pattern,
+    /// The patterns of `Σ λᵢ ∂²Φᵢ/∂u²`, `∂g/∂u`, `∂g/∂u̇`, `∂(M ü)/∂u`, for
+    /// [`tangent_mul_add`](Self::tangent_mul_add).
+    tangent_patterns: [Pattern; 4],
     /// Values of `M`, `B`, `Σ λᵢ ∂²Φᵢ/∂u²`, `∂g/∂u`, `∂g/∂u̇`, `∂(M ü)/∂u` on
     /// the system's patterns.
     mass: Vec<f64>,
@@ -276,6 +279,7 @@ impl Linearization {
             bb_values: vec![0.0; layout.bb_pairs.len()],
             mass_pattern: p.mass,
             b_pattern: p.b,
+            tangent_patterns: [p.hessian, p.g_u, p.g_v, p.mass_du],
             layout,
         })
     }
@@ -492,6 +496,34 @@ impl Linearization {
         }
         if !self.mass_du.is_empty() {
             sys.mass_du_into(t, u, a, &mut self.mass_du);
+        }
+    }
+
+    /// `y += K_T x + C_T w` (eqs. 6-7) from the last
+    /// [`eval_jacobians`](Self::eval_jacobians): `K_T = Σλᵢ∂²Φᵢ/∂u² − ∂g/∂u
+    /// + ∂(M ü)/∂u`, `C_T = −∂g/∂u̇`. The product of the tangent without
+    /// assembling it, e.g. for the right-hand side of a sensitivity
+    /// (`mstar_newmark::Sensitivities`).
+    ///
+    /// # Panics
+    /// If `x`, `w` or `y` is not of length `n`.
+    pub fn tangent_mul_add(&self, x: &[f64], w: &[f64], y: &mut [f64]) {
+        let [hessian, g_u, g_v, mass_du] = &self.tangent_patterns;
+        let mut minus = vec![0.0; self.n];
+        if !self.hessian.is_empty() {
+            hessian.mul_add(&self.hessian, x, y);
+        }
+        if !self.mass_du.is_empty() {
+            mass_du.mul_add(&self.mass_du, x, y);
+        }
+        if !self.g_u.is_empty() {
+            g_u.mul_add(&self.g_u, x, &mut minus);
+        }
+        if !self.g_v.is_empty() {
+            g_v.mul_add(&self.g_v, w, &mut minus);
+        }
+        for (y, m) in y.iter_mut().zip(&minus) {
+            *y -= m;
         }
     }
 

@@ -33,7 +33,9 @@ mod params;
 mod resample;
 
 pub use error::{IntegrationError, Short};
-pub use integrator::{Integrator, StartReport};
+pub use integrator::{
+    DIFFERENCE_STEP, Integrator, Parameterized, Sensitivities, StartReport, Variant,
+};
 pub use output::{EnergyReport, ErrorReport, Observer, RunStats, Trajectory};
 pub use params::{AlphaParams, Config, ErrorControl, Newton, Predictor, Scheme, Start, StepMode};
 pub use resample::Resample;

@@ -4,7 +4,10 @@
 
 mod control;
 mod newton;
+mod sensitivity;
 mod start;
+
+pub use sensitivity::{DIFFERENCE_STEP, Parameterized, Sensitivities, Variant};
 
 use mstar_kkt::{Backend, KktError, KktSolver};
 use mstar_linearize::Linearization;

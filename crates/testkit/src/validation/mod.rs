@@ -23,6 +23,7 @@ mod n_four_bar;
 mod order;
 mod parallelogram;
 mod pendulums;
+mod sensitivity;
 mod slider_crank;
 mod spatial;
 mod top;
@@ -101,6 +102,8 @@ pub const CASES: &[Case] = &[
     modes::DAMPED,
     iftomm_a01::CASE,
     torsion_bar::CASE,
+    sensitivity::PENDULUM,
+    sensitivity::SLIDER_CRANK,
 ];
 
 /// A model file of `models`, with overrides (`simulation.h=…`).

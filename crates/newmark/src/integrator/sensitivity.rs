@@ -1,0 +1,406 @@
+//! Forward parameter sensitivities of the discrete solution
+//! (`docs/analysis.md`, "Parameter sensitivities").
+//!
+//! One step solves `R(x_{n+1}; x_n, p) = 0`: the residual `r = g − Bᵀλ − M ü`
+//! and the constraints `Φ` at `t_{n+1}`, with `u, u̇, ü` and the
+//! acceleration-like variable of the step tied to the correction `Δu` by the
+//! corrector (15). Differentiating the converged step with respect to a
+//! parameter `p` gives, with the step's Jacobian `J` at the converged state,
+//!
+//! ```text
+//! J [δΔ; δλ] = [ r_p − K_T δu^p − C_T δu̇^p ;  −Φ_p − B δu^p ]
+//! ```
+//!
+//! where `δu^p, δu̇^p` are the sensitivities of the predictor with zero
+//! acceleration (linear in the previous step's sensitivities; the converged
+//! step does not depend on the predictor) and `r_p, Φ_p` the residual's and
+//! the constraints' partial derivatives at the converged state, by central
+//! differences between the model at `p ± h_p`. The initial sensitivities are
+//! central differences of the whole start (projection, consistent
+//! accelerations, the start on the discrete solution) at `p ± h_p`.
+
+use mstar_linearize::Linearization;
+use mstar_model::System;
+
+use super::{Integrator, State};
+use crate::IntegrationError;
+
+/// A model at one value of a parameter: its system and its initial state
+/// (as given, before the start projects it).
+pub trait Variant {
+    /// The system.
+    fn system(&self) -> &dyn System;
+    /// The initial coordinates `u₀`.
+    fn initial_position(&self) -> &[f64];
+    /// The initial velocities `u̇₀`.
+    fn initial_velocity(&self) -> &[f64];
+}
+
+/// A parameter of a model: its name, its nominal value and the model at any
+/// value (for a model file, the file read with `--set KEY=VALUE`).
+pub trait Parameterized {
+    /// The parameter's name (a model file's key, e.g. `body.rod.mass`).
+    fn name(&self) -> String;
+    /// The nominal value `p`, at which the run is made.
+    fn value(&self) -> f64;
+    /// The model with the parameter set to `value`.
+    ///
+    /// # Errors
+    /// Why the model cannot be made at that value.
+    fn at(&self, value: f64) -> Result<Box<dyn Variant>, String>;
+}
+
+/// The central-difference step relative to `|p|` (absolute when `p = 0`):
+/// `≈ (3ε)^{1/3}`, which balances the truncation error `h_p² |∂³R/∂p³| / 6`
+/// against the rounding error `ε |R| / h_p`, both then `≈ 1e-10` relative.
+pub const DIFFERENCE_STEP: f64 = 1e-5;
+
+/// One parameter's models at `p ± h_p`, their linearizations, and the
+/// sensitivities of the state.
+struct Parameter {
+    name: String,
+    value: f64,
+    step: f64,
+    plus: Box<dyn Variant>,
+    minus: Box<dyn Variant>,
+    lin_plus: Linearization,
+    lin_minus: Linearization,
+    /// `∂(u, u̇, ü, a, λ)/∂p` of the current state.
+    s: State,
+}
+
+/// Forward sensitivities `∂x/∂p` of the integrator's discrete solution to
+/// parameters of its model, advanced by [`Integrator::step_with`].
+pub struct Sensitivities {
+    params: Vec<Parameter>,
+    /// Solves, one per parameter and step.
+    solves: usize,
+    /// Factorizations at the converged state, one per step.
+    factorizations: usize,
+}
+
+impl std::fmt::Debug for Sensitivities {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Sensitivities")
+            .field("parameters", &self.names())
+            .field("solves", &self.solves)
+            .field("factorizations", &self.factorizations)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Sensitivities {
+    /// How many parameters.
+    #[must_use]
+    pub fn len(&self) -> usize {
+        self.params.len()
+    }
+
+    /// Whether there are none.
+    #[must_use]
+    pub fn is_empty(&self) -> bool {
+        self.params.is_empty()
+    }
+
+    /// The parameters' names, in order.
+    #[must_use]
+    pub fn names(&self) -> Vec<String> {
+        self.params.iter().map(|p| p.name.clone()).collect()
+    }
+
+    /// The nominal value and the difference step `h_p` of parameter `k`.
+    #[must_use]
+    pub fn value_and_step(&self, k: usize) -> (f64, f64) {
+        (self.params[k].value, self.params[k].step)
+    }
+
+    /// `∂u/∂p_k` of the current state.
+    #[must_use]
+    pub fn u(&self, k: usize) -> &[f64] {
+        &self.params[k].s.u
+    }
+
+    /// `∂u̇/∂p_k`.
+    #[must_use]
+    pub fn v(&self, k: usize) -> &[f64] {
+        &self.params[k].s.v
+    }
+
+    /// `∂ü/∂p_k`.
+    #[must_use]
+    pub fn a(&self, k: usize) -> &[f64] {
+        &self.params[k].s.a
+    }
+
+    /// `∂λ/∂p_k`.
+    #[must_use]
+    pub fn lambda(&self, k: usize) -> &[f64] {
+        &self.params[k].s.lambda
+    }
+
+    /// Solves made so far: one per parameter and step.
+    #[must_use]
+    pub fn solves(&self) -> usize {
+        self.solves
+    }
+
+    /// Factorizations made for the sensitivities: one per step, at the
+    /// converged state.
+    #[must_use]
+    pub fn factorizations(&self) -> usize {
+        self.factorizations
+    }
+}
+
+/// The difference step for a parameter of value `p`.
+fn difference_step(p: f64) -> f64 {
+    if p == 0.0 {
+        DIFFERENCE_STEP
+    } else {
+        DIFFERENCE_STEP * p.abs()
+    }
+}
+
+/// `(x⁺ − x⁻) / (2 h)` element by element.
+fn central(plus: &[f64], minus: &[f64], h: f64) -> Vec<f64> {
+    plus.iter()
+        .zip(minus)
+        .map(|(a, b)| (a - b) / (2.0 * h))
+        .collect()
+}
+
+impl<S: System + ?Sized> Integrator<'_, S> {
+    /// The sensitivities of the current (initial) state to `params`: central
+    /// differences of the start made at `p ± h_p`
+    /// ([`DIFFERENCE_STEP`]), with this integrator's configuration.
+    ///
+    /// # Errors
+    /// [`IntegrationError::Config`] after the first step, for a parameter
+    /// whose model cannot be made at `p ± h_p` or has other dimensions;
+    /// the start's error of a perturbed model.
+    pub fn sensitivities(
+        &self,
+        params: &[&dyn Parameterized],
+    ) -> Result<Sensitivities, IntegrationError> {
+        if self.stats.steps > 0 {
+            return Err(IntegrationError::Config(
+                "sensitivities start at the initial state, before the first step".into(),
+            ));
+        }
+        let mut out = Vec::with_capacity(params.len());
+        for param in params {
+            out.push(self.parameter(*param)?);
+        }
+        Ok(Sensitivities {
+            params: out,
+            solves: 0,
+            factorizations: 0,
+        })
+    }
+
+    /// One parameter's models at `p ± h_p` and its initial sensitivities.
+    fn parameter(&self, param: &dyn Parameterized) -> Result<Parameter, IntegrationError> {
+        let name = param.name();
+        let value = param.value();
+        let step = difference_step(value);
+        let bad = |why: String| IntegrationError::Config(format!("sensitivity to '{name}': {why}"));
+        let plus = param.at(value + step).map_err(bad)?;
+        let minus = param.at(value - step).map_err(bad)?;
+        let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
+        for v in [&plus, &minus] {
+            let sys = v.system();
+            if (sys.n_coords(), sys.n_constraints()) != (n, m) {
+                return Err(bad(format!(
+                    "the model changes size with it ({} coordinates and {} constraints instead of {n} and {m})",
+                    sys.n_coords(),
+                    sys.n_constraints()
+                )));
+            }
+        }
+        let start = |v: &dyn Variant| -> Result<State, IntegrationError> {
+            let integ = Integrator::new(
+                v.system(),
+                self.config.clone(),
+                self.t,
+                v.initial_position(),
+                v.initial_velocity(),
+            )?;
+            Ok(integ.state)
+        };
+        let (s_plus, s_minus) = (start(plus.as_ref())?, start(minus.as_ref())?);
+        let s = State {
+            u: central(&s_plus.u, &s_minus.u, step),
+            v: central(&s_plus.v, &s_minus.v, step),
+            a: central(&s_plus.a, &s_minus.a, step),
+            a_alpha: central(&s_plus.a_alpha, &s_minus.a_alpha, step),
+            lambda: central(&s_plus.lambda, &s_minus.lambda, step),
+        };
+        let lin = |v: &dyn Variant| Linearization::new(v.system()).map_err(|e| bad(e.to_string()));
+        Ok(Parameter {
+            lin_plus: lin(plus.as_ref())?,
+            lin_minus: lin(minus.as_ref())?,
+            name,
+            value,
+            step,
+            plus,
+            minus,
+            s,
+        })
+    }
+
+    /// [`step`](Self::step), then the sensitivities carried to the new state.
+    ///
+    /// # Errors
+    /// As [`step`](Self::step); [`IntegrationError::Kkt`] when the
+    /// sensitivities' solve fails; [`IntegrationError::NonFinite`] for a
+    /// sensitivity that is not finite.
+    pub fn step_with(
+        &mut self,
+        t_end: f64,
+        sens: &mut Sensitivities,
+    ) -> Result<(), IntegrationError> {
+        let h_before = self.h_last;
+        self.step(t_end)?;
+        if sens.params.is_empty() {
+            return Ok(());
+        }
+        let h = self.h_last;
+        // `M`, `B`, `g`, `Φ` are those of Newton's last residual, at the
+        // converged state; the Jacobians are evaluated there too, and the
+        // matrix factored once for every parameter.
+        let s = &self.state;
+        self.lin.eval_jacobians(self.sys, &s.at(self.t));
+        self.factor_converged(h)?;
+        sens.factorizations += 1;
+        for k in 0..sens.params.len() {
+            self.advance_sensitivity(sens, k, h, h / h_before)?;
+        }
+        Ok(())
+    }
+
+    /// Parameter `k`'s sensitivities from the previous state to the new one
+    /// (module documentation); `rescale` is the ratio of this step's size to
+    /// the previous one's (the predictor's rescaling of `a_n`).
+    fn advance_sensitivity(
+        &mut self,
+        sens: &mut Sensitivities,
+        k: usize,
+        h: f64,
+        rescale: f64,
+    ) -> Result<(), IntegrationError> {
+        let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
+        let predicted = self.predicted_sensitivity(&sens.params[k].s, h, rescale);
+        let mut rhs = self.partial_derivatives(&mut sens.params[k]);
+        // rhs = [r_p − K_T δu^p − C_T δu̇^p; −Φ_p − B δu^p]
+        let mut tangent = vec![0.0; n];
+        self.lin
+            .tangent_mul_add(&predicted.u, &predicted.v, &mut tangent);
+        for (r, t) in rhs[..n].iter_mut().zip(&tangent) {
+            *r -= t;
+        }
+        let mut b_u = vec![0.0; m];
+        self.lin
+            .b_pattern()
+            .mul_add(self.lin.b(), &predicted.u, &mut b_u);
+        for (r, b) in rhs[n..].iter_mut().zip(&b_u) {
+            *r -= b;
+        }
+        let x = self.solve_scaled(&rhs, h)?;
+        sens.solves += 1;
+        let c = self.p.coefficients(h, self.config.scaling);
+        let a_p = 1.0 / (self.p.beta * h * h);
+        let s = &mut sens.params[k].s;
+        for i in 0..n {
+            let du = x[i];
+            s.u[i] = predicted.u[i] + du;
+            s.v[i] = predicted.v[i] + c.c_v * du;
+            s.a[i] = c.c_a * du;
+            s.a_alpha[i] = predicted.a_alpha[i] + a_p * du;
+        }
+        s.lambda.copy_from_slice(&x[n..]);
+        if let Some(i) = s.u.iter().chain(&s.lambda).position(|x| !x.is_finite()) {
+            return Err(IntegrationError::NonFinite {
+                t: self.t,
+                what: format!(
+                    "the sensitivity to '{}' ({})",
+                    sens.params[k].name,
+                    if i < n {
+                        format!("coordinate '{}'", self.sys.coord_name(i))
+                    } else {
+                        format!("multiplier of '{}'", self.sys.constraint_name(i - n))
+                    }
+                ),
+            });
+        }
+        Ok(())
+    }
+
+    /// The predictor (14) with zero acceleration applied to the
+    /// sensitivities `s` of the previous state (as `predict` with
+    /// [`crate::Predictor::ZeroAcceleration`]); its `a` is zero.
+    fn predicted_sensitivity(&self, s: &State, h: f64, rescale: f64) -> State {
+        let p = self.p;
+        let n = s.u.len();
+        let mut out = State::zeros(n, 0);
+        for i in 0..n {
+            let a_n = s.a[i] + rescale * (s.a_alpha[i] - s.a[i]);
+            let aa1 = (p.alpha_f * s.a[i] - p.alpha_m * a_n) / (1.0 - p.alpha_m);
+            out.a_alpha[i] = aa1;
+            out.v[i] = s.v[i] + h * ((1.0 - p.gamma) * a_n + p.gamma * aa1);
+            out.u[i] = s.u[i] + h * s.v[i] + h * h * ((0.5 - p.beta) * a_n + p.beta * aa1);
+        }
+        out
+    }
+
+    /// `[r_p; −Φ_p]` at the converged state: central differences of the
+    /// residual and the constraints of the models at `p ± h_p`.
+    fn partial_derivatives(&self, param: &mut Parameter) -> Vec<f64> {
+        let x = self.state.at(self.t);
+        param.lin_plus.eval_residual(param.plus.system(), &x);
+        param.lin_minus.eval_residual(param.minus.system(), &x);
+        let (lp, lm, h) = (&param.lin_plus, &param.lin_minus, param.step);
+        let mut rhs = central(lp.r(), lm.r(), h);
+        rhs.extend(
+            lp.phi()
+                .iter()
+                .zip(lm.phi())
+                .map(|(a, b)| -(a - b) / (2.0 * h)),
+        );
+        rhs
+    }
+
+    /// `J⁻¹ f` with the factored (scaled, possibly augmented) KKT matrix:
+    /// its right-hand side is `[scale f_u; f_λ]`, and its multiplier part
+    /// is `scale (δλ − c_bb f_λ)` when `S` carries `c_bb BᵀB`.
+    fn solve_scaled(&mut self, f: &[f64], h: f64) -> Result<Vec<f64>, IntegrationError> {
+        let n = self.sys.n_coords();
+        let c = self.p.coefficients(h, self.config.scaling);
+        let in_matrix = if self.lin.augmented() { c.c_bb } else { 0.0 };
+        let mut y: Vec<f64> = f[..n].iter().map(|r| c.scale * r).collect();
+        y.extend_from_slice(&f[n..]);
+        self.solver
+            .solve_in_place(&mut y)
+            .map_err(|source| self.kkt_error("solving for a sensitivity", self.t, h, source))?;
+        for (y, f) in y[n..].iter_mut().zip(&f[n..]) {
+            *y = *y / c.scale + in_matrix * f;
+        }
+        Ok(y)
+    }
+
+    /// Factors the iteration matrix at the converged state (the Jacobians
+    /// of [`step_with`](Self::step_with)): the step's own factorization is
+    /// of an earlier iterate (an earlier step with modified Newton), and
+    /// refining with it took 3–7 solves and products a step where this takes
+    /// one solve (docs/performance.md, "Forward sensitivities"). The next
+    /// step's modified Newton starts from it.
+    fn factor_converged(&mut self, h: f64) -> Result<(), IntegrationError> {
+        let c = self.p.coefficients(h, self.config.scaling);
+        self.lin.assemble(&c);
+        self.factored_h = None;
+        self.solver
+            .factor(&self.lin.kkt().values)
+            .map_err(|source| self.kkt_error("factoring for a sensitivity", self.t, h, source))?;
+        self.factored_h = Some(h);
+        Ok(())
+    }
+}
