@@ -335,11 +335,7 @@ impl MechanismFile {
         {
             (root, notes, places) = (read.root, read.notes, Some(read.places));
         }
-        for o in overrides {
-            settings::apply_override(&mut root, o).map_err(|why| {
-                FileError::unplaced(origin, format!("--set {o}: {why}")).of_override()
-            })?;
-        }
+        apply_overrides(&mut root, origin, overrides)?;
         // An error in a URDF's body or joint: at the URDF's element (unless
         // an override may have given the value).
         let mut file = read(doc, &root).map_err(|e| match &places {
@@ -349,6 +345,61 @@ impl MechanismFile {
         // The URDF's notes first: they are about what the model is made of.
         file.warnings.splice(0..0, notes);
         Ok(file)
+    }
+}
+
+/// Applies the `--set` overrides to the document `root` of `origin`.
+fn apply_overrides(root: &mut Node, origin: &str, overrides: &[String]) -> Result<(), FileError> {
+    for o in overrides {
+        settings::apply_override(root, o).map_err(|why| {
+            FileError::unplaced(origin, format!("--set {o}: {why}")).of_override()
+        })?;
+    }
+    Ok(())
+}
+
+/// The number the dotted `key` (the `--set` syntax: `force.push.fx`,
+/// `body.upper.mass`) holds in the model file at `path`, after the
+/// `overrides`: what a key's value is before a command changes it (the
+/// inputs of `mstar linearize`). TOML and JSON files; a URDF's keys are
+/// those of the spatial document it means.
+///
+/// # Errors
+/// [`FileError`] when the file cannot be read, a step of the path is not
+/// there (naming the keys or elements that are), or the key holds something
+/// other than a number (`FILE:LINE:COLUMN` of the value where known).
+pub fn number_at(path: &Path, overrides: &[String], key: &str) -> Result<f64, FileError> {
+    let origin = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| FileError::unplaced(&origin, format!("cannot read the model file: {e}")))?;
+    let mut root = match Format::of(path) {
+        Format::Toml => node::parse_toml(&text, &origin)?,
+        Format::Json => node::parse_json(&text, &origin)?,
+        Format::Urdf => urdf::read(&text, &origin)?.root,
+    };
+    let doc = Doc {
+        origin: &origin,
+        text: &text,
+    };
+    if is_spatial(&root)
+        && let Some(read) = urdf::expand(doc, &root)?
+    {
+        root = read.root;
+    }
+    apply_overrides(&mut root, &origin, overrides)?;
+    let node = settings::lookup(&mut root, key)
+        .map_err(|why| FileError::unplaced(&origin, format!("{key}: {why}")))?;
+    match node.value {
+        node::Value::Num { value, .. } => Ok(value),
+        ref other => Err(FileError::at(
+            &origin,
+            &text,
+            node.span.as_ref().map(|s| s.start),
+            format!(
+                "{key}: is {}, not a number (name the number itself, e.g. force.push.fx.constant or force.push.fx.harmonic.offset)",
+                other.kind()
+            ),
+        )),
     }
 }
 
