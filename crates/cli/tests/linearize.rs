@@ -193,6 +193,46 @@ fn pendulum_about_its_hanging_equilibrium() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// About the file's pose (`--about initial`): the paper's pendulum released
+/// horizontally at rest. There `θ̈ = −(g/l) sin θ` has `∂θ̈/∂θ = −(g/l) cos θ
+/// = 0` (and the rod carries no tension, `λ = 0`: no geometric stiffness),
+/// so `A = [[0, 1], [0, 0]]`, and the drift is `θ̈₀ = −g/l = −10` per unit
+/// of θ (`xdot0`, scaled by `N`). Tolerance: round-off of `cos(π/2)`
+/// times `g/l` and of the acceleration problem's solve, `10⁻¹²`.
+#[test]
+fn pendulum_about_its_initial_pose() {
+    let dir = scratch("lin-initial");
+    let out = dir.join("ss.json");
+    ok(&[
+        "linearize",
+        &model("pendulum.toml"),
+        "--about",
+        "initial",
+        "--out",
+        &out.display().to_string(),
+    ]);
+    let ss = read_json(&out);
+    assert_eq!(ss["about"], "initial");
+    let a = matrix(&ss, "A");
+    let want = [[0.0, 1.0], [0.0, 0.0]];
+    for (i, row) in want.iter().enumerate() {
+        for (j, w) in row.iter().enumerate() {
+            close(&format!("A[{i}][{j}]"), a[i][j], *w, 1e-12);
+        }
+    }
+    let coordinates = names(&ss, "coordinates");
+    let theta = coordinates
+        .iter()
+        .position(|c| c == "bob.theta")
+        .expect("θ");
+    let n = matrix(&ss, "N");
+    let xdot0 = ss["xdot0"].as_array().expect("xdot0");
+    close("xdot0[0]", xdot0[0].as_f64().expect("a number"), 0.0, 1e-12);
+    let q_ddot = xdot0[1].as_f64().expect("a number");
+    close("θ̈₀", q_ddot * n[theta][0], -10.0, 1e-12);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `models/double-pendulum.toml` with a motor torque on the upper bar
 /// (0 in the file) and a damper at the elbow.
 fn damped_double_pendulum() -> String {

@@ -5,7 +5,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use mstar::equilibrium::EquilibriumOptions;
+use mstar::equilibrium::{EquilibriumError, EquilibriumOptions};
 use mstar::file::MechanismFile;
 use mstar::linear::{Input, OperatingPoint, StateSpace};
 use mstar::run::ModelLookup;
@@ -114,29 +114,41 @@ fn operating_point(args: &LinearizeArgs, sys: &dyn ModelLookup) -> Result<Operat
         return Err((format!("{model}: {e}"), 1));
     }
     match args.about {
-        About::Equilibrium => {
-            let eq = mstar::equilibrium::solve(sys, &u0, &EquilibriumOptions::default()).map_err(
-                |e| {
-                    (
-                        format!(
-                            "{model}: {e} (or linearize about the file's pose: --about initial)"
-                        ),
-                        1,
-                    )
-                },
-            )?;
-            Ok(OperatingPoint {
-                about: "equilibrium".into(),
-                t: 0.0,
-                a: vec![0.0; eq.u.len()],
-                u: eq.u,
-                lambda: eq.lambda,
-            })
-        }
+        About::Equilibrium => equilibrium(sys, &u0).map_err(|e| {
+            let hint = "(or linearize about the file's pose: --about initial)";
+            (format!("{model}: {e} {hint}"), 1)
+        }),
         About::Initial => {
             mstar::linear::at_rest(sys, 0.0, &u0).map_err(|e| (format!("{model}: {e}"), 1))
         }
     }
+}
+
+/// The equilibrium from `u0`; a neutral one (its free direction a zero
+/// eigenvalue pair of `A`) with a warning.
+fn equilibrium(sys: &dyn ModelLookup, u0: &[f64]) -> Result<OperatingPoint, EquilibriumError> {
+    let eq = match mstar::equilibrium::solve(sys, u0, &EquilibriumOptions::default()) {
+        Ok(eq) => eq,
+        Err(EquilibriumError::Neutral {
+            equilibrium,
+            direction,
+        }) => {
+            let along: Vec<&str> = direction.iter().map(|(n, _)| n.as_str()).collect();
+            note!(
+                "warning: the equilibrium is neutral along {}: nothing resists that motion, and A has a zero eigenvalue pair for it",
+                along.join(", ")
+            );
+            *equilibrium
+        }
+        Err(e) => return Err(e),
+    };
+    Ok(OperatingPoint {
+        about: "equilibrium".into(),
+        t: 0.0,
+        a: vec![0.0; eq.u.len()],
+        u: eq.u,
+        lambda: eq.lambda,
+    })
 }
 
 /// The input `key`: its value in the file, and `∂g/∂p` from the models
