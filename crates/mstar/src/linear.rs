@@ -41,6 +41,9 @@ use crate::run::ModelLookup;
 /// smaller model of the part that matters.
 pub const MAX_COORDS: usize = 400;
 
+/// The `format` field of the JSON file.
+pub const FORMAT: &str = "mstar.linear/1";
+
 /// The state `(t₀, u₀, u̇ = 0, λ₀)` a model is linearized about.
 #[derive(Clone, Debug, PartialEq)]
 pub struct OperatingPoint {
@@ -720,6 +723,7 @@ impl StateSpace {
         // Serializing plain vectors and strings does not fail.
         let json = |v: &dyn erased::Value| v.json();
         let fields: [(&str, String); 17] = [
+            ("format", json(&FORMAT)),
             ("about", json(&self.about)),
             ("t0", json(&self.t0)),
             ("states", json(&self.states)),
@@ -736,7 +740,6 @@ impl StateSpace {
             ("lambda0", json(&self.lambda0)),
             ("y0", json(&self.y0)),
             ("xdot0", json(&self.xdot0)),
-            ("format", json(&"mstar.linear/1".to_string())),
         ];
         let body: Vec<String> = fields
             .iter()
