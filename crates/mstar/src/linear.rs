@@ -775,3 +775,36 @@ mod erased {
 }
 
 use erased::Value as _;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use mstar_model::PendulumChain;
+
+    /// `N` spans the null space of `B` (`B N = 0` to round-off of entries of
+    /// order one), is the identity on the independent coordinates, and a
+    /// repeated row of `B` is named redundant.
+    #[test]
+    fn the_basis_spans_the_null_space_of_b() {
+        // (Only its constraint names are used.)
+        let sys = PendulumChain::paper(1.0, 1.0, 10.0);
+        let b = DMatrix::from_row_slice(2, 4, &[1.0, 2.0, 0.5, -1.0, 0.0, 3.0, 1.0, 0.25]);
+        let (independent, n) = tangent_basis(&sys, &b).expect("full rank");
+        assert_eq!(n.shape(), (4, 2));
+        assert!((&b * &n).amax() < 1e-14, "B N = {}", &b * &n);
+        for (col, &j) in independent.iter().enumerate() {
+            for k in 0..2 {
+                let want = if k == col { 1.0 } else { 0.0 };
+                assert_eq!(n[(j, k)], want, "N[{j}, {k}]");
+            }
+        }
+        // The pivots: 3 (row 1, column 1); then row 0 less twice the
+        // scaled row 1 is [1, 0, −1/6, −7/6], whose largest is column 3.
+        assert_eq!(independent, [0, 2]);
+        let repeated = DMatrix::from_row_slice(2, 3, &[1.0, 0.0, 2.0, 1.0, 0.0, 2.0]);
+        match tangent_basis(&sys, &repeated) {
+            Err(LinearError::Redundant { rank, m, .. }) => assert_eq!((rank, m), (1, 2)),
+            other => panic!("{other:?}"),
+        }
+    }
+}

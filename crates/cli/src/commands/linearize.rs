@@ -157,7 +157,8 @@ fn input(args: &LinearizeArgs, key: &str, op: &OperatingPoint) -> Result<Input, 
     if key.trim().starts_with("driver.") {
         return Err((
             format!(
-                "--inputs {key}: a driver prescribes a coordinate's position, and a step in a position is an impulse: it enters the equations through its first and second time derivatives, which ẋ = A x + B p has no place for; drive the coordinate with a force or torque (a [[force]] of type force or torque, or a stiff spring-damper whose end you move) and name its value instead"
+                "{}: --inputs {key}: a driver prescribes a coordinate's position, and a step in a position is an impulse: it enters the equations through its first and second time derivatives, which ẋ = A x + B p has no place for; drive the coordinate with a force or torque (a [[force]] of type force or torque, or a stiff spring-damper whose end you move) and name its value instead",
+                args.model.display()
             ),
             2,
         ));
@@ -172,7 +173,8 @@ fn input(args: &LinearizeArgs, key: &str, op: &OperatingPoint) -> Result<Input, 
     };
     let (plus, minus) = (build(value + h)?, build(value - h)?);
     let systems = [plus.mechanism.system(), minus.mechanism.system()];
-    mstar::linear::input(key, value, h, systems, op).map_err(|e| (e.to_string(), 2))
+    mstar::linear::input(key, value, h, systems, op)
+        .map_err(|e| (format!("{}: {e}", args.model.display()), 2))
 }
 
 /// Writes the JSON and reports what it holds.
