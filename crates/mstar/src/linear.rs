@@ -673,7 +673,8 @@ pub fn input(
         key: key.to_string(),
         what: what.to_string(),
     };
-    if plus.n_coords() != n || plus.n_constraints() != minus.n_constraints() {
+    let same_size = |s: &dyn System| s.n_coords() == n && s.n_constraints() == op.lambda.len();
+    if !(same_size(plus) && same_size(minus)) {
         return Err(not_a_load("the model's dimensions"));
     }
     let (mut phi_p, mut phi_m) = (

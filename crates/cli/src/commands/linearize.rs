@@ -197,12 +197,12 @@ fn write(args: &LinearizeArgs, ss: &StateSpace) -> Result<(), Failure> {
             .map_err(|e| (format!("cannot write {}: {e}", args.out.display()), 1))?;
     }
     say!(
-        "linear model about the {} ({} coordinates): {} states, {} inputs, {} outputs",
+        "linear model about the {} ({}): {}, {}, {}",
         ss.about,
-        ss.coordinates.len(),
-        ss.states.len(),
-        ss.inputs.len(),
-        ss.outputs.len()
+        count(ss.coordinates.len(), "coordinate"),
+        count(ss.states.len(), "state"),
+        count(ss.inputs.len(), "input"),
+        count(ss.outputs.len(), "output")
     );
     say!("  states: {}", ss.states.join(", "));
     let drift = ss.xdot0.iter().fold(0.0_f64, |a, x| a.max(x.abs()));
@@ -215,4 +215,13 @@ fn write(args: &LinearizeArgs, ss: &StateSpace) -> Result<(), Failure> {
         say!("wrote {}", args.out.display());
     }
     Ok(())
+}
+
+/// `1 input`, `2 inputs`.
+fn count(n: usize, what: &str) -> String {
+    if n == 1 {
+        format!("1 {what}")
+    } else {
+        format!("{n} {what}s")
+    }
 }
