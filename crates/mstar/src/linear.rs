@@ -529,8 +529,9 @@ impl<'a> Outputs<'a> {
 /// with the model file's `sensors`).
 ///
 /// `C` and `D`: each output is evaluated at the operating point moved by
-/// `± h` along the change `(δu, δu̇, δü, δλ)` that one state or input causes,
-/// `h = ε^{1/3} L / ‖direction‖∞` (`L = max(1, ‖u₀‖∞)`), and differenced:
+/// `± h` along the change `(δu, δu̇, δü, δλ)` that one state or input causes
+/// (`h` from `output_step`: `ε^{1/3} L / max(‖δu‖∞, ‖δu̇‖∞)`,
+/// `L = max(1, ‖u₀‖∞)`, along a state), and differenced:
 /// the `u:`, `v:`, `a:` and `lambda:` columns, which are the state's own,
 /// are taken exactly from the direction instead; the others have an error
 /// `O(h²)` from truncation and `O(ε/h)` from round-off, about `10⁻¹⁰` of
@@ -612,13 +613,9 @@ fn output_matrices(
         };
         let da = accel.column(col).into_owned();
         let dl = red.lambda_map.column(col).into_owned();
-        let big = [du.amax(), dv.amax(), da.amax(), dl.amax()]
-            .into_iter()
-            .fold(0.0_f64, f64::max);
-        if big == 0.0 {
+        let Some(h) = output_step(length, [&du, &dv, &da, &dl]) else {
             continue;
-        }
-        let h = f64::EPSILON.cbrt() * length / big;
+        };
         let at = |s: f64| {
             let shift = |x: &[f64], d: &DVector<f64>| -> Vec<f64> {
                 x.iter().zip(d.iter()).map(|(x, d)| x + s * h * d).collect()
@@ -639,6 +636,26 @@ fn output_matrices(
     let c = cd.columns(0, 2 * r).into_owned();
     let d = cd.columns(2 * r, k).into_owned();
     (c, d)
+}
+
+/// The step of the outputs' central differences along the direction
+/// `(δu, δu̇, δü, δλ)` (`None`: it is zero). The columns are nonlinear in
+/// `u` and `u̇` only (in `ü` and `λ` they are linear at a fixed `u`, `u̇`:
+/// sensors' accelerations, reactions, efforts): where the direction moves
+/// them, `ε^{1/3} L / max(‖δu‖∞, ‖δu̇‖∞)` balances truncation and
+/// round-off; where it moves only `ü` and `λ` (an input), the difference is
+/// exact and `L / max(‖δü‖∞, ‖δλ‖∞)` keeps the round-off at `ε`.
+fn output_step(length: f64, d: [&DVector<f64>; 4]) -> Option<f64> {
+    let [du, dv, da, dl] = d;
+    let moving = du.amax().max(dv.amax());
+    let linear = da.amax().max(dl.amax());
+    if moving > 0.0 {
+        Some(f64::EPSILON.cbrt() * length / moving)
+    } else if linear > 0.0 {
+        Some(length / linear)
+    } else {
+        None
+    }
 }
 
 /// A matrix as rows.
