@@ -91,6 +91,71 @@ body = "slider"
 fx = 0.0
 "#;
 
+/// [`SLIDER`] with two sensors: the distance from the spring's anchor
+/// (`1 + x`) and the slider's acceleration.
+fn slider_with_sensors() -> String {
+    SLIDER.to_string()
+        + r#"
+[[sensor]]
+name = "gap"
+type = "distance"
+bodies = ["ground", "slider"]
+points = [[-1.0, 0.0], [0.0, 0.0]]
+
+[[sensor]]
+name = "acc"
+type = "acceleration"
+body = "slider"
+"#
+}
+
+/// Sensor outputs of the mass–spring–damper: `sensor:gap = 1 + x` (`C =
+/// [1, 0]`, `D = 0`), `sensor:acc.x = ẍ` (`C = [−k/m, −c/m]`, `D = 1/m`),
+/// `sensor:acc.y = 0`. The distance is differenced along the state
+/// (`10⁻¹⁰` of its scale, 1 m; `10⁻⁹` allowed); the acceleration is linear
+/// in `ü`, so round-off of entries of order 25 (`10⁻¹²` of them).
+#[test]
+fn sensor_outputs_of_the_mass_spring_damper() {
+    let dir = scratch("lin-sensors");
+    let file = dir.join("slider.toml");
+    std::fs::write(&file, slider_with_sensors()).expect("model written");
+    let out = dir.join("ss.json");
+    ok(&[
+        "linearize",
+        &file.display().to_string(),
+        "--inputs",
+        "force.push.fx",
+        "--outputs",
+        "sensor:*",
+        "--out",
+        &out.display().to_string(),
+    ]);
+    let ss = read_json(&out);
+    assert_eq!(
+        names(&ss, "outputs"),
+        ["sensor:gap", "sensor:acc.x", "sensor:acc.y"]
+    );
+    let (m, k, c) = (2.0, 50.0, 3.0);
+    let (cm, d) = (matrix(&ss, "C"), matrix(&ss, "D"));
+    let want = [
+        ([1.0, 0.0, 0.0], 1e-9),
+        ([-k / m, -c / m, 1.0 / m], 25e-12),
+        ([0.0, 0.0, 0.0], 25e-12),
+    ];
+    for (i, (row, tol)) in want.iter().enumerate() {
+        close(&format!("C[{i}][0]"), cm[i][0], row[0], *tol);
+        close(&format!("C[{i}][1]"), cm[i][1], row[1], *tol);
+        close(&format!("D[{i}]"), d[i][0], row[2], *tol);
+    }
+    close(
+        "y0[gap]",
+        ss["y0"][0].as_f64().expect("a number"),
+        1.0,
+        1e-15,
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `m ẍ + c ẋ + k x = p`: `A = [[0, 1], [−k/m, −c/m]]`, `B = [0; 1/m]`;
 /// the outputs `u:slider.x` (`C = [1, 0]`), `a:slider.x` (`C = [−k/m,
 /// −c/m]`, `D = 1/m`) and the guide's multiplier (`λ` holds the weight:
