@@ -28,6 +28,10 @@
 //! derivatives along each state and input, by central differences (see
 //! [`state_space`]).
 
+mod model_file;
+
+pub use model_file::{About, FromFile, Request, from_file};
+
 use mstar_model::sensor::Sensor;
 use mstar_model::{Pattern, SampleRef, System};
 use nalgebra::{DMatrix, DVector};
@@ -166,6 +170,20 @@ pub enum LinearError {
     /// function of the state.
     #[error("--outputs {0}")]
     Output(String),
+    /// The model file or an input key cannot be read.
+    #[error("{0}")]
+    File(#[from] mstar_file::FileError),
+    /// No equilibrium to linearize about.
+    #[error("{0} (or linearize about the file's initial pose: --about initial)")]
+    NoEquilibrium(Box<crate::equilibrium::EquilibriumError>),
+    /// A driver's key named as an input.
+    #[error(
+        "--inputs {key}: a driver prescribes a coordinate's position, and a step in a position is an impulse: it enters the equations through its first and second time derivatives, which ẋ = A x + B p has no place for; drive the coordinate with a force or torque (a [[force]] of type force or torque, or a stiff spring-damper whose end you move) and name its value instead"
+    )]
+    DriverInput {
+        /// The key.
+        key: String,
+    },
     /// An input that changes something other than the loads.
     #[error(
         "--inputs {key}: changing it changes {what}, not only the loads: inputs are force and torque values (e.g. force.push.fx, force.motor.function.constant)"
@@ -176,6 +194,19 @@ pub enum LinearError {
         /// What it changes.
         what: String,
     },
+}
+
+impl LinearError {
+    /// Whether it is the model file's or the request's fault (a file that
+    /// cannot be read, a key or a column that is wrong), not the
+    /// mechanism's (`mstar linearize` exits with 2 then, else 1).
+    #[must_use]
+    pub fn is_usage(&self) -> bool {
+        matches!(
+            self,
+            Self::File(_) | Self::Output(_) | Self::DriverInput { .. } | Self::NotALoad { .. }
+        )
+    }
 }
 
 /// A dense matrix from values on a pattern (duplicates summed).

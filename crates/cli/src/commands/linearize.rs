@@ -5,10 +5,7 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use mstar::equilibrium::{EquilibriumError, EquilibriumOptions};
-use mstar::file::MechanismFile;
-use mstar::linear::{Input, OperatingPoint, StateSpace};
-use mstar::run::ModelLookup;
+use mstar::linear::{self, LinearError, Request, StateSpace};
 
 /// The state a model is linearized about.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,112 +66,37 @@ pub fn linearize(args: &LinearizeArgs) -> ExitCode {
     }
 }
 
-/// Loads the model, finds the operating point and forms the model.
+/// Loads the model, finds the operating point and forms the model
+/// (`mstar::linear::from_file`).
 fn build(args: &LinearizeArgs) -> Result<StateSpace, Failure> {
     if args.out.as_os_str() != "-" {
         let outputs = [("--out", args.out.as_path())];
         crate::output::refuse_overwrites(&[("the model file", &args.model)], &outputs)
             .map_err(|e| (e.to_string(), 2))?;
     }
-    let file = MechanismFile::load_with(&args.model, &args.set).map_err(|e| (e.to_string(), 2))?;
-    for w in &file.warnings {
-        note!("warning: {w}");
-    }
-    let sys = mstar::run::lookup(&file.mechanism);
-    let op = operating_point(args, sys)?;
-    let inputs = args
-        .inputs
-        .iter()
-        .map(|key| input(args, key, &op))
-        .collect::<Result<Vec<_>, _>>()?;
-    let model = args.model.display();
-    let ss = mstar::linear::state_space(sys, &op, &inputs, &args.outputs, &file.output.sensors)
-        .map_err(|e| {
-            let code = if matches!(e, mstar::linear::LinearError::Output(_)) {
-                2
-            } else {
-                1
-            };
-            (format!("{model}: {e}"), code)
-        })?;
-    Ok(ss)
-}
-
-/// The equilibrium (`mstar equilibrium`'s search) or the initial pose at
-/// rest.
-fn operating_point(args: &LinearizeArgs, sys: &dyn ModelLookup) -> Result<OperatingPoint, Failure> {
-    let model = args.model.display();
-    let u0 = sys.initial_position();
-    let n = sys.n_coords();
-    if n > mstar::linear::MAX_COORDS {
-        let e = mstar::linear::LinearError::TooLarge {
-            n,
-            max: mstar::linear::MAX_COORDS,
-        };
-        return Err((format!("{model}: {e}"), 1));
-    }
-    match args.about {
-        About::Equilibrium => equilibrium(sys, &u0).map_err(|e| {
-            let hint = "(or linearize about the file's pose: --about initial)";
-            (format!("{model}: {e} {hint}"), 1)
-        }),
-        About::Initial => {
-            mstar::linear::at_rest(sys, 0.0, &u0).map_err(|e| (format!("{model}: {e}"), 1))
+    let request = Request {
+        about: match args.about {
+            About::Equilibrium => linear::About::Equilibrium,
+            About::Initial => linear::About::Initial,
+        },
+        inputs: &args.inputs,
+        outputs: &args.outputs,
+        overrides: &args.set,
+    };
+    match linear::from_file(&args.model, &request) {
+        Ok(formed) => {
+            for w in &formed.warnings {
+                note!("warning: {w}");
+            }
+            Ok(formed.model)
+        }
+        // A file error names the file (and where) itself.
+        Err(e @ LinearError::File(_)) => Err((e.to_string(), 2)),
+        Err(e) => {
+            let code = if e.is_usage() { 2 } else { 1 };
+            Err((format!("{}: {e}", args.model.display()), code))
         }
     }
-}
-
-/// The equilibrium from `u0`; a neutral one (its free direction a zero
-/// eigenvalue pair of `A`) with a warning.
-fn equilibrium(sys: &dyn ModelLookup, u0: &[f64]) -> Result<OperatingPoint, EquilibriumError> {
-    let eq = match mstar::equilibrium::solve(sys, u0, &EquilibriumOptions::default()) {
-        Ok(eq) => eq,
-        Err(EquilibriumError::Neutral {
-            equilibrium,
-            direction,
-        }) => {
-            let along: Vec<&str> = direction.iter().map(|(n, _)| n.as_str()).collect();
-            note!(
-                "warning: the equilibrium is neutral along {}: nothing resists that motion, and A has a zero eigenvalue pair for it",
-                along.join(", ")
-            );
-            *equilibrium
-        }
-        Err(e) => return Err(e),
-    };
-    Ok(OperatingPoint {
-        about: "equilibrium".into(),
-        t: 0.0,
-        a: vec![0.0; eq.u.len()],
-        u: eq.u,
-        lambda: eq.lambda,
-    })
-}
-
-/// The input `key`: its value in the file, and `∂g/∂p` from the models
-/// built with it changed by `± h`.
-fn input(args: &LinearizeArgs, key: &str, op: &OperatingPoint) -> Result<Input, Failure> {
-    if key.trim().starts_with("driver.") {
-        return Err((
-            format!(
-                "{}: --inputs {key}: a driver prescribes a coordinate's position, and a step in a position is an impulse: it enters the equations through its first and second time derivatives, which ẋ = A x + B p has no place for; drive the coordinate with a force or torque (a [[force]] of type force or torque, or a stiff spring-damper whose end you move) and name its value instead",
-                args.model.display()
-            ),
-            2,
-        ));
-    }
-    let value =
-        mstar::file::number_at(&args.model, &args.set, key).map_err(|e| (e.to_string(), 2))?;
-    let h = mstar::linear::input_step(value);
-    let build = |p: f64| {
-        let mut sets = args.set.clone();
-        sets.push(format!("{key}={p:e}"));
-        MechanismFile::load_with(&args.model, &sets).map_err(|e| (e.to_string(), 2))
-    };
-    let (plus, minus) = (build(value + h)?, build(value - h)?);
-    let systems = [plus.mechanism.system(), minus.mechanism.system()];
-    mstar::linear::input(key, value, h, systems, op)
-        .map_err(|e| (format!("{}: {e}", args.model.display()), 2))
 }
 
 /// Writes the JSON and reports what it holds.
