@@ -73,6 +73,13 @@ enum Command {
     /// no equilibrium or the eigenproblem fails, 2 when the file cannot be
     /// read.
     Modes(commands::modes::ModesArgs),
+    /// Write a linear state-space model ẋ = A x + B p, y = C x + D p of a
+    /// model file about its equilibrium (or --about initial: its initial
+    /// pose at rest) in a minimal set of coordinates, as JSON: inputs are
+    /// force or torque values of the file, outputs columns of `mstar run`
+    /// (docs/analysis.md). Exit 0 when written, 1 when no model can be
+    /// formed or written, 2 when the file, a key or a column is wrong.
+    Linearize(commands::linearize::LinearizeArgs),
     /// Write a URDF robot (`.urdf`) as the mstar.spatial/1 model file it
     /// means (docs/model-format.md, "URDF robots"); `run`, `check` and
     /// `animate` also read a `.urdf` directly. Exit 0 when written, 2 when
@@ -159,6 +166,7 @@ fn dispatch(cli: Cli) -> ExitCode {
         Command::Chain(args) => args.out.as_deref(),
         Command::Equilibrium(args) => args.out(),
         Command::Modes(args) => args.out(),
+        Command::Linearize(args) => args.out(),
         _ => None,
     };
     if output::is_stdout(out) {
@@ -169,6 +177,7 @@ fn dispatch(cli: Cli) -> ExitCode {
         Command::Check(args) => return commands::check::check(&args),
         Command::Equilibrium(args) => return commands::equilibrium::equilibrium(&args),
         Command::Modes(args) => return commands::modes::modes(&args),
+        Command::Linearize(args) => return commands::linearize::linearize(&args),
         Command::Convert(args) => return commands::convert::convert(&args),
         Command::Sweep(args) => return commands::sweep::sweep(&args),
         Command::Animate(args) => return commands::animate::animate(&args),

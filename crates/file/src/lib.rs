@@ -401,6 +401,37 @@ fn document(
     Ok((root, notes, places))
 }
 
+/// The number the dotted `key` (the `--set` syntax: `force.push.fx`,
+/// `body.upper.mass`) holds in the model file at `path`, after the
+/// `overrides`: what a key's value is before a command changes it (the
+/// inputs of `mstar linearize`). TOML and JSON files; a URDF's keys are
+/// those of the spatial document it means.
+///
+/// # Errors
+/// [`FileError`] when the file cannot be read, a step of the path is not
+/// there (naming the keys or elements that are), or the key holds something
+/// other than a number (`FILE:LINE:COLUMN` of the value where known).
+pub fn number_at(path: &Path, overrides: &[String], key: &str) -> Result<f64, FileError> {
+    let origin = path.display().to_string();
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| FileError::unplaced(&origin, format!("cannot read the model file: {e}")))?;
+    let (mut root, _, _) = document(&text, &origin, Format::of(path), overrides)?;
+    let node = settings::lookup(&mut root, key)
+        .map_err(|why| FileError::unplaced(&origin, format!("{key}: {why}")))?;
+    match node.value {
+        node::Value::Num { value, .. } => Ok(value),
+        ref other => Err(FileError::at(
+            &origin,
+            &text,
+            node.span.as_ref().map(|s| s.start),
+            format!(
+                "{key}: is {}, not a number (name the number itself, e.g. force.push.fx.constant or force.push.fx.harmonic.offset)",
+                other.kind()
+            ),
+        )),
+    }
+}
+
 impl Simulation {
     /// The `[simulation]` of a planar model made in code (no file): the
     /// defaults with the overrides `simulation.key=value` applied and checked
@@ -469,4 +500,38 @@ fn read(doc: Doc<'_>, root: &Node) -> Result<MechanismFile, FileError> {
         output,
         warnings,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `number_at` reads a key's number as the file (after the overrides)
+    /// has it, and says where a key holds no number or is not there.
+    #[test]
+    fn number_at_reads_keys_and_places_errors() {
+        let text = "format = \"mstar.planar/1\"\n\n[[body]]\nname = \"bar\"\nmass = 1.5\ninertia = 0.1\npose = [0.0, 0.0, 0.0]\n\n[[force]]\nname = \"push\"\ntype = \"force\"\nbody = \"bar\"\nfx = { constant = 0.25 }\n";
+        let dir = std::env::temp_dir().join(format!("mstar-file-number-at-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("a scratch directory");
+        let path = dir.join("bar.toml");
+        std::fs::write(&path, text).expect("written");
+        let at = |overrides: &[&str], key: &str| {
+            let o: Vec<String> = overrides.iter().map(|s| (*s).to_string()).collect();
+            number_at(&path, &o, key)
+        };
+        assert_eq!(at(&[], "body.bar.mass"), Ok(1.5));
+        assert_eq!(at(&[], "force.push.fx.constant"), Ok(0.25));
+        assert_eq!(
+            at(&["force.push.fx.constant=2"], "force.push.fx.constant"),
+            Ok(2.0)
+        );
+        let table = at(&[], "force.push.fx").expect_err("a table");
+        assert_eq!(table.place, Some((13, 6)), "{table}");
+        assert!(table.message.contains("not a number"), "{table}");
+        let missing = at(&[], "force.pull.fx").expect_err("no such force");
+        assert!(missing.message.contains("the names are: push"), "{missing}");
+        let settings = at(&[], "simulation.h").expect_err("no [simulation]");
+        assert!(settings.message.contains("no [simulation]"), "{settings}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
 }

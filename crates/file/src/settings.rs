@@ -379,6 +379,28 @@ pub(crate) fn apply_override(root: &mut Node, assignment: &str) -> Result<(), St
     Ok(())
 }
 
+/// The node the dotted `path` (as in [`apply_override`]) names in `root`;
+/// every step must exist.
+pub(crate) fn lookup<'n>(root: &'n mut Node, path: &str) -> Result<&'n Node, String> {
+    let keys: Vec<&str> = path.trim().split('.').map(str::trim).collect();
+    if keys.iter().any(|k| k.is_empty()) {
+        return Err(format!("'{path}' is not a dotted path of keys"));
+    }
+    let mut node = root;
+    for (k, key) in keys.iter().enumerate() {
+        if k == 0 && OPTIONAL_TABLES.contains(key) {
+            // (`step` would add an empty settings table the file does not have.)
+            if let Value::Table(entries) = &node.value
+                && !entries.iter().any(|e| e.key == *key)
+            {
+                return Err(format!("the file has no [{key}] table"));
+            }
+        }
+        node = step(node, &keys[..k], key)?;
+    }
+    Ok(node)
+}
+
 /// The scheme parameters that belong to each integrator.
 const SCHEME_PARAMETERS: [(&str, &[&str]); 3] = [
     ("generalized-alpha", &["rho"]),

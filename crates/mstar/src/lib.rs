@@ -13,6 +13,8 @@
 //! - [`rk4`]: independent minimal-coordinate references ([`ChainOracle`]);
 //! - [`csv`]: the output format; [`pendulum`]: the paper's presets;
 //!   [`analysis`]: errors, fitted orders, the period-2h amplitude;
+//! - [`equilibrium`]: static equilibrium; [`linear`]: linear state-space
+//!   models about it;
 //! - [`run`]: model files' settings as an integrator configuration, and
 //!   `mstar check`'s report; [`record`]: what a run writes (its CSV rows) and
 //!   measures; [`sweep`]: many runs of a model file over parameter values,
@@ -42,6 +44,7 @@ pub mod analysis;
 pub mod columns;
 pub mod csv;
 pub mod equilibrium;
+pub mod linear;
 pub mod modes;
 pub mod npz;
 pub mod pendulum;
