@@ -72,6 +72,20 @@ pub fn drive<S: System + ?Sized>(
     t_end: f64,
     each: &mut dyn FnMut(&Integrator<'_, S>),
 ) -> Result<(), Stop> {
+    drive_with(integ, t_end, &mut |integ, t_end| integ.step(t_end), each)
+}
+
+/// [`drive`] with `step` taking each step (e.g. with sensitivities,
+/// [`Integrator::step_with`]).
+///
+/// # Errors
+/// As [`drive`].
+pub fn drive_with<S: System + ?Sized>(
+    integ: &mut Integrator<'_, S>,
+    t_end: f64,
+    step: &mut dyn FnMut(&mut Integrator<'_, S>, f64) -> Result<(), IntegrationError>,
+    each: &mut dyn FnMut(&Integrator<'_, S>),
+) -> Result<(), Stop> {
     each(integ);
     loop {
         if WRITE_FAILED.load(Ordering::Relaxed) {
@@ -83,7 +97,7 @@ pub fn drive<S: System + ?Sized>(
         if let Some(signal) = signals::received() {
             return Err(Stop::Signal(signal));
         }
-        integ.step(t_end).map_err(Stop::Failed)?;
+        step(integ, t_end).map_err(Stop::Failed)?;
         each(integ);
     }
 }

@@ -41,6 +41,7 @@
 mod bodies;
 mod fields;
 mod functions;
+mod keys;
 mod node;
 mod planar;
 pub mod pose;
@@ -319,27 +320,8 @@ impl MechanismFile {
         format: Format,
         overrides: &[String],
     ) -> Result<Self, FileError> {
+        let (root, notes, places) = document(text, origin, format, overrides)?;
         let doc = Doc { origin, text };
-        let (mut root, mut notes, mut places) = match format {
-            Format::Toml => (node::parse_toml(text, origin)?, Vec::new(), None),
-            Format::Json => (node::parse_json(text, origin)?, Vec::new(), None),
-            Format::Urdf => {
-                let read = urdf::read(text, origin)?;
-                (read.root, read.notes, Some(read.places))
-            }
-        };
-        // A spatial file that starts from a URDF (`urdf = "arm.urdf"`):
-        // expanded first, so that overrides reach the URDF's bodies too.
-        if is_spatial(&root)
-            && let Some(read) = urdf::expand(doc, &root)?
-        {
-            (root, notes, places) = (read.root, read.notes, Some(read.places));
-        }
-        for o in overrides {
-            settings::apply_override(&mut root, o).map_err(|why| {
-                FileError::unplaced(origin, format!("--set {o}: {why}")).of_override()
-            })?;
-        }
         // An error in a URDF's body or joint: at the URDF's element (unless
         // an override may have given the value).
         let mut file = read(doc, &root).map_err(|e| match &places {
@@ -350,6 +332,73 @@ impl MechanismFile {
         file.warnings.splice(0..0, notes);
         Ok(file)
     }
+}
+
+impl MechanismFile {
+    /// The value of the model parameter at the dotted key `key` of the model
+    /// file at `path`, with `overrides` applied first: a key of a table or an
+    /// element's name then its key, as `--set KEY=VALUE` names them
+    /// (`body.crank.mass`, `joint.rod.length`).
+    ///
+    /// # Errors
+    /// [`FileError`] as [`load_with`](Self::load_with) for the document, and
+    /// for a key that names nothing or a value that is not a number, with the
+    /// closest numeric keys of the file, or a key of `[simulation]` or
+    /// `[output]` (settings of the run, not of the model).
+    pub fn parameter(path: &Path, overrides: &[String], key: &str) -> Result<f64, FileError> {
+        let origin = path.display().to_string();
+        if let Some(table) = ["simulation", "output"]
+            .into_iter()
+            .find(|t| key.split('.').next().map(str::trim) == Some(*t))
+        {
+            return Err(FileError::unplaced(
+                &origin,
+                format!(
+                    "'{key}' is a setting of the run ([{table}]), not a parameter of the \
+                     model: give a key of a body, joint, force, driver or other element"
+                ),
+            )
+            .of_override());
+        }
+        let text = std::fs::read_to_string(path).map_err(|e| {
+            FileError::unplaced(&origin, format!("cannot read the model file: {e}"))
+        })?;
+        let (root, _, _) = document(&text, &origin, Format::of(path), overrides)?;
+        keys::number(&root, key).map_err(|why| FileError::unplaced(&origin, why).of_override())
+    }
+}
+
+/// What a model document reads as: its tree (a URDF, or a spatial file
+/// that starts from one, expanded), the URDF's notes and places, with
+/// `overrides` applied.
+fn document(
+    text: &str,
+    origin: &str,
+    format: Format,
+    overrides: &[String],
+) -> Result<(node::Node, Vec<String>, Option<urdf::Places>), FileError> {
+    let doc = Doc { origin, text };
+    let (mut root, mut notes, mut places) = match format {
+        Format::Toml => (node::parse_toml(text, origin)?, Vec::new(), None),
+        Format::Json => (node::parse_json(text, origin)?, Vec::new(), None),
+        Format::Urdf => {
+            let read = urdf::read(text, origin)?;
+            (read.root, read.notes, Some(read.places))
+        }
+    };
+    // A spatial file that starts from a URDF (`urdf = "arm.urdf"`):
+    // expanded first, so that overrides reach the URDF's bodies too.
+    if is_spatial(&root)
+        && let Some(read) = urdf::expand(doc, &root)?
+    {
+        (root, notes, places) = (read.root, read.notes, Some(read.places));
+    }
+    for o in overrides {
+        settings::apply_override(&mut root, o).map_err(|why| {
+            FileError::unplaced(origin, format!("--set {o}: {why}")).of_override()
+        })?;
+    }
+    Ok((root, notes, places))
 }
 
 impl Simulation {

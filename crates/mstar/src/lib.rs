@@ -47,6 +47,7 @@ pub mod pendulum;
 pub mod record;
 pub mod redundant;
 pub mod run;
+pub mod sensitivity;
 pub mod sweep;
 
 pub use mstar_file as file;

@@ -4,9 +4,7 @@
 //! multipliers with the mass.
 
 use mstar_model::{PendulumChain, System};
-use mstar_newmark::{
-    Config, DIFFERENCE_STEP, Integrator, Newton, Parameterized, Scheme, Variant,
-};
+use mstar_newmark::{Config, DIFFERENCE_STEP, Integrator, Newton, Parameterized, Scheme, Variant};
 
 /// Newton tolerance of every run here: the finite differences divide the
 /// runs' own errors (about this, relative) by the difference step.
@@ -99,7 +97,10 @@ fn sensitivity(param: &Param, config: &Config, t_end: f64) -> (Vec<f64>, Vec<f64
     }
     let s = integ.view();
     let value = s.u.iter().chain(s.lambda).copied().collect();
-    (sens.u(0).iter().chain(sens.lambda(0)).copied().collect(), value)
+    (
+        sens.u(0).iter().chain(sens.lambda(0)).copied().collect(),
+        value,
+    )
 }
 
 /// Checks the sensitivity to the length against central differences of
@@ -172,7 +173,11 @@ fn mass_sensitivity_scales_the_multipliers() {
     let force_error = steps * f64::EPSILON * force / (DIFFERENCE_STEP * m);
     for i in 0..3 {
         let tolerance = force_error * h * h / m;
-        assert!(s[i].abs() <= tolerance, "∂u{i}/∂m = {} (tolerance {tolerance:.1e})", s[i]);
+        assert!(
+            s[i].abs() <= tolerance,
+            "∂u{i}/∂m = {} (tolerance {tolerance:.1e})",
+            s[i]
+        );
     }
     for i in 3..5 {
         let want = nominal[i] / m;

@@ -10,10 +10,12 @@ use mstar::columns::Columns;
 use mstar::columns::{OutputColumns, Selection};
 use mstar::file::{MAX_MAGNITUDE, Mechanism, MechanismFile, Simulation};
 use mstar::model::RowSubset;
+use mstar::newmark::Parameterized;
 use mstar::newmark::Short;
 use mstar::pendulum::PendulumRun;
 use mstar::redundant::Expanded;
 use mstar::run::ModelLookup;
+use mstar::sensitivity::{Chained, FileParameter, SensitivityColumns};
 use mstar::{IntegrationError, Integrator, Observer, SampleRef, System, csv};
 
 use crate::output::Stop;
@@ -73,6 +75,12 @@ pub struct RunArgs {
     /// --set body.upper.mass=2 (repeatable; values in TOML syntax).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+    /// Forward sensitivity of the discrete solution to a numeric key of
+    /// the model file, named as --set names it (e.g. body.rod.mass,
+    /// joint.rod.length); repeatable. Adds the columns
+    /// d(<column>)/d(<KEY>) of u, v, a and lambda (docs/analysis.md).
+    #[arg(long = "sensitivity", value_name = "KEY")]
+    sensitivity: Vec<String>,
 }
 
 /// The built-in models of `mstar run --builtin`.
@@ -227,9 +235,22 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         warn_far_start(sys);
     }
     let rows = independent_rows(model)?;
-    let columns = match model.system.named() {
+    let params = sensitivity_parameters(args, &config, rows.is_some(), every_time)?;
+    let sensitivity_columns = (!params.is_empty()).then(|| {
+        let keys: Vec<String> = params.iter().map(|p| p.name()).collect();
+        SensitivityColumns::new(sys, &keys)
+    });
+    let model_columns = match model.system.named() {
         Some(named) => Some(OutputColumns::new(named, &model.sensors)?),
         None => None,
+    };
+    let model_columns = model_columns.as_ref().map(|c| c as &dyn Columns);
+    let chained = sensitivity_columns
+        .as_ref()
+        .map(|s| Chained(model_columns, s));
+    let columns = match &chained {
+        Some(c) => Some(c as &dyn Columns),
+        None => model_columns,
     };
     // Named only for a CSV file: 6·10⁵ names for 10⁵ bodies.
     let extra = match (&columns, &args.out) {
@@ -258,7 +279,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     };
     crate::limits::check_steps(t_end, config.h)?;
     let fields = selection.as_ref().map_or_else(
-        || csv::header_len(sys) + columns.as_ref().map_or(0, Columns::count),
+        || csv::header_len(sys) + columns.map_or(0, Columns::count),
         Selection::len,
     );
     super::check_output(
@@ -268,7 +289,6 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         (args.builtin.is_none().then_some(every), every_time),
     )?;
     let stream = super::open_output(args.out.as_deref(), sys, &extra, selection.as_ref())?;
-    let columns = columns.as_ref().map(|c| c as &dyn Columns);
     let grid = crate::output::Grid::new(every_time)?;
     let mut output = RunOutput::new(stream, columns, (every, grid), t_end);
     let config_used = config.clone();
@@ -278,13 +298,19 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
             let subset = RowSubset::new(sys, rows.kept.clone());
             let hold = |u: &[f64]| mstar::run::left_out_rows_hold(named, &rows, u);
             let mut expanded = Expanded::new(&subset, &mut output);
-            let outcome = integrate(&subset, start, &hold, &mut expanded);
+            let outcome = integrate(&subset, start, &hold, None, &mut expanded);
             let drift = expanded
                 .drifted()
                 .map(|d| mstar::run::redundancy_changed(named, d));
             (outcome, drift)
         }
-        _ => (integrate(sys, start, &|_| Ok(()), &mut output), None),
+        _ => {
+            let refs: Vec<&dyn Parameterized> =
+                params.iter().map(|p| p as &dyn Parameterized).collect();
+            let sensitivities = sensitivity_columns.as_ref().map(|c| (&refs[..], c));
+            let outcome = integrate(sys, start, &|_| Ok(()), sensitivities, &mut output);
+            (outcome, None)
+        }
     };
     output.progress.finish_and_clear();
     output.recorder.finish_rows();
@@ -391,10 +417,19 @@ fn integrate<S: System + ?Sized>(
     sys: &S,
     (config, u0, v0, t_end): (mstar::Config, &[f64], &[f64], f64),
     check_start: &dyn Fn(&[f64]) -> Result<(), mstar::run::RunError>,
+    sensitivities: Option<(&[&dyn Parameterized], &SensitivityColumns)>,
     observer: &mut dyn Observer,
 ) -> Result<Outcome> {
     let mut integ = Integrator::new(sys, config, 0.0, u0, v0)?;
     check_start(integ.view().u)?;
+    let mut sens = match sensitivities {
+        Some((params, columns)) => {
+            let sens = integ.sensitivities(params)?;
+            columns.set(&sens);
+            Some((sens, columns))
+        }
+        None => None,
+    };
     warn_projection(sys, integ.start_report(), u0, v0);
     say!(
         "KKT solver: {}; Newton: {}",
@@ -402,7 +437,15 @@ fn integrate<S: System + ?Sized>(
         integ.newton()
     );
     let clock = Instant::now();
-    let result = crate::output::drive(&mut integ, t_end, &mut |integ| {
+    let mut step = |integ: &mut Integrator<'_, S>, t_end: f64| match &mut sens {
+        Some((sens, columns)) => {
+            integ.step_with(t_end, sens)?;
+            columns.set(sens);
+            Ok(())
+        }
+        None => integ.step(t_end),
+    };
+    let result = crate::output::drive_with(&mut integ, t_end, &mut step, &mut |integ| {
         observer.observe(&integ.view());
     });
     if result.is_err() {
@@ -416,23 +459,7 @@ fn integrate<S: System + ?Sized>(
 /// The model of `mstar run`: a file or a built-in.
 fn load(args: &RunArgs) -> Result<Loaded> {
     check_options(args)?;
-    let mut set = args.set.clone();
-    for (key, value) in [
-        ("t_end", args.t_end),
-        ("h", args.h),
-        ("rtol", args.rtol),
-        ("atol", args.atol),
-        ("tol", args.tol),
-    ] {
-        if let Some(v) = value {
-            set.push(format!("simulation.{key}={v:e}"));
-        }
-    }
-    for (flag, mode) in [(args.adaptive, "adaptive"), (args.strict, "strict")] {
-        if flag {
-            set.push(format!("simulation.error_control={mode}"));
-        }
-    }
+    let set = overrides(args);
     if let Some(builtin) = args.builtin {
         return builtin_model(builtin, &set);
     }
@@ -453,6 +480,85 @@ fn load(args: &RunArgs) -> Result<Loaded> {
         simulation: file.simulation,
         system: Model::Named(Box::new(file.mechanism)),
     })
+}
+
+/// The parameters of `--sensitivity`, read from the model file (with the
+/// run's overrides). Refused (usage errors, exit 2) with a built-in model,
+/// adaptive steps (the step sizes would depend on the parameter), output
+/// at fixed times (rows interpolated between steps) and redundant
+/// constraints solved on a subset of rows.
+///
+/// # Errors
+/// [`crate::output::Usage`] for those; [`mstar::file::FileError`] for a key
+/// that names no number of the file.
+fn sensitivity_parameters(
+    args: &RunArgs,
+    config: &mstar::Config,
+    redundant: bool,
+    every_time: Option<f64>,
+) -> Result<Vec<FileParameter>> {
+    if args.sensitivity.is_empty() {
+        return Ok(Vec::new());
+    }
+    let refuse = |why: &str| Err(crate::output::usage(format!("--sensitivity {why}")));
+    let Some(path) = args.model.as_deref() else {
+        return refuse("needs a model file (its keys are the parameters), not --builtin");
+    };
+    if config.error.mode == mstar::StepMode::Adaptive {
+        return refuse(
+            "needs fixed steps: with adaptive steps the step sizes depend on the parameter; \
+             drop --adaptive (or error_control = \"adaptive\") and choose h",
+        );
+    }
+    if every_time.is_some() {
+        return refuse(
+            "writes the steps' own sensitivities: drop --output-every (or [output] every_time) \
+             and use [output] every",
+        );
+    }
+    if redundant {
+        return refuse(
+            "does not handle redundant constraints solved on a subset of rows yet; remove the \
+             redundant joints",
+        );
+    }
+    let set = overrides(args);
+    let mut params = Vec::with_capacity(args.sensitivity.len());
+    for key in &args.sensitivity {
+        let param =
+            FileParameter::new(path, &set, key).with_context(|| format!("--sensitivity {key}"))?;
+        if params
+            .iter()
+            .any(|p: &FileParameter| p.name() == param.name())
+        {
+            return refuse(&format!("{key}: the key is given twice"));
+        }
+        params.push(param);
+    }
+    Ok(params)
+}
+
+/// The `--set` overrides of the run: `--set` itself, then `--t-end`,
+/// `--h`, `--rtol`, `--atol`, `--tol`, `--adaptive`, `--strict`.
+fn overrides(args: &RunArgs) -> Vec<String> {
+    let mut set = args.set.clone();
+    for (key, value) in [
+        ("t_end", args.t_end),
+        ("h", args.h),
+        ("rtol", args.rtol),
+        ("atol", args.atol),
+        ("tol", args.tol),
+    ] {
+        if let Some(v) = value {
+            set.push(format!("simulation.{key}={v:e}"));
+        }
+    }
+    for (flag, mode) in [(args.adaptive, "adaptive"), (args.strict, "strict")] {
+        if flag {
+            set.push(format!("simulation.error_control={mode}"));
+        }
+    }
+    set
 }
 
 /// Refuses a command-line value out of range, naming the option (before

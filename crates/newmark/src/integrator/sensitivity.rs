@@ -429,9 +429,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         let x_v: Vec<f64> = x_u.iter().map(|x| c.c_v * x).collect();
         let x_a: Vec<f64> = x_u.iter().map(|x| c.c_a * x).collect();
         self.lin.tangent_mul_add(x_u, &x_v, top);
-        self.lin
-            .mass_pattern()
-            .mul_add(self.lin.mass(), &x_a, top);
+        self.lin.mass_pattern().mul_add(self.lin.mass(), &x_a, top);
         let (b, b_pattern) = (self.lin.b(), self.lin.b_pattern());
         b_pattern.mul_transpose_add(b, x_l, top);
         b_pattern.mul_add(b, x_u, bottom);

@@ -1,0 +1,179 @@
+//! Parameter sensitivities of a model file's run (`docs/analysis.md`,
+//! "Parameter sensitivities"): a numeric key of the file as a parameter
+//! ([`FileParameter`], the file read again with `--set KEY=VALUE` at
+//! `p ± h_p`), and the output columns `d(<column>)/d(<key>)`
+//! ([`SensitivityColumns`]). The sensitivities themselves are
+//! [`mstar_newmark::Sensitivities`].
+
+use std::cell::RefCell;
+use std::path::{Path, PathBuf};
+
+use mstar_file::{FileError, Mechanism, MechanismFile};
+use mstar_model::{SampleRef, System};
+use mstar_newmark::{Parameterized, Sensitivities, Variant};
+
+use crate::columns::Columns;
+
+/// A numeric key of a model file as a parameter of its model.
+#[derive(Clone, Debug)]
+pub struct FileParameter {
+    path: PathBuf,
+    overrides: Vec<String>,
+    key: String,
+    value: f64,
+}
+
+impl FileParameter {
+    /// The key `key` of the model file at `path` with `overrides` (`--set`
+    /// assignments) applied, its value read from the file.
+    ///
+    /// # Errors
+    /// [`FileError`] for a file that cannot be read, a key that names no
+    /// number (with the closest numeric keys), or a key of `[simulation]`
+    /// or `[output]` ([`MechanismFile::parameter`]).
+    pub fn new(path: &Path, overrides: &[String], key: &str) -> Result<Self, FileError> {
+        let key = key.trim();
+        let value = MechanismFile::parameter(path, overrides, key)?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            overrides: overrides.to_vec(),
+            key: key.to_string(),
+            value,
+        })
+    }
+}
+
+/// A model file read at one value of a parameter.
+struct FileVariant {
+    mechanism: Mechanism,
+    u0: Vec<f64>,
+    v0: Vec<f64>,
+}
+
+impl Variant for FileVariant {
+    fn system(&self) -> &dyn System {
+        self.mechanism.system()
+    }
+    fn initial_position(&self) -> &[f64] {
+        &self.u0
+    }
+    fn initial_velocity(&self) -> &[f64] {
+        &self.v0
+    }
+}
+
+impl Parameterized for FileParameter {
+    fn name(&self) -> String {
+        self.key.clone()
+    }
+
+    fn value(&self) -> f64 {
+        self.value
+    }
+
+    fn at(&self, value: f64) -> Result<Box<dyn Variant>, String> {
+        let mut overrides = self.overrides.clone();
+        // `{:?}` writes the shortest decimal that reads back as `value`.
+        overrides.push(format!("{}={value:?}", self.key));
+        let file = MechanismFile::load_with(&self.path, &overrides)
+            .map_err(|e| format!("the model at {} = {value:?}: {e}", self.key))?;
+        let sys = crate::run::lookup(&file.mechanism);
+        let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+        Ok(Box::new(FileVariant {
+            mechanism: file.mechanism,
+            u0,
+            v0,
+        }))
+    }
+}
+
+/// The columns `d(<column>)/d(<key>)` of every parameter, for the state's
+/// columns `u:…`, `v:…`, `a:…` and `lambda:…` (in the order of
+/// [`crate::csv::header`]). The values are the sensitivities last
+/// [`set`](Self::set): a run sets them after every step, before the
+/// sample is observed.
+#[derive(Debug)]
+pub struct SensitivityColumns {
+    names: Vec<String>,
+    values: RefCell<Vec<f64>>,
+}
+
+impl SensitivityColumns {
+    /// The columns of `sys`'s state for the parameters `keys`.
+    #[must_use]
+    pub fn new<S: System + ?Sized>(sys: &S, keys: &[String]) -> Self {
+        let header = crate::csv::header(sys);
+        let state = &header[1..1 + 3 * sys.n_coords() + sys.n_constraints()];
+        let names = keys
+            .iter()
+            .flat_map(|k| state.iter().map(move |c| format!("d({c})/d({k})")))
+            .collect();
+        Self {
+            names,
+            values: RefCell::new(Vec::new()),
+        }
+    }
+
+    /// Takes the current sensitivities.
+    pub fn set(&self, sens: &Sensitivities) {
+        let mut values = self.values.borrow_mut();
+        values.clear();
+        for k in 0..sens.len() {
+            for part in [sens.u(k), sens.v(k), sens.a(k), sens.lambda(k)] {
+                values.extend_from_slice(part);
+            }
+        }
+    }
+}
+
+impl Columns for SensitivityColumns {
+    fn names(&self) -> Vec<String> {
+        self.names.clone()
+    }
+
+    fn count(&self) -> usize {
+        self.names.len()
+    }
+
+    /// The sensitivities last set (NaN before any).
+    fn values(&self, _s: &SampleRef<'_>, out: &mut Vec<f64>) {
+        let values = self.values.borrow();
+        if values.len() == self.names.len() {
+            out.extend_from_slice(&values);
+        } else {
+            out.extend(std::iter::repeat_n(f64::NAN, self.names.len()));
+        }
+    }
+}
+
+/// Two sets of columns, one after the other (a model's reactions and
+/// sensors, then sensitivities).
+pub struct Chained<'a>(pub Option<&'a dyn Columns>, pub &'a dyn Columns);
+
+impl Columns for Chained<'_> {
+    fn names(&self) -> Vec<String> {
+        let mut names = self.0.map(Columns::names).unwrap_or_default();
+        names.extend(self.1.names());
+        names
+    }
+
+    fn count(&self) -> usize {
+        self.0.map_or(0, Columns::count) + self.1.count()
+    }
+
+    fn values(&self, s: &SampleRef<'_>, out: &mut Vec<f64>) {
+        if let Some(first) = self.0 {
+            first.values(s, out);
+        }
+        self.1.values(s, out);
+    }
+
+    fn values_wanted(&self, s: &SampleRef<'_>, wanted: &[bool], out: &mut Vec<f64>) {
+        let first = self.0.map_or(0, Columns::count);
+        let (a, b) = wanted.split_at(first.min(wanted.len()));
+        if let Some(c) = self.0 {
+            c.values_wanted(s, a, out);
+        }
+        self.1.values_wanted(s, b, out);
+    }
+}
