@@ -6,6 +6,7 @@ pub mod chain;
 pub mod check;
 pub mod convert;
 pub mod equilibrium;
+pub mod gradient;
 pub mod options;
 pub mod pendulum;
 pub mod run;

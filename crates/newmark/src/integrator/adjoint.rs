@@ -121,6 +121,8 @@ pub struct Gradient {
     pub values: Vec<f64>,
     /// `Ψ` of the run.
     pub objective: f64,
+    /// The samples' times: the start and the end of every step.
+    pub times: Vec<f64>,
     /// The forward run's steps.
     pub steps: usize,
     /// Steps per segment when checkpointing, else `None`.
@@ -250,7 +252,8 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         self.check_column(objective.column())?;
         let mut sens = self.sensitivities(params)?;
         let every = self.checkpoint_every(t_end, memory)?;
-        let (values, records, snapshots) = self.forward(t_end, objective.column(), every)?;
+        let (times, values, records, snapshots) =
+            self.forward(t_end, objective.column(), every)?;
         let steps = values.len() - 1;
         if let Objective::Fit { measured, .. } = objective
             && measured.len() != values.len()
@@ -292,6 +295,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             names: sens.names(),
             values: grad,
             objective: psi,
+            times,
             steps,
             checkpoint_every: every,
             recomputed_steps: recomputed,
@@ -340,17 +344,18 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         }
     }
 
-    /// The forward run: the column's value at every sample, and every
-    /// state (`every = None`) or a checkpoint every `every` steps.
+    /// The forward run: the time and the column's value at every sample,
+    /// and every state (`every = None`) or a checkpoint every `every` steps.
     #[allow(clippy::type_complexity)]
     fn forward(
         &mut self,
         t_end: f64,
         column: Column,
         every: Option<usize>,
-    ) -> Result<(Vec<f64>, Vec<Record>, Vec<Snapshot>), IntegrationError> {
+    ) -> Result<(Vec<f64>, Vec<f64>, Vec<Record>, Vec<Snapshot>), IntegrationError> {
         let (mut records, mut snapshots) = (Vec::new(), Vec::new());
         let mut values = vec![self.column_value(column)];
+        let mut times = vec![self.t];
         match every {
             None => records.push(self.record()),
             Some(_) => snapshots.push(self.snapshot()),
@@ -360,6 +365,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             self.step(t_end)?;
             steps += 1;
             values.push(self.column_value(column));
+            times.push(self.t);
             match every {
                 None => records.push(self.record()),
                 Some(k) if steps % k == 0 && !self.reached(t_end) => {
@@ -368,7 +374,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 Some(_) => {}
             }
         }
-        Ok((values, records, snapshots))
+        Ok((times, values, records, snapshots))
     }
 
     /// The backward pass segment by segment, the last first: each is
