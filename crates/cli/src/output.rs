@@ -80,6 +80,7 @@ pub fn drive<S: System + ?Sized>(
 ///
 /// # Errors
 /// As [`drive`].
+#[allow(clippy::type_complexity)] // (one closure type, spelled once)
 pub fn drive_with<S: System + ?Sized>(
     integ: &mut Integrator<'_, S>,
     t_end: f64,

@@ -36,7 +36,13 @@ fn column(path: &Path, name: &str) -> Vec<f64> {
     let header: Vec<&str> = lines.next().expect("a header").split(',').collect();
     let k = header.iter().position(|h| *h == name).expect("the column");
     lines
-        .map(|l| l.split(',').nth(k).expect("a field").parse().expect("a number"))
+        .map(|l| {
+            l.split(',')
+                .nth(k)
+                .expect("a field")
+                .parse()
+                .expect("a number")
+        })
         .collect()
 }
 
@@ -54,13 +60,32 @@ fn sum_objective_matches_the_forward_sensitivities() {
     let out_arg = out.display().to_string();
     let keys = ["body.lower.mass", "body.upper.inertia"];
     let o = mstar(&[
-        "run", &m, "--t-end", "0.2", "--tol", TOL, "--out", &out_arg, "--sensitivity", keys[0],
-        "--sensitivity", keys[1],
+        "run",
+        &m,
+        "--t-end",
+        "0.2",
+        "--tol",
+        TOL,
+        "--out",
+        &out_arg,
+        "--sensitivity",
+        keys[0],
+        "--sensitivity",
+        keys[1],
     ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let g = gradient(&[
-        "run", &m, "--t-end", "0.2", "--tol", TOL, "--objective", "sum:u:lower.x", "--gradient",
-        keys[0], keys[1],
+        "run",
+        &m,
+        "--t-end",
+        "0.2",
+        "--tol",
+        TOL,
+        "--objective",
+        "sum:u:lower.x",
+        "--gradient",
+        keys[0],
+        keys[1],
     ]);
     for key in keys {
         let s = column(&out, &format!("d(u:lower.x)/d({key})"));
@@ -98,8 +123,20 @@ fn fit_of_the_multiplier_scales_with_the_mass() {
     let json_arg = json.display().to_string();
     let spec = format!("fit:lambda:hinge.x={data_arg}");
     let g = gradient(&[
-        "run", &m, "--t-end", "1", "--tol", TOL, "--set", "body.bob.mass=1.1", "--objective",
-        &spec, "--gradient", "body.bob.mass", "--gradient-out", &json_arg,
+        "run",
+        &m,
+        "--t-end",
+        "1",
+        "--tol",
+        TOL,
+        "--set",
+        "body.bob.mass=1.1",
+        "--objective",
+        &spec,
+        "--gradient",
+        "body.bob.mass",
+        "--gradient-out",
+        &json_arg,
     ]);
     let psi = g["Ψ"];
     assert!(psi > 1.0, "Ψ = {psi}");
@@ -128,15 +165,35 @@ fn bad_objectives_are_usage_errors() {
         ("max:u:bob.x", "give final:COLUMN"),
         (fit.as_str(), "short.csv:3:2: 'oops'"),
     ] {
-        let o = mstar(&["run", &m, "--t-end", "0.1", "--objective", spec, "--gradient", "body.bob.mass"]);
+        let o = mstar(&[
+            "run",
+            &m,
+            "--t-end",
+            "0.1",
+            "--objective",
+            spec,
+            "--gradient",
+            "body.bob.mass",
+        ]);
         let err = text(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{spec}: {err}");
         assert!(err.contains(says), "{spec}: {err}");
     }
     let o = mstar(&[
-        "run", &m, "--t-end", "0.1", "--adaptive", "--objective", "final:u:bob.x", "--gradient",
+        "run",
+        &m,
+        "--t-end",
+        "0.1",
+        "--adaptive",
+        "--objective",
+        "final:u:bob.x",
+        "--gradient",
         "body.bob.mass",
     ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(text(&o.stderr).contains("needs fixed steps"), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stderr).contains("needs fixed steps"),
+        "{}",
+        text(&o.stderr)
+    );
 }

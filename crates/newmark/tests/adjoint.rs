@@ -9,8 +9,8 @@ use mstar_model::planar::{
 };
 use mstar_model::{PendulumChain, System};
 use mstar_newmark::{
-    Column, Config, Integrator, IntegrationError, Memory, Newton, Objective, Parameterized,
-    Scheme, Variant,
+    Column, Config, IntegrationError, Integrator, Memory, Newton, Objective, Parameterized, Scheme,
+    Variant,
 };
 
 /// Newton tolerance of every run here (the finite differences divide the
@@ -85,10 +85,27 @@ fn slider_crank(p: &[f64]) -> Model {
             velocity: [0.0; 2],
         },
     );
-    b.revolute("hinge", At::Ground([0.0, 0.0]), At::Body(crank, [-0.5 * r, 0.0]));
-    b.revolute("pin", At::Body(crank, [0.5 * r, 0.0]), At::Body(coupler, [-0.5 * l, 0.0]));
-    b.revolute("wrist", At::Body(coupler, [0.5 * l, 0.0]), At::Body(slider, [0.0, 0.0]));
-    b.prismatic("rail", At::Ground([0.0, 0.0]), [1.0, 0.0], At::Body(slider, [0.0, 0.0]));
+    b.revolute(
+        "hinge",
+        At::Ground([0.0, 0.0]),
+        At::Body(crank, [-0.5 * r, 0.0]),
+    );
+    b.revolute(
+        "pin",
+        At::Body(crank, [0.5 * r, 0.0]),
+        At::Body(coupler, [-0.5 * l, 0.0]),
+    );
+    b.revolute(
+        "wrist",
+        At::Body(coupler, [0.5 * l, 0.0]),
+        At::Body(slider, [0.0, 0.0]),
+    );
+    b.prismatic(
+        "rail",
+        At::Ground([0.0, 0.0]),
+        [1.0, 0.0],
+        At::Body(slider, [0.0, 0.0]),
+    );
     b.torque("motor", crank, TimeFunction::Constant(3.0));
     b.spring(
         "buffer",
@@ -188,9 +205,17 @@ fn forward_gradient(
     objective: &Objective,
     steps: usize,
 ) -> Vec<f64> {
-    let mut integ =
-        Integrator::new(model.sys.as_ref(), config.clone(), 0.0, &model.u0, &model.v0).unwrap();
-    let mut sens = integ.sensitivities(params).unwrap();
+    let mut integ = Integrator::new(
+        model.sys.as_ref(),
+        config.clone(),
+        0.0,
+        &model.u0,
+        &model.v0,
+    )
+    .expect("the integrator starts");
+    let mut sens = integ
+        .sensitivities(params)
+        .expect("the sensitivities start");
     let c = objective.column();
     let mut grad = vec![0.0; params.len()];
     let mut n = 0;
@@ -203,7 +228,9 @@ fn forward_gradient(
         if integ.reached(t_end) {
             return grad;
         }
-        integ.step_with(t_end, &mut sens).unwrap();
+        integ
+            .step_with(t_end, &mut sens)
+            .expect("the step succeeds");
         n += 1;
     }
 }
@@ -217,8 +244,14 @@ fn adjoint(
     objective: &Objective,
     memory: Memory,
 ) -> Result<mstar_newmark::Gradient, IntegrationError> {
-    let mut integ =
-        Integrator::new(model.sys.as_ref(), config.clone(), 0.0, &model.u0, &model.v0).unwrap();
+    let mut integ = Integrator::new(
+        model.sys.as_ref(),
+        config.clone(),
+        0.0,
+        &model.u0,
+        &model.v0,
+    )
+    .expect("the integrator starts");
     integ.gradient(t_end, params, objective, memory)
 }
 
@@ -228,7 +261,10 @@ fn adjoint(
 /// two gradients' entries times the samples), and the adjoint's own
 /// error is round-off.
 fn assert_agree(adjoint: &[f64], forward: &[f64], steps: usize, what: &str) {
-    let scale = forward.iter().chain(adjoint).fold(0.0_f64, |a, b| a.max(b.abs()));
+    let scale = forward
+        .iter()
+        .chain(adjoint)
+        .fold(0.0_f64, |a, b| a.max(b.abs()));
     let tolerance = steps as f64 * 1e-12 * scale.max(f64::MIN_POSITIVE);
     for (k, (a, f)) in adjoint.iter().zip(forward).enumerate() {
         assert!(
@@ -261,7 +297,8 @@ fn pendulum_adjoint_matches_forward_sensitivities() {
             measured: measured(101, -0.8),
         },
     ] {
-        let g = adjoint(&model, &config, t_end, &refs, &objective, Memory::Store).unwrap();
+        let g = adjoint(&model, &config, t_end, &refs, &objective, Memory::Store)
+            .expect("the gradient is computed");
         assert_eq!(g.steps, 100);
         let f = forward_gradient(&model, &config, t_end, &refs, &objective, g.steps);
         assert_agree(&g.values, &f, g.steps, &format!("{objective:?}"));
@@ -283,7 +320,8 @@ fn damped_slider_crank_adjoint_matches_forward_sensitivities() {
         Objective::Sum(Column::Multiplier(0)),
         Objective::Final(Column::Acceleration(2)),
     ] {
-        let g = adjoint(&model, &config, t_end, &refs, &objective, Memory::Store).unwrap();
+        let g = adjoint(&model, &config, t_end, &refs, &objective, Memory::Store)
+            .expect("the gradient is computed");
         let f = forward_gradient(&model, &config, t_end, &refs, &objective, g.steps);
         assert_agree(&g.values, &f, g.steps, &format!("{objective:?}"));
     }
@@ -299,12 +337,25 @@ fn check_against_differences(make: fn(&[f64]) -> Model, nominal: &[f64], objecti
     let t_end = 0.6;
     let ps = params(make, nominal);
     let refs: Vec<&dyn Parameterized> = ps.iter().map(|p| p as &dyn Parameterized).collect();
-    let g = adjoint(&make(nominal), &config, t_end, &refs, objective, Memory::Store).unwrap();
+    let g = adjoint(
+        &make(nominal),
+        &config,
+        t_end,
+        &refs,
+        objective,
+        Memory::Store,
+    )
+    .expect("the gradient is computed");
     let psi = |p: &[f64]| -> (f64, f64) {
         let model = make(p);
-        let mut integ =
-            Integrator::new(model.sys.as_ref(), config.clone(), 0.0, &model.u0, &model.v0)
-                .unwrap();
+        let mut integ = Integrator::new(
+            model.sys.as_ref(),
+            config.clone(),
+            0.0,
+            &model.u0,
+            &model.v0,
+        )
+        .expect("the integrator starts");
         let (mut psi, mut eta, mut samples) = (0.0, 0.0, Vec::new());
         loop {
             let s = integ.view();
@@ -312,7 +363,7 @@ fn check_against_differences(make: fn(&[f64]) -> Model, nominal: &[f64], objecti
             if integ.reached(t_end) {
                 break;
             }
-            integ.step(t_end).unwrap();
+            integ.step(t_end).expect("the step succeeds");
         }
         let last = samples.len() - 1;
         for (n, &y) in samples.iter().enumerate() {
@@ -379,25 +430,37 @@ fn checkpointed_and_stored_modes_agree() {
     let model = slider_crank(&nominal);
     let config = config(Newton::Full, 0.7);
     let objective = Objective::Sum(Column::Velocity(3));
-    let stored = adjoint(&model, &config, 0.5, &refs, &objective, Memory::Store).unwrap();
+    let stored = adjoint(&model, &config, 0.5, &refs, &objective, Memory::Store)
+        .expect("the gradient is computed");
     for memory in [
         Memory::Checkpoints { every: 7 },
         Memory::Checkpoints { every: 1 },
         Memory::Budget { bytes: 1000 },
     ] {
-        let g = adjoint(&model, &config, 0.5, &refs, &objective, memory).unwrap();
+        let g = adjoint(&model, &config, 0.5, &refs, &objective, memory)
+            .expect("the gradient is computed");
         assert!(g.checkpoint_every.is_some(), "{memory:?}");
         // Every segment, the last included, is recomputed once.
         assert_eq!(g.recomputed_steps, g.steps, "{memory:?}");
         assert_eq!(g.objective, stored.objective);
         let scale = stored.values.iter().fold(0.0_f64, |a, b| a.max(b.abs()));
         for (a, b) in g.values.iter().zip(&stored.values) {
-            assert!((a - b).abs() <= 16.0 * f64::EPSILON * scale, "{memory:?}: {a} vs {b}");
+            assert!(
+                (a - b).abs() <= 16.0 * f64::EPSILON * scale,
+                "{memory:?}: {a} vs {b}"
+            );
         }
     }
     // 51 states × (4·8 + 7 + 2) numbers do not fit in 1000 bytes: ⌈√50⌉ = 8.
-    let g = adjoint(&model, &config, 0.5, &refs, &objective, Memory::Budget { bytes: 1000 })
-        .unwrap();
+    let g = adjoint(
+        &model,
+        &config,
+        0.5,
+        &refs,
+        &objective,
+        Memory::Budget { bytes: 1000 },
+    )
+    .expect("the gradient is computed");
     assert_eq!(g.checkpoint_every, Some(8));
 }
 
@@ -407,11 +470,11 @@ fn bad_objectives_are_errors() {
     let refs: Vec<&dyn Parameterized> = ps.iter().map(|p| p as &dyn Parameterized).collect();
     let model = pendulum(&[1.0, 1.0]);
     let config = config(Newton::Full, 0.8);
-    let run = |objective: Objective, memory| {
-        match adjoint(&model, &config, 0.1, &refs, &objective, memory) {
-            Err(IntegrationError::Config(why)) => why,
-            other => panic!("{objective:?}: {other:?}"),
-        }
+    let run = |objective: Objective, memory| match adjoint(
+        &model, &config, 0.1, &refs, &objective, memory,
+    ) {
+        Err(IntegrationError::Config(why)) => why,
+        other => panic!("{objective:?}: {other:?}"),
     };
     let why = run(Objective::Final(Column::Multiplier(2)), Memory::Store);
     assert!(why.contains("multiplier 2") && why.contains("2"), "{why}");
@@ -422,7 +485,10 @@ fn bad_objectives_are_errors() {
         },
         Memory::Store,
     );
-    assert!(why.contains("3 given") && why.contains("11 samples"), "{why}");
+    assert!(
+        why.contains("3 given") && why.contains("11 samples"),
+        "{why}"
+    );
     let why = run(
         Objective::Final(Column::Position(0)),
         Memory::Checkpoints { every: 0 },

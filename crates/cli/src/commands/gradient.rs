@@ -59,7 +59,10 @@ fn parse_spec(spec: &str) -> Result<Spec> {
         "sum" => Ok(Spec::Sum(rest.trim().to_string())),
         "fit" => {
             let (column, file) = rest.rsplit_once('=').ok_or_else(bad)?;
-            Ok(Spec::Fit(column.trim().to_string(), PathBuf::from(file.trim())))
+            Ok(Spec::Fit(
+                column.trim().to_string(),
+                PathBuf::from(file.trim()),
+            ))
         }
         _ => Err(bad()),
     }
@@ -124,12 +127,15 @@ fn measured(path: &Path, name: &str) -> Result<(Vec<f64>, Vec<f64>)> {
         let line = record.position().map_or(0, ::csv::Position::line);
         let number = |i: usize, what: &str| -> Result<f64> {
             let text = record.get(i).unwrap_or_default();
-            text.parse::<f64>().ok().filter(|x| x.is_finite()).ok_or_else(|| {
-                usage(format!(
-                    "{shown}:{line}:{}: '{text}' in column '{what}' is not a finite number",
-                    i + 1
-                ))
-            })
+            text.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| {
+                    usage(format!(
+                        "{shown}:{line}:{}: '{text}' in column '{what}' is not a finite number",
+                        i + 1
+                    ))
+                })
         };
         times.push(number(it, "t")?);
         values.push(number(iy, name)?);
@@ -190,7 +196,9 @@ pub fn run<S: System + ?Sized>(
         ));
     };
     if request.keys.is_empty() {
-        return Err(usage("--objective needs at least one --gradient KEY".into()));
+        return Err(usage(
+            "--objective needs at least one --gradient KEY".into(),
+        ));
     }
     refuse(request, &config)?;
     let spec = parse_spec(request.spec)?;

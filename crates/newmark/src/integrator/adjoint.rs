@@ -252,8 +252,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         self.check_column(objective.column())?;
         let mut sens = self.sensitivities(params)?;
         let every = self.checkpoint_every(t_end, memory)?;
-        let (times, values, records, snapshots) =
-            self.forward(t_end, objective.column(), every)?;
+        let (times, values, records, snapshots) = self.forward(t_end, objective.column(), every)?;
         let steps = values.len() - 1;
         if let Objective::Fit { measured, .. } = objective
             && measured.len() != values.len()
@@ -284,7 +283,9 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 self.backward_over(&mut transposed, &mut back, &records, 0)?;
                 0
             }
-            Some(k) => self.backward_checkpointed(t_end, &mut transposed, &mut back, &snapshots, k)?,
+            Some(k) => {
+                self.backward_checkpointed(t_end, &mut transposed, &mut back, &snapshots, k)?
+            }
         };
         self.restore(&end);
         let mut grad = back.grad;
@@ -552,8 +553,14 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             backend: Backend::SPARSE_LU,
             ..KktOptions::default()
         };
-        let solver = KktSolver::new(&a_t, &options)
-            .map_err(|source| self.kkt_error("analysing the transposed KKT pattern", self.t, self.h, source))?;
+        let solver = KktSolver::new(&a_t, &options).map_err(|source| {
+            self.kkt_error(
+                "analysing the transposed KKT pattern",
+                self.t,
+                self.h,
+                source,
+            )
+        })?;
         Ok(Transposed {
             lin,
             a_t,
@@ -615,12 +622,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
 /// `μᵀ c` with `c = [r_p; −Φ_p]` at `x`: central differences of the
 /// residual and the constraints of the parameter's models at `p ± h_p`, as
 /// the forward sensitivities form them.
-fn partials_dot(
-    param: &mut Parameter,
-    x: &mstar_model::StateRef<'_>,
-    mu: &[f64],
-    n: usize,
-) -> f64 {
+fn partials_dot(param: &mut Parameter, x: &mstar_model::StateRef<'_>, mu: &[f64], n: usize) -> f64 {
     param.lin_plus.eval_residual(param.plus.system(), x);
     param.lin_minus.eval_residual(param.minus.system(), x);
     let (lp, lm, h) = (&param.lin_plus, &param.lin_minus, param.step);
