@@ -481,6 +481,14 @@ fn integrate<S: System + ?Sized>(
         observer.observe(&integ.view());
     }
     let wall = clock.elapsed().as_secs_f64();
+    if let Some((sens, _)) = &sens {
+        say!(
+            "sensitivities: {} parameter(s); {} solves, {} factorizations of their own",
+            sens.len(),
+            sens.solves(),
+            sens.factorizations()
+        );
+    }
     Ok((integ.stats(), integ.time(), wall, result))
 }
 

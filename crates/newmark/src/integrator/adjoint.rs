@@ -24,8 +24,8 @@
 //!
 //! `Jᵀ` is solved with a factorization of its own: the backward pass
 //! re-evaluates the Jacobians at each stored state (the forward pass's
-//! factorizations are not kept, and one at an earlier iterate would need
-//! refinement), so forming `Jᵀ` costs what refactoring `J` would.
+//! factorizations are not kept per step), so forming `Jᵀ` costs what
+//! refactoring `J` would.
 
 use mstar_kkt::{Backend, Csc, KktOptions, KktSolver, Structure};
 use mstar_linearize::Linearization;

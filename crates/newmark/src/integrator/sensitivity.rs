@@ -19,7 +19,7 @@
 //! central differences of the whole start (projection, consistent
 //! accelerations, the start on the discrete solution) at `p ± h_p`.
 
-use mstar_linearize::{Linearization, max_abs};
+use mstar_linearize::Linearization;
 use mstar_model::System;
 
 use super::{Integrator, State};
@@ -55,9 +55,6 @@ pub trait Parameterized {
 /// against the rounding error `ε |R| / h_p`, both then `≈ 1e-10` relative.
 pub const DIFFERENCE_STEP: f64 = 1e-5;
 
-/// Refinement steps with a reused factorization before a fresh one.
-const MAX_REFINEMENTS: usize = 8;
-
 /// One parameter's models at `p ± h_p`, their linearizations, and the
 /// sensitivities of the state.
 pub(super) struct Parameter {
@@ -76,9 +73,9 @@ pub(super) struct Parameter {
 /// parameters of its model, advanced by [`Integrator::step_with`].
 pub struct Sensitivities {
     pub(super) params: Vec<Parameter>,
-    /// Solves with a reused factorization (refinement passes).
+    /// Solves, one per parameter and step.
     solves: usize,
-    /// Factorizations made for the sensitivities at the converged state.
+    /// Factorizations at the converged state, one per step.
     factorizations: usize,
 }
 
@@ -141,15 +138,14 @@ impl Sensitivities {
         &self.params[k].s.lambda
     }
 
-    /// Solves made so far with a factorization in hand (the first solve and
-    /// refinement passes of every parameter at every step).
+    /// Solves made so far: one per parameter and step.
     #[must_use]
     pub fn solves(&self) -> usize {
         self.solves
     }
 
-    /// Factorizations made for the sensitivities when refinement with the
-    /// step's own factorization did not converge.
+    /// Factorizations made for the sensitivities: one per step, at the
+    /// converged state.
     #[must_use]
     pub fn factorizations(&self) -> usize {
         self.factorizations
@@ -265,10 +261,17 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     ) -> Result<(), IntegrationError> {
         let h_before = self.h_last;
         self.step(t_end)?;
+        if sens.params.is_empty() {
+            return Ok(());
+        }
         let h = self.h_last;
+        // `M`, `B`, `g`, `Φ` are those of Newton's last residual, at the
+        // converged state; the Jacobians are evaluated there too, and the
+        // matrix factored once for every parameter.
         let s = &self.state;
-        self.lin.eval_residual(self.sys, &s.at(self.t));
         self.lin.eval_jacobians(self.sys, &s.at(self.t));
+        self.factor_converged(h)?;
+        sens.factorizations += 1;
         for k in 0..sens.params.len() {
             self.advance_sensitivity(sens, k, h, h / h_before)?;
         }
@@ -302,7 +305,8 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         for (r, b) in rhs[n..].iter_mut().zip(&b_u) {
             *r -= b;
         }
-        let x = self.solve_sensitivity(sens, &rhs, h)?;
+        let x = self.solve_scaled(&rhs, h)?;
+        sens.solves += 1;
         let c = self.p.coefficients(h, self.config.scaling);
         let a_p = 1.0 / (self.p.beta * h * h);
         let s = &mut sens.params[k].s;
@@ -365,42 +369,6 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         rhs
     }
 
-    /// `J x = rhs` with `J = [S Bᵀ; B 0]`, `S = K_T + γ' C_T + β' M`, at the
-    /// converged state: refinement with the step's factorization (made at
-    /// an earlier iterate, or an earlier step with modified Newton), and a
-    /// fresh factorization at the converged state when that does not
-    /// converge within [`MAX_REFINEMENTS`] passes or stops contracting.
-    fn solve_sensitivity(
-        &mut self,
-        sens: &mut Sensitivities,
-        rhs: &[f64],
-        h: f64,
-    ) -> Result<Vec<f64>, IntegrationError> {
-        let n = self.sys.n_coords();
-        let mut x = vec![0.0; rhs.len()];
-        let mut residual = rhs.to_vec();
-        let (mut previous, mut fresh, mut passes) = (f64::INFINITY, false, 0);
-        loop {
-            let y = self.solve_scaled(&residual, h)?;
-            sens.solves += 1;
-            passes += 1;
-            for (x, y) in x.iter_mut().zip(&y) {
-                *x += y;
-            }
-            let change = relative_change(&y, &x, n);
-            if change <= 1e-12 || (fresh && (change > 0.5 * previous || passes >= 3)) {
-                return Ok(x);
-            }
-            if !fresh && (change > 0.5 * previous || passes >= MAX_REFINEMENTS) {
-                self.factor_converged(h)?;
-                sens.factorizations += 1;
-                (fresh, passes) = (true, 0);
-            }
-            previous = change;
-            self.kkt_residual(rhs, &x, h, &mut residual);
-        }
-    }
-
     /// `J⁻¹ f` with the factored (scaled, possibly augmented) KKT matrix:
     /// its right-hand side is `[scale f_u; f_λ]`, and its multiplier part
     /// is `scale (δλ − c_bb f_λ)` when `S` carries `c_bb BᵀB`.
@@ -419,28 +387,12 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         Ok(y)
     }
 
-    /// `out = rhs − J x` (see [`solve_sensitivity`](Self::solve_sensitivity)).
-    fn kkt_residual(&self, rhs: &[f64], x: &[f64], h: f64, out: &mut [f64]) {
-        let n = self.sys.n_coords();
-        let c = self.p.coefficients(h, self.config.scaling);
-        let (x_u, x_l) = x.split_at(n);
-        let mut j_x = vec![0.0; x.len()];
-        let (top, bottom) = j_x.split_at_mut(n);
-        let x_v: Vec<f64> = x_u.iter().map(|x| c.c_v * x).collect();
-        let x_a: Vec<f64> = x_u.iter().map(|x| c.c_a * x).collect();
-        self.lin.tangent_mul_add(x_u, &x_v, top);
-        self.lin.mass_pattern().mul_add(self.lin.mass(), &x_a, top);
-        let (b, b_pattern) = (self.lin.b(), self.lin.b_pattern());
-        b_pattern.mul_transpose_add(b, x_l, top);
-        b_pattern.mul_add(b, x_u, bottom);
-        for ((o, r), j) in out.iter_mut().zip(rhs).zip(&j_x) {
-            *o = r - j;
-        }
-    }
-
     /// Factors the iteration matrix at the converged state (the Jacobians
-    /// of [`step_with`](Self::step_with)); the next step's modified Newton
-    /// starts from it.
+    /// of [`step_with`](Self::step_with)): the step's own factorization is
+    /// of an earlier iterate (an earlier step with modified Newton), and
+    /// refining with it took 3–7 solves and products a step where this takes
+    /// one solve (docs/performance.md, "Forward sensitivities"). The next
+    /// step's modified Newton starts from it.
     fn factor_converged(&mut self, h: f64) -> Result<(), IntegrationError> {
         let c = self.p.coefficients(h, self.config.scaling);
         self.lin.assemble(&c);
@@ -451,14 +403,4 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         self.factored_h = Some(h);
         Ok(())
     }
-}
-
-/// The larger of `‖y_u‖∞ / ‖x_u‖∞` and `‖y_λ‖∞ / ‖x_λ‖∞` (each 0 when `y`'s
-/// part is 0): coordinates and multipliers have units of their own.
-fn relative_change(y: &[f64], x: &[f64], n: usize) -> f64 {
-    let part = |y: &[f64], x: &[f64]| {
-        let (dy, sx) = (max_abs(y), max_abs(x));
-        if dy == 0.0 { 0.0 } else { dy / sx }
-    };
-    part(&y[..n], &x[..n]).max(part(&y[n..], &x[n..]))
 }

@@ -16,6 +16,7 @@ mod n_four_bar;
 mod order;
 mod parallelogram;
 mod pendulums;
+mod sensitivity;
 mod slider_crank;
 mod spatial;
 mod top;
@@ -88,6 +89,8 @@ pub const CASES: &[Case] = &[
     spatial::DOUBLE_PENDULUM,
     spatial::BRICARD,
     spatial::SLIDER_CRANK,
+    sensitivity::PENDULUM,
+    sensitivity::SLIDER_CRANK,
 ];
 
 /// A model file of `models`, with overrides (`simulation.h=…`).
