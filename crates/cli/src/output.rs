@@ -80,7 +80,8 @@ pub fn drive<S: System + ?Sized>(
 ///
 /// # Errors
 /// As [`drive`].
-#[allow(clippy::type_complexity)] // (one closure type, spelled once)
+// (The closure's type is spelled out once, here.)
+#[allow(clippy::type_complexity)]
 pub fn drive_with<S: System + ?Sized>(
     integ: &mut Integrator<'_, S>,
     t_end: f64,

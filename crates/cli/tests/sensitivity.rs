@@ -99,7 +99,7 @@ fn slider_crank_multiplier_error(forces: f64) -> f64 {
     let (alpha_m, alpha_f) = ((2.0 * rho - 1.0) / (rho + 1.0), rho / (rho + 1.0));
     let beta = (1.0 - alpha_m + alpha_f).powi(2) / 4.0;
     let beta_p = (1.0 - alpha_m) / ((1.0 - alpha_f) * beta * h * h);
-    let tol: f64 = TOL.parse().unwrap();
+    let tol: f64 = TOL.parse().expect("a number");
     let residual = (tol * forces).max(4.0 * beta_p * f64::EPSILON);
     residual / 0.05
 }
@@ -135,7 +135,7 @@ fn slider_crank_motor_torque_with_respect_to_the_coupler_mass() {
             continue;
         };
         let scale = if column.starts_with("u:") {
-            TOL.parse().unwrap()
+            TOL.parse().expect("a number")
         } else if column.starts_with("lambda:") {
             eta
         } else {
@@ -167,7 +167,7 @@ fn pendulum_angle_with_respect_to_its_length() {
          points = [[0.0, 0.0], [0.0, 0.0]]\nlength = 1.0\n\
          [simulation]\nt_end = 0.5\nh = 1e-3\n",
     )
-    .unwrap();
+    .expect("the model is written");
     let m = file.display().to_string();
     let (key, p, delta) = ("joint.rod.length", 1.0, 1e-3);
     let nominal = run(&dir, &m, "nominal", &["--sensitivity", key]);
@@ -178,7 +178,7 @@ fn pendulum_angle_with_respect_to_its_length() {
     let dy = nominal[&format!("d(u:bob.y)/d({key})")];
     let got = (-y * dx + x * dy) / (x * x + y * y);
     // Positions converge to ‖Φ‖∞ ≤ TOL max(1, ‖u‖∞) = TOL.
-    let (want, tolerance) = extrapolated(&rows, delta, &angle, TOL.parse().unwrap());
+    let (want, tolerance) = extrapolated(&rows, delta, &angle, TOL.parse().expect("a number"));
     assert!(
         (got - want).abs() <= tolerance,
         "∂θ/∂l = {got}, extrapolated differences {want} ± {tolerance:.2e}"
@@ -208,7 +208,7 @@ fn columns_choose_sensitivities_and_npz_holds_them() {
         &out.display().to_string(),
     ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
-    let csv = std::fs::read_to_string(&out).unwrap();
+    let csv = std::fs::read_to_string(&out).expect("the CSV is written");
     assert_eq!(
         csv.lines().next(),
         Some("t,d(lambda:motor)/d(body.rod.mass),d(lambda:motor)/d(body.crank.inertia)")
@@ -225,7 +225,7 @@ fn columns_choose_sensitivities_and_npz_holds_them() {
         &npz.display().to_string(),
     ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
-    let (names, values) = mstar::npz::read(&npz).unwrap();
+    let (names, values) = mstar::npz::read(&npz).expect("the .npz is written");
     let k = names
         .iter()
         .position(|n| n == "d(lambda:motor)/d(body.rod.mass)")

@@ -113,7 +113,7 @@ mod tests {
              [simulation]\nh = 1e-3\n",
             "t.toml",
         )
-        .unwrap()
+        .expect("the document parses")
     }
 
     #[test]
@@ -125,7 +125,7 @@ mod tests {
 
     #[test]
     fn a_wrong_key_names_the_closest_numeric_keys() {
-        let e = number(&doc(), "body.crank.mas").unwrap_err();
+        let e = number(&doc(), "body.crank.mas").expect_err("a typo");
         assert!(
             e.starts_with("the model has no numeric key 'body.crank.mas'"),
             "{e}"
@@ -134,12 +134,12 @@ mod tests {
             e.contains("closest numeric keys are: body.crank.mass,"),
             "{e}"
         );
-        let e = number(&doc(), "joint.rod.type").unwrap_err();
+        let e = number(&doc(), "joint.rod.type").expect_err("a string");
         assert!(
             e.starts_with("'joint.rod.type' is a string, not a number"),
             "{e}"
         );
-        let e = number(&doc(), "body..mass").unwrap_err();
+        let e = number(&doc(), "body..mass").expect_err("an empty key");
         assert!(e.contains("no numeric key 'body..mass'"), "{e}");
     }
 }

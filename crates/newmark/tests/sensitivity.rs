@@ -78,9 +78,10 @@ fn config(newton: Newton, rho: f64) -> Config {
 /// The final state `[u; λ]` of a run of the pendulum of length `l` to `t_end`.
 fn final_state(l: f64, config: &Config, t_end: f64) -> Vec<f64> {
     let p = Pendulum::new(1.0, l);
-    let mut integ = Integrator::new(&p.sys, config.clone(), 0.0, &p.u0, &p.v0).unwrap();
+    let mut integ =
+        Integrator::new(&p.sys, config.clone(), 0.0, &p.u0, &p.v0).expect("the pendulum starts");
     while !integ.reached(t_end) {
-        integ.step(t_end).unwrap();
+        integ.step(t_end).expect("the step converges");
     }
     let s = integ.view();
     s.u.iter().chain(s.lambda).copied().collect()
@@ -90,10 +91,15 @@ fn final_state(l: f64, config: &Config, t_end: f64) -> Vec<f64> {
 /// sensitivities to `param`.
 fn sensitivity(param: &Param, config: &Config, t_end: f64) -> (Vec<f64>, Vec<f64>) {
     let p = Pendulum::new(param.m, param.l);
-    let mut integ = Integrator::new(&p.sys, config.clone(), 0.0, &p.u0, &p.v0).unwrap();
-    let mut sens = integ.sensitivities(&[param]).unwrap();
+    let mut integ =
+        Integrator::new(&p.sys, config.clone(), 0.0, &p.u0, &p.v0).expect("the pendulum starts");
+    let mut sens = integ
+        .sensitivities(&[param])
+        .expect("the sensitivities start");
     while !integ.reached(t_end) {
-        integ.step_with(t_end, &mut sens).unwrap();
+        integ
+            .step_with(t_end, &mut sens)
+            .expect("the step converges");
     }
     let s = integ.view();
     let value = s.u.iter().chain(s.lambda).copied().collect();
