@@ -332,21 +332,21 @@ fn damped_slider_crank_adjoint_matches_forward_sensitivities() {
 /// (Richardson): `D₁`, `D₂` have errors `c δ²`, `4 c δ²`, so `(4 D₁ − D₂)/3`
 /// removes them and `|D₁ − D₂|/3` bounds what is left; the runs' own errors
 /// `η` (Newton's tolerance on every sample, weighted by `|w_n|`) enter it
-/// as at most `1.5 η / δ`.
-fn check_against_differences(make: fn(&[f64]) -> Model, nominal: &[f64], objective: &Objective) {
-    let config = config(Newton::Full, 0.8);
+/// as at most `1.5 η / δ`. With modified Newton and checkpoints the
+/// adjoint's run refactors at every checkpoint, and its solution differs
+/// from the plain runs' within the same Newton tolerance.
+fn check_against_differences(
+    make: fn(&[f64]) -> Model,
+    nominal: &[f64],
+    objective: &Objective,
+    (newton, memory): (Newton, Memory),
+) {
+    let config = config(newton, 0.8);
     let t_end = 0.6;
     let ps = params(make, nominal);
     let refs: Vec<&dyn Parameterized> = ps.iter().map(|p| p as &dyn Parameterized).collect();
-    let g = adjoint(
-        &make(nominal),
-        &config,
-        t_end,
-        &refs,
-        objective,
-        Memory::Store,
-    )
-    .expect("the gradient is computed");
+    let g = adjoint(&make(nominal), &config, t_end, &refs, objective, memory)
+        .expect("the gradient is computed");
     let psi = |p: &[f64]| -> (f64, f64) {
         let model = make(p);
         let mut integ = Integrator::new(
@@ -408,6 +408,7 @@ fn pendulum_adjoint_matches_extrapolated_differences() {
             column: Column::Position(1),
             measured: measured(61, -0.8),
         },
+        (Newton::Full, Memory::Store),
     );
 }
 
@@ -417,6 +418,20 @@ fn slider_crank_adjoint_matches_extrapolated_differences() {
         slider_crank,
         &[2.0, 1.5, 4.0, 30.0],
         &Objective::Final(Column::Position(6)),
+        (Newton::Full, Memory::Store),
+    );
+}
+
+#[test]
+fn checkpointed_modified_newton_matches_extrapolated_differences() {
+    check_against_differences(
+        slider_crank,
+        &[2.0, 1.5, 4.0, 30.0],
+        &Objective::Sum(Column::Multiplier(2)),
+        (
+            Newton::Modified { max_rate: 0.5 },
+            Memory::Checkpoints { every: 9 },
+        ),
     );
 }
 
