@@ -527,6 +527,39 @@ impl Linearization {
         }
     }
 
+    /// `y += K_Tᵀ x` and `z += C_Tᵀ x` (the transposes of
+    /// [`tangent_mul_add`](Self::tangent_mul_add)'s products) from the last
+    /// [`eval_jacobians`](Self::eval_jacobians): the tangent's share of a
+    /// transposed KKT product, e.g. for the discrete adjoint
+    /// (`mstar_newmark::Integrator::gradient`). `K_T` is not symmetric with
+    /// velocity-dependent or follower forces, so `K_Tᵀ x ≠ K_T x` in general.
+    ///
+    /// # Panics
+    /// If `x`, `y` or `z` is not of length `n`.
+    pub fn tangent_mul_transpose_add(&self, x: &[f64], y: &mut [f64], z: &mut [f64]) {
+        let [hessian, g_u, g_v, mass_du] = &self.tangent_patterns;
+        let mut minus = vec![0.0; self.n];
+        if !self.hessian.is_empty() {
+            hessian.mul_transpose_add(&self.hessian, x, y);
+        }
+        if !self.mass_du.is_empty() {
+            mass_du.mul_transpose_add(&self.mass_du, x, y);
+        }
+        if !self.g_u.is_empty() {
+            g_u.mul_transpose_add(&self.g_u, x, &mut minus);
+        }
+        for (y, m) in y.iter_mut().zip(&minus) {
+            *y -= m;
+        }
+        if !self.g_v.is_empty() {
+            minus.fill(0.0);
+            g_v.mul_transpose_add(&self.g_v, x, &mut minus);
+            for (z, m) in z.iter_mut().zip(&minus) {
+                *z -= m;
+            }
+        }
+    }
+
     fn eval_bb(&mut self) {
         for (out, &(p, q)) in self.bb_values.iter_mut().zip(&self.layout.bb_pairs) {
             *out = self.b[p] * self.b[q];

@@ -34,7 +34,8 @@ mod resample;
 
 pub use error::{IntegrationError, Short};
 pub use integrator::{
-    DIFFERENCE_STEP, Integrator, Parameterized, Sensitivities, StartReport, Variant,
+    Column, DIFFERENCE_STEP, Gradient, Integrator, Memory, Objective, Parameterized, Sensitivities,
+    StartReport, Variant,
 };
 pub use output::{EnergyReport, ErrorReport, Observer, RunStats, Trajectory};
 pub use params::{AlphaParams, Config, ErrorControl, Newton, Predictor, Scheme, Start, StepMode};

@@ -6,6 +6,7 @@ pub mod chain;
 pub mod check;
 pub mod convert;
 pub mod equilibrium;
+pub mod gradient;
 pub mod linearize;
 pub mod modes;
 pub mod options;

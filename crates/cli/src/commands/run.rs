@@ -81,6 +81,21 @@ pub struct RunArgs {
     /// d(<column>)/d(<KEY>) of u, v, a and lambda (docs/analysis.md).
     #[arg(long = "sensitivity", value_name = "KEY")]
     sensitivity: Vec<String>,
+    /// A scalar objective over the run, whose gradient --gradient asks
+    /// for: final:COLUMN, sum:COLUMN (over every step) or
+    /// fit:COLUMN=FILE.csv (Σ (y − d)² against the measured column of a
+    /// CSV with a t column at the run's steps); COLUMN a u:, v:, a: or
+    /// lambda: column. Prints dΨ/d<KEY> instead of writing rows
+    /// (docs/analysis.md, "Adjoint gradients").
+    #[arg(long, value_name = "SPEC", requires = "gradient")]
+    objective: Option<String>,
+    /// A model-file key (as --set names it) to differentiate --objective
+    /// by, with the discrete adjoint; repeatable.
+    #[arg(long, value_name = "KEY", num_args = 1.., requires = "objective")]
+    gradient: Vec<String>,
+    /// Write the gradient as JSON.
+    #[arg(long, value_name = "G.json", requires = "objective")]
+    gradient_out: Option<PathBuf>,
 }
 
 /// The built-in models of `mstar run --builtin`.
@@ -235,6 +250,19 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         warn_far_start(sys);
     }
     let rows = independent_rows(model)?;
+    if let Some(spec) = &args.objective {
+        let request = super::gradient::Request {
+            model: args.model.as_deref(),
+            set: &overrides(args),
+            spec,
+            keys: &args.gradient,
+            out: args.gradient_out.as_deref(),
+            rows_out: args.out.is_some(),
+            redundant: rows.is_some(),
+            every_time,
+        };
+        return super::gradient::run(&request, sys, (config, &model.u0, &model.v0, t_end));
+    }
     let params = sensitivity_parameters(args, &config, rows.is_some(), every_time)?;
     let sensitivity_columns = (!params.is_empty()).then(|| {
         let keys: Vec<String> = params.iter().map(|p| p.name()).collect();

@@ -2,11 +2,13 @@
 //! one step (paper §2.2, Fig. 2; `algorithm.md` §4) is in `newton.rs`, the
 //! initial conditions (§3, §6) in `start.rs`.
 
+mod adjoint;
 mod control;
 mod newton;
 mod sensitivity;
 mod start;
 
+pub use adjoint::{Column, Gradient, Memory, Objective};
 pub use sensitivity::{DIFFERENCE_STEP, Parameterized, Sensitivities, Variant};
 
 use mstar_kkt::{Backend, KktError, KktSolver};

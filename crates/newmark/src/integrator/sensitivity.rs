@@ -57,22 +57,22 @@ pub const DIFFERENCE_STEP: f64 = 1e-5;
 
 /// One parameter's models at `p ± h_p`, their linearizations, and the
 /// sensitivities of the state.
-struct Parameter {
+pub(super) struct Parameter {
     name: String,
     value: f64,
-    step: f64,
-    plus: Box<dyn Variant>,
-    minus: Box<dyn Variant>,
-    lin_plus: Linearization,
-    lin_minus: Linearization,
+    pub(super) step: f64,
+    pub(super) plus: Box<dyn Variant>,
+    pub(super) minus: Box<dyn Variant>,
+    pub(super) lin_plus: Linearization,
+    pub(super) lin_minus: Linearization,
     /// `∂(u, u̇, ü, a, λ)/∂p` of the current state.
-    s: State,
+    pub(super) s: State,
 }
 
 /// Forward sensitivities `∂x/∂p` of the integrator's discrete solution to
 /// parameters of its model, advanced by [`Integrator::step_with`].
 pub struct Sensitivities {
-    params: Vec<Parameter>,
+    pub(super) params: Vec<Parameter>,
     /// Solves, one per parameter and step.
     solves: usize,
     /// Factorizations at the converged state, one per step.
@@ -162,7 +162,7 @@ fn difference_step(p: f64) -> f64 {
 }
 
 /// `(x⁺ − x⁻) / (2 h)` element by element.
-fn central(plus: &[f64], minus: &[f64], h: f64) -> Vec<f64> {
+pub(super) fn central(plus: &[f64], minus: &[f64], h: f64) -> Vec<f64> {
     plus.iter()
         .zip(minus)
         .map(|(a, b)| (a - b) / (2.0 * h))
