@@ -29,6 +29,7 @@ from ._model import ModelWarning as ModelWarning
 from ._modes import Modes as Modes
 from ._model import load as load
 from ._native import __version__ as __version__
+from ._linear import StateSpace as StateSpace
 from ._result import Result as Result
 from ._result import Stats as Stats
 from ._sweep import Sweep as Sweep
@@ -45,6 +46,7 @@ __all__ = [
     "ModelWarning",
     "Modes",
     "Result",
+    "StateSpace",
     "Stats",
     "Sweep",
     "__version__",
@@ -55,6 +57,6 @@ __all__ = [
 
 # Python's own exceptions and classes report the package, not the private
 # module that defines them.
-for _name in ("AccuracyWarning", "Equilibrium", "Model", "ModelWarning", "Modes", "Result", "Stats", "Sweep", "animate", "load", "sweep"):
+for _name in ("AccuracyWarning", "Equilibrium", "Model", "ModelWarning", "Modes", "Result", "StateSpace", "Stats", "Sweep", "animate", "load", "sweep"):
     globals()[_name].__module__ = __name__
 del _name

@@ -34,8 +34,13 @@ RUN_RULES: List[Tuple[str, str]] = [
     (r"--set (?!simulation\.)([^=\s]+)=", r'overrides["\1"]='),
 ]
 
-#: Further rules for :meth:`mstar.Model.modes`: its options as arguments.
+#: Further rules for :meth:`mstar.Model.modes` and
+#: :meth:`mstar.Model.linearize`: their options as arguments.
 MODES_RULES: List[Tuple[str, str]] = [
+    (r"--outputs ('[^']*')", r"outputs=[\1]"),
+    (r"--inputs ('[^']*')", r"inputs=[\1]"),
+    (r"--outputs", "outputs="),
+    (r"--inputs", "inputs="),
     (r"--about initial", 'about="initial"'),
     (r"--count (\d+)", r"count=\1"),
     (r"use the dense method", 'use method="dense"'),

@@ -12,6 +12,7 @@ from ._literal import integer, number, toml_literal
 from ._native import load_path as _load_path
 from ._native import load_text as _load_text
 from ._equilibrium import Equilibrium
+from ._linear import StateSpace
 from ._modes import Modes
 from ._result import Result
 
@@ -54,6 +55,23 @@ def _overrides(settings: Dict[str, Any], overrides: Optional[Dict[str, Any]] = N
             raise TypeError(f"overrides: expected str keys, got {type(key).__name__} {key!r}")
         given.append(f"{key}={toml_literal(value, f'overrides[{key!r}]', lists=True)}")
     return given
+
+
+def _keys(keys: Optional[List[str]], name: str) -> List[str]:
+    """``keys`` as a list of str (None: none).
+
+    Raises:
+        TypeError: naming the argument, for a str or a non-str entry.
+    """
+    if keys is None:
+        return []
+    if isinstance(keys, str):
+        raise TypeError(f"{name}: expected a list of keys, got the str {keys!r} (write [{keys!r}])")
+    out = list(keys)
+    for k in out:
+        if not isinstance(k, str):
+            raise TypeError(f"{name}: expected str keys, got {type(k).__name__} {k!r}")
+    return out
 
 
 class Model:
@@ -125,6 +143,7 @@ class Model:
         t_end: Optional[float] = None,
         h: Optional[float] = None,
         overrides: Optional[Dict[str, Any]] = None,
+        sensitivities: Optional[List[str]] = None,
         **settings: Any,
     ) -> Result:
         """Runs the model, every accepted step a sample, with the GIL released.
@@ -135,6 +154,12 @@ class Model:
         Numbers may be numpy's (``np.float64``, ``np.int64``, 0-d arrays ...).
         ``overrides`` sets any key of a model file by its dotted path, as
         ``--set`` does: ``{"body.bob.mass": 2.0, "output.every": 1}``.
+        ``sensitivities`` lists numeric keys of the model file (``mstar run
+        --sensitivity KEY``, a model read from a file): the result gains the
+        columns ``d(<column>)/d(<key>)`` of the coordinates, velocities,
+        accelerations and multipliers, the exact derivatives of the
+        discrete solution (``docs/analysis.md``, "Parameter
+        sensitivities"); fixed steps only.
 
         Raises:
             TypeError: a number setting that is not a number (``t_end:
@@ -150,9 +175,10 @@ class Model:
                 run``'s warning, in ``result.stats.warning`` too).
         """
         given = _overrides({"t_end": t_end, "h": h, **settings}, overrides)
+        keys = _keys(sensitivities, "sensitivities")
         try:
             with translated(RUN_RULES):
-                raw = self._native.run(given)
+                raw = self._native.run(given, keys)
         except (IntegrationError, KeyboardInterrupt) as e:
             partial = getattr(e, "partial", None)
             if isinstance(partial, dict):
@@ -192,6 +218,35 @@ class Model:
                 e.equilibrium = Equilibrium(found, self, given)  # type: ignore[attr-defined]
             raise
         return Equilibrium(raw, self, given)
+
+    def linearize(
+        self,
+        inputs: Optional[List[str]] = None,
+        outputs: Optional[List[str]] = None,
+        about: str = "equilibrium",
+        overrides: Optional[Dict[str, Any]] = None,
+    ) -> StateSpace:
+        """The linear state-space model ``ẋ = A x + B p``, ``y = C x + D p``
+        about the state ``about`` names (``"equilibrium"`` or ``"initial"``),
+        in a minimal set of coordinates, as ``mstar linearize`` forms it
+        (``docs/analysis.md``, "Linear state-space models"): ``inputs`` are
+        keys of the model file holding a force or torque value
+        (``"force.push.fx"``), ``outputs`` columns of ``mstar run``
+        (``"u:*.theta"``, ``"sensor:tip.x"``). A model read from a file.
+
+        Raises:
+            EquilibriumError: ``about="equilibrium"`` and none was found.
+            ModelError: a key or column that is wrong, a driver key as an
+                input, a model too large or without a state-space form, a
+                model not read from a file.
+            ValueError: an unknown ``about``.
+        """
+        given = _overrides({}, overrides)
+        with translated(RUN_RULES + MODES_RULES):
+            text, notes = self._native.linearize(
+                given, _keys(inputs, "inputs"), _keys(outputs, "outputs"), about
+            )
+        return StateSpace(text, notes)
 
     def modes(
         self,

@@ -9,7 +9,9 @@ use mstar::System;
 use mstar::columns::{Columns, OutputColumns, ReactionColumns};
 use mstar::file::{FileError, Format, Mechanism, MechanismFile, Simulation};
 use mstar::model::sensor::Sensor;
+use mstar::newmark::Parameterized;
 use mstar::run::{CheckReport, RunError};
+use mstar::sensitivity::{Chained, FileParameter, SensitivityColumns};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -119,6 +121,34 @@ impl NativeModel {
         };
         Ok((Some(file.mechanism), file.simulation))
     }
+
+    /// The model-file keys `keys` as parameters of forward sensitivities
+    /// (`mstar run --sensitivity`), read with `overrides`.
+    ///
+    /// # Errors
+    /// `ModelError` for a model not read from a file, a key that names no
+    /// number of the file (with the closest), or a key given twice.
+    fn parameters(&self, overrides: &[String], keys: &[String]) -> PyResult<Vec<FileParameter>> {
+        if keys.is_empty() {
+            return Ok(Vec::new());
+        }
+        let Source::Path(path) = &self.source else {
+            return Err(ModelError::new_err(format!(
+                "{}: sensitivities need a model read from a file (its keys are the parameters); save the text to a .toml file and load that",
+                self.origin
+            )));
+        };
+        let mut params: Vec<FileParameter> = Vec::with_capacity(keys.len());
+        for (i, key) in keys.iter().enumerate() {
+            if keys[..i].iter().any(|k| k.trim() == key.trim()) {
+                return Err(ModelError::new_err(format!(
+                    "sensitivities: '{key}' is given twice"
+                )));
+            }
+            params.push(FileParameter::new(path, overrides, key).map_err(|e| model_error(&e))?);
+        }
+        Ok(params)
+    }
 }
 
 /// Asks Python every 50 ms, with the GIL taken back briefly, whether a
@@ -197,8 +227,15 @@ impl NativeModel {
     /// Runs the model with the settings `overrides`, GIL released: a dict of
     /// arrays and `stats`. On a failure or Ctrl-C, the exception carries the
     /// samples so far as `partial` (such a dict).
-    fn run<'py>(&self, py: Python<'py>, overrides: Vec<String>) -> PyResult<Bound<'py, PyDict>> {
+    #[pyo3(signature = (overrides, sensitivities = Vec::new()))]
+    fn run<'py>(
+        &self,
+        py: Python<'py>,
+        overrides: Vec<String>,
+        sensitivities: Vec<String>,
+    ) -> PyResult<Bound<'py, PyDict>> {
         let (fresh, sim) = self.settings(&overrides).map_err(|e| model_error(&e))?;
+        let params = self.parameters(&overrides, &sensitivities)?;
         let mechanism = fresh.as_ref().unwrap_or(&self.mechanism);
         let sys = mechanism.system();
         let mut collect = Collect::new(sys.n_coords(), sys.n_constraints());
@@ -218,13 +255,28 @@ impl NativeModel {
             // (The reactions alone never: checked above.)
             let columns = extra_columns(mechanism, sensors)
                 .unwrap_or_else(|_| Box::new(ReactionColumns::new(mstar::run::lookup(mechanism))));
+            let sys = mstar::run::lookup(mechanism);
+            let sens_columns = SensitivityColumns::new(sys, &sensitivities);
+            let chained = Chained(Some(&*columns), &sens_columns);
             let mut observer = Extra {
                 collect: &mut collect,
-                columns: &*columns,
+                columns: &chained,
             };
-            let sys = mstar::run::lookup(mechanism);
-            let outcome = mstar::run::simulate_until(sys, &sim, &mut observer, &mut || poll.stop());
-            (outcome, columns.names())
+            let outcome = if params.is_empty() {
+                mstar::run::simulate_until(sys, &sim, &mut observer, &mut || poll.stop())
+            } else {
+                let refs: Vec<&dyn Parameterized> =
+                    params.iter().map(|p| p as &dyn Parameterized).collect();
+                mstar::sensitivity::simulate_until(
+                    sys,
+                    &sim,
+                    &refs,
+                    &sens_columns,
+                    &mut observer,
+                    &mut || poll.stop(),
+                )
+            };
+            (outcome, chained.names())
         });
         let wall = collect.wall();
         let names = |d: &Bound<'py, PyDict>| -> PyResult<()> {
@@ -281,6 +333,57 @@ impl NativeModel {
         let (fresh, _) = self.settings(&overrides).map_err(|e| model_error(&e))?;
         let mechanism = fresh.as_ref().unwrap_or(&self.mechanism);
         crate::modes::solve(py, mechanism, &self.origin, count, about, method)
+    }
+
+    /// The linear state-space model of the model file about the state
+    /// `about` names (`mstar linearize`): its JSON text (the file `mstar
+    /// linearize --out` writes) and the warnings on the way.
+    #[pyo3(signature = (overrides, inputs, outputs, about))]
+    fn linearize(
+        &self,
+        py: Python<'_>,
+        overrides: Vec<String>,
+        inputs: Vec<String>,
+        outputs: Vec<String>,
+        about: &str,
+    ) -> PyResult<(String, Vec<String>)> {
+        let about = match about {
+            "equilibrium" => mstar::modes::About::Equilibrium,
+            "initial" => mstar::modes::About::Initial,
+            other => {
+                return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                    "about: expected \"equilibrium\" or \"initial\", got {other:?}"
+                )));
+            }
+        };
+        let Source::Path(path) = &self.source else {
+            return Err(ModelError::new_err(format!(
+                "{}: a state-space model's inputs are keys of a model file; save the text to a .toml file and load that",
+                self.origin
+            )));
+        };
+        let request = mstar::linear::Request {
+            about,
+            inputs: &inputs,
+            outputs: &outputs,
+            overrides: &overrides,
+        };
+        let formed = py.detach(|| mstar::linear::from_file(path, &request));
+        match formed {
+            Ok(f) => Ok((f.model.to_json(), f.warnings)),
+            Err(e @ mstar::linear::LinearError::NoEquilibrium(_)) => {
+                Err(crate::EquilibriumError::new_err(format!(
+                    "{}: {}",
+                    self.origin,
+                    crate::message(&e)
+                )))
+            }
+            Err(e) => Err(ModelError::new_err(format!(
+                "{}: {}",
+                self.origin,
+                crate::message(&e)
+            ))),
+        }
     }
 
     /// The model file's TOML text with the pose `u` as its initial pose,

@@ -212,12 +212,14 @@ pub fn modes<S: System + ?Sized>(
     }
 }
 
-/// The state at rest a model's modes are found about.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// The state at rest a model is linearized about (its modes,
+/// [`crate::linear`]'s state-space models).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum About {
     /// The static equilibrium [`crate::equilibrium::solve`] finds from the
     /// initial pose (a neutral one as it is: its free direction is a rigid
     /// mode).
+    #[default]
     Equilibrium,
     /// The initial pose, at rest, with the multipliers of the acceleration
     /// problem there ([`rest_multipliers`]).

@@ -177,3 +177,60 @@ impl Columns for Chained<'_> {
         self.1.values_wanted(s, b, out);
     }
 }
+
+/// Runs `sys` with the settings `sim` as [`crate::run::simulate_until`]
+/// does, carrying the forward sensitivities to `params` along
+/// (`docs/analysis.md`, "Parameter sensitivities"): after every step
+/// `columns` holds them, so an observer that reads `columns` (e.g. through
+/// [`Chained`]) sees each sample's own. What `mstar run --sensitivity` and
+/// Python's `model.run(sensitivities=…)` do.
+///
+/// # Errors
+/// [`RunError::Settings`] for adaptive steps (the step sizes would depend
+/// on the parameters) or redundant constraints solved on a subset of rows;
+/// otherwise as [`crate::run::simulate_until`].
+pub fn simulate_until<S: crate::run::ModelLookup + ?Sized>(
+    sys: &S,
+    sim: &mstar_file::Simulation,
+    params: &[&dyn Parameterized],
+    columns: &SensitivityColumns,
+    observer: &mut dyn mstar_newmark::Observer,
+    stop: &mut dyn FnMut() -> bool,
+) -> Result<mstar_newmark::RunStats, crate::run::RunError> {
+    use crate::run::{RunError, SettingsError};
+    let refuse = |why: &str| {
+        RunError::Settings(SettingsError::Refused(
+            mstar_newmark::IntegrationError::Config(format!("sensitivities {why}")),
+        ))
+    };
+    let (config, t_end) = crate::run::config(sim)?;
+    if config.error.mode == mstar_newmark::StepMode::Adaptive {
+        return Err(refuse(
+            "need fixed steps: with adaptive steps the step sizes depend on the parameter; \
+             use fixed steps (error_control = \"warn\" or \"strict\") and choose h",
+        ));
+    }
+    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+    if crate::run::solve_rows(sys, &u0, sim.redundant.unwrap_or_default())?.is_some() {
+        return Err(refuse(
+            "do not handle redundant constraints solved on a subset of rows yet; remove the \
+             redundant joints",
+        ));
+    }
+    let mut integ = mstar_newmark::Integrator::new(sys, config, 0.0, &u0, &v0)?;
+    let mut sens = integ.sensitivities(params)?;
+    columns.set(&sens);
+    observer.observe(&integ.view());
+    if !t_end.is_finite() {
+        return Err(refuse("need a finite t_end"));
+    }
+    while !integ.reached(t_end) {
+        if stop() {
+            return Err(RunError::Stopped { t: integ.time() });
+        }
+        integ.step_with(t_end, &mut sens)?;
+        columns.set(&sens);
+        observer.observe(&integ.view());
+    }
+    Ok(integ.stats())
+}

@@ -7,15 +7,7 @@ use std::process::ExitCode;
 
 use mstar::linear::{self, LinearError, Request, StateSpace};
 
-/// The state a model is linearized about.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum About {
-    /// The static equilibrium `mstar equilibrium` finds from the file's pose.
-    Equilibrium,
-    /// The file's initial pose, at rest (the multipliers of the
-    /// acceleration problem there; the drift `xdot0` is written).
-    Initial,
-}
+use super::modes::About;
 
 /// Arguments of `mstar linearize`.
 #[derive(clap::Args, Debug)]
@@ -75,10 +67,7 @@ fn build(args: &LinearizeArgs) -> Result<StateSpace, Failure> {
             .map_err(|e| (e.to_string(), 2))?;
     }
     let request = Request {
-        about: match args.about {
-            About::Equilibrium => linear::About::Equilibrium,
-            About::Initial => linear::About::Initial,
-        },
+        about: args.about.library(),
         inputs: &args.inputs,
         outputs: &args.outputs,
         overrides: &args.set,

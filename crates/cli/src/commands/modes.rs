@@ -16,8 +16,19 @@ pub enum About {
     /// The static equilibrium `mstar equilibrium` finds from the file's pose.
     Equilibrium,
     /// The file's initial pose, at rest, with the multipliers of the
-    /// acceleration problem there.
+    /// acceleration problem there (`mstar linearize` writes the drift
+    /// `xdot0` it leaves).
     Initial,
+}
+
+impl About {
+    /// The library's [`mstar::modes::About`].
+    pub fn library(self) -> mstar::modes::About {
+        match self {
+            Self::Equilibrium => mstar::modes::About::Equilibrium,
+            Self::Initial => mstar::modes::About::Initial,
+        }
+    }
 }
 
 /// The eigensolver (`mstar::modes::Method`).
@@ -104,11 +115,7 @@ pub fn modes(args: &ModesArgs) -> ExitCode {
 /// The state at rest `(u, λ)` to linearize about
 /// ([`mstar::modes::rest_state`]).
 pub fn state(about: About, sys: &dyn ModelLookup) -> Result<(Vec<f64>, Vec<f64>)> {
-    let about = match about {
-        About::Equilibrium => mstar::modes::About::Equilibrium,
-        About::Initial => mstar::modes::About::Initial,
-    };
-    let found = mstar::modes::rest_state(sys, &sys.initial_position(), about)
+    let found = mstar::modes::rest_state(sys, &sys.initial_position(), about.library())
         .map_err(|e| anyhow::anyhow!("{e}"))?;
     if found.neutral {
         // A neutral direction is a rigid mode: the modes say so.

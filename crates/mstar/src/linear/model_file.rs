@@ -10,16 +10,7 @@ use super::{Input, LinearError, OperatingPoint, StateSpace, at_rest, input, inpu
 use crate::equilibrium::{EquilibriumError, EquilibriumOptions};
 use crate::run::ModelLookup;
 
-/// The state a model file is linearized about.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum About {
-    /// The static equilibrium [`crate::equilibrium::solve`] finds from the
-    /// file's pose.
-    #[default]
-    Equilibrium,
-    /// The file's initial pose, at rest.
-    Initial,
-}
+pub use crate::modes::About;
 
 /// What [`from_file`] forms.
 #[derive(Clone, Copy, Debug, Default)]
