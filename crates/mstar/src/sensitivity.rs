@@ -186,7 +186,7 @@ impl Columns for Chained<'_> {
 /// Python's `model.run(sensitivities=…)` do.
 ///
 /// # Errors
-/// [`RunError::Settings`] for adaptive steps (the step sizes would depend
+/// [`crate::run::RunError::Settings`] for adaptive steps (the step sizes would depend
 /// on the parameters) or redundant constraints solved on a subset of rows;
 /// otherwise as [`crate::run::simulate_until`].
 pub fn simulate_until<S: crate::run::ModelLookup + ?Sized>(
