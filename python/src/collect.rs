@@ -3,7 +3,11 @@
 
 use std::time::Instant;
 
+use mstar::System;
+use mstar::columns::OutputColumns;
 use mstar::csv::Columns;
+use mstar::file::Mechanism;
+use mstar::model::sensor::Sensor;
 use mstar::{Observer, RunStats, SampleRef};
 use numpy::{PyArray1, PyArrayMethods};
 use pyo3::prelude::*;
@@ -124,7 +128,7 @@ impl Observer for Collect {
 pub(crate) struct Extra<'c> {
     /// Where the samples go.
     pub(crate) collect: &'c mut Collect,
-    /// The further columns ([`crate::model::extra_columns`]).
+    /// The further columns ([`extra_columns`]).
     pub(crate) columns: &'c dyn Columns,
 }
 
@@ -198,4 +202,25 @@ impl Collect {
         d.set_item("extra_names", extra_names)?;
         Ok(d)
     }
+}
+
+/// The columns a run adds after the standard ones, as `mstar run --out`
+/// writes them: the reactions and efforts of its joints and drivers, then
+/// its sensors ([`OutputColumns`]). Results expose whatever these name,
+/// generically.
+pub(crate) fn extra_columns<'a>(
+    mechanism: &'a Mechanism,
+    sensors: &[Sensor],
+) -> Result<Box<dyn Columns + 'a>, mstar::columns::SensorError> {
+    Ok(Box::new(OutputColumns::new(
+        mstar::run::lookup(mechanism),
+        sensors,
+    )?))
+}
+
+/// The constraint rows' names, in order.
+pub(crate) fn constraint_names(sys: &dyn System) -> Vec<String> {
+    (0..sys.n_constraints())
+        .map(|i| sys.constraint_name(i))
+        .collect()
 }

@@ -27,7 +27,7 @@ pub(crate) fn solve<'py>(
     sensors: &[Sensor],
     origin: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    crate::model::extra_columns(mechanism, sensors)
+    crate::collect::extra_columns(mechanism, sensors)
         .map_err(|e| ModelError::new_err(format!("{origin}: {e}")))?;
     let sys = mstar::run::lookup(mechanism);
     let u0 = sys.initial_position();
@@ -46,7 +46,7 @@ fn at_rest<'py>(
     eq: &Equilibrium,
 ) -> PyResult<Bound<'py, PyDict>> {
     let sys = mstar::run::lookup(mechanism);
-    let columns = crate::model::extra_columns(mechanism, sensors)
+    let columns = crate::collect::extra_columns(mechanism, sensors)
         .map_err(|e| ModelError::new_err(e.to_string()))?;
     let mut collect = Collect::new(sys.n_coords(), sys.n_constraints());
     let zeros = vec![0.0; eq.u.len()];
@@ -58,7 +58,7 @@ fn at_rest<'py>(
     .observe(&sample);
     let d = collect.into_dict(py, columns.names())?;
     d.set_item("coords", mstar::model::coord_names(sys))?;
-    d.set_item("constraints", crate::model::constraint_names(sys))?;
+    d.set_item("constraints", crate::collect::constraint_names(sys))?;
     d.set_item("header", mstar::csv::header(sys))?;
     let stats = PyDict::new(py);
     stats.set_item("steps", 0)?;

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use mstar::System;
-use mstar::columns::{Columns, OutputColumns, ReactionColumns};
+use mstar::columns::{Columns, ReactionColumns};
 use mstar::file::{FileError, Format, Mechanism, MechanismFile, Simulation};
 use mstar::model::sensor::Sensor;
 use mstar::newmark::Parameterized;
@@ -15,7 +15,7 @@ use mstar::sensitivity::{Chained, FileParameter, SensitivityColumns};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::collect::{Collect, Extra, stats_dict};
+use crate::collect::{Collect, Extra, constraint_names, extra_columns, stats_dict};
 use crate::{IntegrationError, ModelError};
 
 /// Where a model came from: what a run with settings re-reads.
@@ -416,20 +416,6 @@ fn is_toml(path: &std::path::Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
 }
 
-/// The columns a run adds after the standard ones, as `mstar run --out`
-/// writes them: the reactions and efforts of its joints and drivers, then
-/// its sensors ([`OutputColumns`]). Results expose whatever these name,
-/// generically.
-pub(crate) fn extra_columns<'a>(
-    mechanism: &'a Mechanism,
-    sensors: &[Sensor],
-) -> Result<Box<dyn Columns + 'a>, mstar::columns::SensorError> {
-    Ok(Box::new(OutputColumns::new(
-        mstar::run::lookup(mechanism),
-        sensors,
-    )?))
-}
-
 /// The warning `mstar run` prints (and exits 3 for) when a run's steps went
 /// beyond the error tolerance or its energy drifted beyond it: one line
 /// each, after `warning: ` (`None`: within the tolerance).
@@ -447,12 +433,6 @@ fn expected_rows(sim: &Simulation) -> Option<usize> {
     }
     let rows = (t_end / config.h).ceil() + 2.0;
     (rows.is_finite() && rows < 1e8).then_some(rows as usize)
-}
-
-pub(crate) fn constraint_names(sys: &dyn System) -> Vec<String> {
-    (0..sys.n_constraints())
-        .map(|i| sys.constraint_name(i))
-        .collect()
 }
 
 /// [`CheckReport`] as a dict; `report`: the text `mstar check` prints.
