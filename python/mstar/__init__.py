@@ -24,6 +24,7 @@ from ._errors import Error as Error
 from ._errors import IntegrationError as IntegrationError
 from ._errors import ModelError as ModelError
 from ._model import AccuracyWarning as AccuracyWarning
+from ._model import Gradient as Gradient
 from ._model import Model as Model
 from ._model import ModelWarning as ModelWarning
 from ._modes import Modes as Modes
@@ -40,6 +41,7 @@ __all__ = [
     "Equilibrium",
     "EquilibriumError",
     "Error",
+    "Gradient",
     "IntegrationError",
     "Model",
     "ModelError",
@@ -57,6 +59,6 @@ __all__ = [
 
 # Python's own exceptions and classes report the package, not the private
 # module that defines them.
-for _name in ("AccuracyWarning", "Equilibrium", "Model", "ModelWarning", "Modes", "Result", "StateSpace", "Stats", "Sweep", "animate", "load", "sweep"):
+for _name in ("AccuracyWarning", "Equilibrium", "Gradient", "Model", "ModelWarning", "Modes", "Result", "StateSpace", "Stats", "Sweep", "animate", "load", "sweep"):
     globals()[_name].__module__ = __name__
 del _name

@@ -5,7 +5,10 @@ from __future__ import annotations
 
 import os
 import warnings
+from dataclasses import dataclass
 from typing import Any, Dict, List, Optional, Union
+
+import numpy as np
 
 from ._errors import MODES_RULES, RUN_RULES, EquilibriumError, IntegrationError, python_message, translated
 from ._literal import integer, number, toml_literal
@@ -55,6 +58,20 @@ def _overrides(settings: Dict[str, Any], overrides: Optional[Dict[str, Any]] = N
             raise TypeError(f"overrides: expected str keys, got {type(key).__name__} {key!r}")
         given.append(f"{key}={toml_literal(value, f'overrides[{key!r}]', lists=True)}")
     return given
+
+
+@dataclass(frozen=True)
+class Gradient:
+    """What :meth:`Model.gradient` computes."""
+
+    #: The objective Ψ of the run.
+    value: float
+    #: dΨ/dp by key, in the order given.
+    gradient: Dict[str, float]
+    #: The samples' times, s (the start and the end of every step).
+    times: np.ndarray
+    #: The run's steps.
+    steps: int
 
 
 def _keys(keys: Optional[List[str]], name: str) -> List[str]:
@@ -218,6 +235,46 @@ class Model:
                 e.equilibrium = Equilibrium(found, self, given)  # type: ignore[attr-defined]
             raise
         return Equilibrium(raw, self, given)
+
+    def gradient(
+        self,
+        objective: str,
+        params: List[str],
+        measured: Any = None,
+        t_end: Optional[float] = None,
+        h: Optional[float] = None,
+        overrides: Optional[Dict[str, Any]] = None,
+        **settings: Any,
+    ) -> Gradient:
+        """The gradient of a scalar objective over a run with respect to
+        numeric keys of the model file, by the discrete adjoint, as ``mstar
+        run --objective … --gradient …`` computes it (``docs/analysis.md``,
+        "Adjoint gradients"), with the GIL released: one backward pass for
+        all of ``params``.
+
+        ``objective``: ``"final:COLUMN"`` (the column's value at the end),
+        ``"sum:COLUMN"`` (its sum over the samples) or ``"fit:COLUMN"`` (the
+        sum of squared differences to ``measured``, one value per sample:
+        the start and every step), ``COLUMN`` a ``u:``, ``v:``, ``a:`` or
+        ``lambda:`` column. ``t_end``, ``h``, ``overrides`` and
+        ``settings`` as for :meth:`run`; fixed steps only; a model read from
+        a file.
+
+        Raises:
+            ValueError: a malformed objective, ``measured`` missing for a
+                fit or given for another objective.
+            ModelError: a column that is not a state column, a key that
+                names no number of the file, adaptive steps, a model not
+                read from a file.
+            IntegrationError: the run or the backward pass failed.
+        """
+        given = _overrides({"t_end": t_end, "h": h, **settings}, overrides)
+        keys = _keys(params, "params")
+        values = None if measured is None else [float(x) for x in np.asarray(measured, dtype=float).ravel()]
+        with translated(RUN_RULES):
+            raw = self._native.gradient(given, objective, keys, values)
+        return Gradient(value=float(raw["value"]), gradient=dict(raw["gradient"]),
+                        times=np.asarray(raw["times"]), steps=int(raw["steps"]))
 
     def linearize(
         self,

@@ -335,6 +335,51 @@ impl NativeModel {
         crate::modes::solve(py, mechanism, &self.origin, count, about, method)
     }
 
+    /// The gradient of `objective` (`final:COLUMN`, `sum:COLUMN` or
+    /// `fit:COLUMN` with `measured`, one value per sample) over a run with
+    /// respect to the model-file keys `params`, by the discrete adjoint
+    /// (`mstar run --objective … --gradient …`), GIL released: `value`,
+    /// `gradient` (key → dΨ/dp), `times`, `steps`.
+    #[pyo3(signature = (overrides, objective, params, measured = None))]
+    fn gradient<'py>(
+        &self,
+        py: Python<'py>,
+        overrides: Vec<String>,
+        objective: &str,
+        params: Vec<String>,
+        measured: Option<Vec<f64>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let (fresh, sim) = self.settings(&overrides).map_err(|e| model_error(&e))?;
+        let mechanism = fresh.as_ref().unwrap_or(&self.mechanism);
+        if params.is_empty() {
+            return Err(ModelError::new_err(
+                "gradient: give at least one key in params",
+            ));
+        }
+        let parameters = self.parameters(&overrides, &params)?;
+        let sys = mstar::run::lookup(mechanism);
+        let objective = objective_of(sys, objective, measured)?;
+        let found = py.detach(|| {
+            let refs: Vec<&dyn Parameterized> =
+                parameters.iter().map(|p| p as &dyn Parameterized).collect();
+            mstar::sensitivity::gradient(sys, &sim, &refs, &objective, 1 << 30)
+        });
+        let g = found.map_err(|e| match e {
+            RunError::Settings(e) => ModelError::new_err(format!("{}: {e}", self.origin)),
+            e => IntegrationError::new_err(crate::message(&e)),
+        })?;
+        let d = PyDict::new(py);
+        d.set_item("value", g.objective)?;
+        let by_key = PyDict::new(py);
+        for (k, v) in g.names.iter().zip(&g.values) {
+            by_key.set_item(k, v)?;
+        }
+        d.set_item("gradient", by_key)?;
+        d.set_item("times", g.times.clone())?;
+        d.set_item("steps", g.steps)?;
+        Ok(d)
+    }
+
     /// The linear state-space model of the model file about the state
     /// `about` names (`mstar linearize`): its JSON text (the file `mstar
     /// linearize --out` writes) and the warnings on the way.
@@ -407,6 +452,45 @@ impl NativeModel {
             }
         };
         crate::equilibrium::model_text(&self.mechanism, &text, &self.origin, &u)
+    }
+}
+
+/// The objective `spec` (`final:COLUMN`, `sum:COLUMN`, `fit:COLUMN` with
+/// `measured`) of `sys`.
+///
+/// # Errors
+/// `ValueError` for a malformed objective or `measured` given or missing
+/// wrongly; `ModelError` for a column that is not a state column.
+fn objective_of(
+    sys: &dyn System,
+    spec: &str,
+    measured: Option<Vec<f64>>,
+) -> PyResult<mstar::newmark::Objective> {
+    use mstar::newmark::Objective;
+    let bad = || {
+        pyo3::exceptions::PyValueError::new_err(format!(
+            "objective: expected \"final:COLUMN\", \"sum:COLUMN\" or \"fit:COLUMN\" (with measured=), got {spec:?}"
+        ))
+    };
+    let (kind, name) = spec.split_once(':').ok_or_else(bad)?;
+    let name = name.trim();
+    let column = mstar::sensitivity::state_column(sys, name).ok_or_else(|| {
+        ModelError::new_err(format!(
+            "objective: '{name}' is not a state column of this model: give a u:, v:, a: or lambda: column (e.g. u:{})",
+            mstar::model::coord_names(sys).first().map_or("body.x", String::as_str)
+        ))
+    })?;
+    match (kind.trim(), measured) {
+        ("final", None) => Ok(Objective::Final(column)),
+        ("sum", None) => Ok(Objective::Sum(column)),
+        ("fit", Some(measured)) => Ok(Objective::Fit { column, measured }),
+        ("fit", None) => Err(pyo3::exceptions::PyValueError::new_err(
+            "objective: \"fit:…\" needs measured=, one value per sample of the run (its start and every step)",
+        )),
+        ("final" | "sum", Some(_)) => Err(pyo3::exceptions::PyValueError::new_err(
+            "measured: only a \"fit:…\" objective takes measured values",
+        )),
+        _ => Err(bad()),
     }
 }
 

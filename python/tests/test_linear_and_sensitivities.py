@@ -94,3 +94,58 @@ def test_sensitivity_errors():
         model.run(t_end=0.1, error_control="adaptive", sensitivities=["body.bob.mass"])
     with pytest.raises(mstar.ModelError, match="file"):
         mstar.load(PENDULUM.read_text()).run(t_end=0.1, sensitivities=["body.bob.mass"])
+
+
+DOUBLE = MODELS / "double-pendulum.toml"
+KEYS = ["body.lower.mass", "body.upper.mass"]
+
+
+def test_the_adjoint_gradient_equals_the_forward_sensitivities():
+    # One backward pass against one forward column per key: the same
+    # derivatives of the discrete solution. The model runs modified Newton,
+    # and the two runs refactor at other steps, so their states differ
+    # within the Newton tolerance (1e-10 here; 3e-12 measured) and the
+    # derivatives by as much relative to their size: 1e-8 allows it.
+    model = mstar.load(DOUBLE)
+    g = model.gradient("final:u:lower.x", KEYS, t_end=0.2)
+    assert isinstance(g, mstar.Gradient) and list(g.gradient) == KEYS and g.steps == 200
+    forward = model.run(t_end=0.2, sensitivities=KEYS)
+    assert abs(g.value - forward["lower.x"][-1]) <= 1e-10
+    for key in KEYS:
+        want = forward[f"d(u:lower.x)/d({key})"][-1]
+        assert abs(g.gradient[key] - want) <= 1e-8 * abs(want), key
+    total = model.gradient("sum:u:lower.x", KEYS, t_end=0.2)
+    for key in KEYS:
+        want = np.sum(forward[f"d(u:lower.x)/d({key})"])
+        assert abs(total.gradient[key] - want) <= 1e-8 * abs(want), key
+    # A fit to the run itself: Ψ and the gradient 2 Σ (y − d) ∂y/∂p vanish
+    # to the runs' difference (1e-10 per sample at most).
+    fit = model.gradient("fit:u:lower.x", KEYS, measured=forward["lower.x"], t_end=0.2)
+    assert fit.value <= 201 * 1e-20
+    for key in KEYS:
+        scale = np.sum(np.abs(forward[f"d(u:lower.x)/d({key})"]))
+        assert abs(fit.gradient[key]) <= 2e-10 * scale, key
+
+
+def test_the_gradient_equals_the_command_s(cli, tmp_path):
+    out = tmp_path / "g.json"
+    proc = subprocess.run([str(cli), "run", str(DOUBLE), "--t-end", "0.2", "--objective", "final:u:lower.x",
+                           "--gradient", *KEYS, "--gradient-out", str(out)], capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr
+    written = json.loads(out.read_text())
+    g = mstar.load(DOUBLE).gradient("final:u:lower.x", KEYS, t_end=0.2)
+    assert written["value"] == g.value and written["gradient"] == g.gradient
+
+
+def test_gradient_errors():
+    model = mstar.load(DOUBLE)
+    with pytest.raises(ValueError, match="objective"):
+        model.gradient("last:u:lower.x", KEYS, t_end=0.1)
+    with pytest.raises(ValueError, match="measured"):
+        model.gradient("fit:u:lower.x", KEYS, t_end=0.1)
+    with pytest.raises(mstar.ModelError, match="state column"):
+        model.gradient("final:u:nothing.x", KEYS, t_end=0.1)
+    with pytest.raises(mstar.ModelError, match="fixed steps"):
+        model.gradient("final:u:lower.x", KEYS, t_end=0.1, error_control="adaptive")
+    with pytest.raises(mstar.ModelError, match="params"):
+        model.gradient("final:u:lower.x", [], t_end=0.1)

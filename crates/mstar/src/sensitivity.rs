@@ -234,3 +234,68 @@ pub fn simulate_until<S: crate::run::ModelLookup + ?Sized>(
     }
     Ok(integ.stats())
 }
+
+/// The state column `name` of `sys` (`u:<coordinate>`, `v:…`, `a:…` or
+/// `lambda:<row>`, as [`crate::csv::header`] names them) as an adjoint
+/// objective's [`mstar_newmark::Column`]; `None` when `name` is no such
+/// column.
+#[must_use]
+pub fn state_column<S: System + ?Sized>(sys: &S, name: &str) -> Option<mstar_newmark::Column> {
+    use mstar_newmark::Column;
+    let (n, m) = (sys.n_coords(), sys.n_constraints());
+    let header = crate::csv::header(sys);
+    let k = header[1..1 + 3 * n + m].iter().position(|c| c == name)?;
+    Some(if k >= 3 * n {
+        Column::Multiplier(k - 3 * n)
+    } else if k >= 2 * n {
+        Column::Acceleration(k - 2 * n)
+    } else if k >= n {
+        Column::Velocity(k - n)
+    } else {
+        Column::Position(k)
+    })
+}
+
+/// The gradient of `objective` over a run of `sys` with the settings `sim`
+/// with respect to `params`, by the discrete adjoint
+/// ([`mstar_newmark::Integrator::gradient`]; `docs/analysis.md`, "Adjoint
+/// gradients"), the states stored up to `memory_budget` bytes and
+/// checkpointed beyond. What Python's `model.gradient(…)` runs.
+///
+/// # Errors
+/// [`RunError::Settings`](crate::run::RunError::Settings) for adaptive
+/// steps or redundant constraints solved on a subset of rows; the run's and
+/// the adjoint's errors.
+pub fn gradient<S: crate::run::ModelLookup + ?Sized>(
+    sys: &S,
+    sim: &mstar_file::Simulation,
+    params: &[&dyn Parameterized],
+    objective: &mstar_newmark::Objective,
+    memory_budget: usize,
+) -> Result<mstar_newmark::Gradient, crate::run::RunError> {
+    use crate::run::{RunError, SettingsError};
+    let refuse = |why: &str| {
+        RunError::Settings(SettingsError::Refused(
+            mstar_newmark::IntegrationError::Config(format!("the gradient {why}")),
+        ))
+    };
+    let (config, t_end) = crate::run::config(sim)?;
+    if config.error.mode == mstar_newmark::StepMode::Adaptive {
+        return Err(refuse(
+            "needs fixed steps: with adaptive steps the step sizes depend on the parameters; \
+             use fixed steps (error_control = \"warn\" or \"strict\") and choose h",
+        ));
+    }
+    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+    if crate::run::solve_rows(sys, &u0, sim.redundant.unwrap_or_default())?.is_some() {
+        return Err(refuse(
+            "does not handle redundant constraints solved on a subset of rows yet; remove the \
+             redundant joints",
+        ));
+    }
+    let mut integ = mstar_newmark::Integrator::new(sys, config, 0.0, &u0, &v0)?;
+    let memory = mstar_newmark::Memory::Budget {
+        bytes: memory_budget,
+    };
+    Ok(integ.gradient(t_end, params, objective, memory)?)
+}

@@ -70,33 +70,28 @@ fn parse_spec(spec: &str) -> Result<Spec> {
 
 /// The state column `name` (`u:…`, `v:…`, `a:…`, `lambda:…`) of `sys`.
 fn column<S: System + ?Sized>(sys: &S, name: &str) -> Result<Column> {
-    let (n, m) = (sys.n_coords(), sys.n_constraints());
+    if let Some(c) = mstar::sensitivity::state_column(sys, name) {
+        return Ok(c);
+    }
+    let n = sys.n_coords();
     let header = csv::header(sys);
-    let state = &header[1..1 + 3 * n + m];
-    let Some(k) = state.iter().position(|c| c == name) else {
-        let prefix = name.split(':').next().unwrap_or_default();
-        let like: Vec<&str> = state
-            .iter()
-            .filter(|c| c.starts_with(&format!("{prefix}:")))
-            .take(6)
-            .map(String::as_str)
-            .collect();
-        return Err(usage(format!(
-            "--objective: '{name}' is not a state column of this model; the objective reads \
-             u:, v:, a: or lambda: columns of the run's CSV header{}",
-            if like.is_empty() {
-                String::new()
-            } else {
-                format!(" (e.g. {})", like.join(", "))
-            }
-        )));
-    };
-    Ok(match k / n.max(1) {
-        _ if k >= 3 * n => Column::Multiplier(k - 3 * n),
-        0 => Column::Position(k),
-        1 => Column::Velocity(k - n),
-        _ => Column::Acceleration(k - 2 * n),
-    })
+    let state = &header[1..1 + 3 * n + sys.n_constraints()];
+    let prefix = name.split(':').next().unwrap_or_default();
+    let like: Vec<&str> = state
+        .iter()
+        .filter(|c| c.starts_with(&format!("{prefix}:")))
+        .take(6)
+        .map(String::as_str)
+        .collect();
+    Err(usage(format!(
+        "--objective: '{name}' is not a state column of this model; the objective reads \
+         u:, v:, a: or lambda: columns of the run's CSV header{}",
+        if like.is_empty() {
+            String::new()
+        } else {
+            format!(" (e.g. {})", like.join(", "))
+        }
+    )))
 }
 
 /// The times and the values of column `name` in the CSV file `path` (a
