@@ -8,7 +8,6 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use mstar::columns::{Columns, OutputColumns};
 use mstar::equilibrium::{Equilibrium, EquilibriumOptions};
-use mstar::file::MechanismFile;
 use mstar::run::ModelLookup;
 
 /// Arguments of `mstar equilibrium`.
@@ -50,16 +49,10 @@ pub fn equilibrium(args: &EquilibriumArgs) -> ExitCode {
         note!("error: {e}");
         return ExitCode::from(2);
     }
-    let file = match MechanismFile::load_with(&args.model, &args.set) {
+    let file = match super::load_model(&args.model, &args.set) {
         Ok(file) => file,
-        Err(e) => {
-            note!("error: {e}");
-            return ExitCode::from(2);
-        }
+        Err(code) => return code,
     };
-    for w in &file.warnings {
-        note!("warning: {w}");
-    }
     let sys = mstar::run::lookup(&file.mechanism);
     let u0 = sys.initial_position();
     let eq = match mstar::equilibrium::solve(sys, &u0, &EquilibriumOptions::default()) {

@@ -96,3 +96,24 @@ pub fn warn_accuracy<S: System + ?Sized>(
     }
     warning.is_some()
 }
+
+/// The model file `path` with the overrides `set`, its reader's warnings
+/// printed; an unreadable file is printed as an error and exit 2 (as the
+/// analysis commands answer it).
+pub fn load_model(
+    path: &std::path::Path,
+    set: &[String],
+) -> Result<mstar::file::MechanismFile, std::process::ExitCode> {
+    match mstar::file::MechanismFile::load_with(path, set) {
+        Ok(file) => {
+            for w in &file.warnings {
+                note!("warning: {w}");
+            }
+            Ok(file)
+        }
+        Err(e) => {
+            note!("error: {e}");
+            Err(std::process::ExitCode::from(2))
+        }
+    }
+}

@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result};
-use mstar::file::MechanismFile;
 use mstar::modes::{Method, ModeKind, Modes, ModesError, ModesOptions};
 use mstar::run::ModelLookup;
 
@@ -86,16 +85,10 @@ pub fn modes(args: &ModesArgs) -> ExitCode {
         note!("error: {e}");
         return ExitCode::from(2);
     }
-    let file = match MechanismFile::load_with(&args.model, &args.set) {
+    let file = match super::load_model(&args.model, &args.set) {
         Ok(file) => file,
-        Err(e) => {
-            note!("error: {e}");
-            return ExitCode::from(2);
-        }
+        Err(code) => return code,
     };
-    for w in &file.warnings {
-        note!("warning: {w}");
-    }
     let sys = mstar::run::lookup(&file.mechanism);
     let result = state(args.about, sys)
         .and_then(|(u, lambda)| solve(args, sys, &u, &lambda))
