@@ -447,11 +447,11 @@ fn bodies_that_start_turned_run_under_the_defaults_on_every_backend() {
     let report = String::from_utf8_lossy(&check.stdout);
     assert!(report.contains("degrees of freedom: 3"), "{report}");
     let reference = final_coordinates(&model, &[], &dir).unwrap_or_else(|e| panic!("{e}"));
-    // The defaults: schur-lu, with full Newton (the automatic variant).
+    // The defaults: schur-lu, with Newton once per step (the automatic variant).
     let run = mstar(&["run", model.to_str().expect("UTF-8"), "--t-end", "0.01"]);
     let summary = String::from_utf8_lossy(&run.stdout);
     assert!(
-        summary.contains("KKT solver: schur-lu; Newton: full"),
+        summary.contains("KKT solver: schur-lu; Newton: once per step"),
         "{summary}"
     );
     let singular = "simulation.rotational_mass=singular";

@@ -25,7 +25,10 @@ pub enum NewtonChoice {
     Modified,
     /// `"full"`: refactor at every iteration.
     Full,
-    /// `"auto"` (the default): full with the Schur backends, else modified.
+    /// `"per-step"`: refactor at each step's first iteration, reuse within
+    /// the step while it contracts.
+    PerStep,
+    /// `"auto"` (the default): once per step with `schur-lu`, else modified.
     Auto,
 }
 
@@ -235,9 +238,10 @@ fn simulation(mut f: Fields<'_>, spatial: bool) -> Result<Simulation, FileError>
         tol: f.optional("tol", number_in(|x| x > 0.0 && x < 1.0, "in (0, 1)"))?,
         max_iterations: f.optional("max_iterations", count(1))?,
         newton: f
-            .optional("newton", choice(&["auto", "modified", "full"]))?
+            .optional("newton", choice(&["auto", "modified", "full", "per-step"]))?
             .map(|c| match c {
                 "full" => NewtonChoice::Full,
+                "per-step" => NewtonChoice::PerStep,
                 "modified" => NewtonChoice::Modified,
                 _ => NewtonChoice::Auto,
             }),

@@ -81,6 +81,7 @@ pub fn config(sim: &Simulation) -> Result<(Config, f64), SettingsError> {
     c.newton = match sim.newton {
         Some(NewtonChoice::Full) => Newton::Full,
         Some(NewtonChoice::Modified) => Newton::MODIFIED,
+        Some(NewtonChoice::PerStep) => Newton::PER_STEP,
         _ => Newton::Automatic,
     };
     if let Some(name) = &sim.kkt {

@@ -136,7 +136,7 @@ fn difference(a: &Run, b: &Run) -> f64 {
 /// Every backend and Newton variant against the default run.
 fn every_backend_agrees(case: &Case, scheme: Scheme, default: &Run) {
     for registration in backends() {
-        for newton in [Newton::Full, Newton::MODIFIED] {
+        for newton in [Newton::Full, Newton::MODIFIED, Newton::PER_STEP] {
             let mut c = config(scheme, case.h);
             c.newton = newton;
             c.kkt = KktOptions {

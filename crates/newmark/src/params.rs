@@ -226,8 +226,20 @@ pub enum Newton {
         /// Largest accepted contraction rate before a refactorization (in (0, 1)).
         max_rate: f64,
     },
+    /// A fresh Jacobian at the first iteration of every step, kept by the
+    /// step's later iterations while each contracts by `max_rate` or better
+    /// ([`Newton::PER_STEP`]: 0.5). A step that converges in one iteration
+    /// costs what full Newton's does; a second iteration costs a residual and
+    /// a solve instead of a factorization too (the spatial chain at 10⁵ bodies
+    /// takes two a step: docs/performance.md, "The second Newton iteration at
+    /// 10⁵ bodies").
+    PerStep {
+        /// Largest accepted contraction rate before a refactorization within
+        /// the step (in (0, 1)).
+        max_rate: f64,
+    },
     /// Chosen with the KKT backend when the integrator is made
-    /// ([`Newton::resolve`]): full Newton with `schur-lu` (spatial bodies'
+    /// ([`Newton::resolve`]): once per step with `schur-lu` (spatial bodies'
     /// exact, unsymmetric tangent: one iteration a step, 1.5–1.8× faster
     /// than modified Newton on the spatial chain), modified Newton with the
     /// others (on the N-four-bar with `schur` at 10⁴ bodies modified Newton
@@ -240,12 +252,15 @@ impl Newton {
     /// The modified variant with its usual rate bound, 0.5.
     pub const MODIFIED: Self = Self::Modified { max_rate: 0.5 };
 
+    /// The once-per-step variant with the same rate bound, 0.5.
+    pub const PER_STEP: Self = Self::PerStep { max_rate: 0.5 };
+
     /// The variant to use with `backend`: [`Automatic`](Self::Automatic)
     /// resolved, the others as they are.
     #[must_use]
     pub fn resolve(self, backend: mstar_kkt::Backend) -> Self {
         match self {
-            Self::Automatic if backend == mstar_kkt::Backend::SCHUR_LU => Self::Full,
+            Self::Automatic if backend == mstar_kkt::Backend::SCHUR_LU => Self::PER_STEP,
             Self::Automatic => Self::MODIFIED,
             chosen => chosen,
         }
@@ -261,7 +276,12 @@ impl std::fmt::Display for Newton {
                 "modified (the Jacobian kept while each iteration contracts by {} or better)",
                 crate::Short(*max_rate)
             ),
-            Self::Automatic => f.write_str("automatic (full with schur-lu, else modified)"),
+            Self::PerStep { max_rate } => write!(
+                f,
+                "once per step (a fresh Jacobian at each step's first iteration, kept while the step's iterations contract by {} or better)",
+                crate::Short(*max_rate)
+            ),
+            Self::Automatic => f.write_str("automatic (once per step with schur-lu, else modified)"),
         }
     }
 }

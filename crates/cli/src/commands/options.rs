@@ -22,6 +22,9 @@ pub enum NewtonArg {
     Full,
     /// Reuse the factorization while the iteration contracts fast.
     Modified,
+    /// A fresh factorization at each step's first iteration, reused by the
+    /// step's later ones while they contract fast (the default of `mstar chain`).
+    PerStep,
 }
 
 /// The `--kkt` values: `auto` and every registered backend, with its summary.
@@ -145,6 +148,7 @@ pub fn apply_integrator(args: &IntegratorArgs, c: &mut Config, paper_preset: boo
         c.newton = match n {
             NewtonArg::Full => Newton::Full,
             NewtonArg::Modified => Newton::MODIFIED,
+            NewtonArg::PerStep => Newton::PER_STEP,
         };
     }
     if let Some(name) = &args.kkt {

@@ -173,6 +173,9 @@ fn describe(run: &PendulumRun) -> String {
     let newton = match c.newton {
         Newton::Full => "full Newton".to_string(),
         Newton::Modified { max_rate } => format!("modified Newton (rate ≤ {})", Short(max_rate)),
+        Newton::PerStep { max_rate } => {
+            format!("Newton once per step (rate ≤ {})", Short(max_rate))
+        }
         Newton::Automatic => "automatic Newton".to_string(),
     };
     format!(

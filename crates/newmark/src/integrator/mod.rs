@@ -587,6 +587,8 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         // and regrowing would step straight back into it (a whip).
         let easy = match self.config.newton {
             Newton::Full => 2,
+            // A second iteration with the step's Jacobian may take a third.
+            Newton::PerStep { .. } => 3,
             Newton::Modified { .. } | Newton::Automatic => (self.config.max_iterations / 4).max(3),
         };
         if iterations <= easy {

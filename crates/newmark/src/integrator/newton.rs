@@ -99,7 +99,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 return Err(norms.not_converged(it));
             }
             previous_constraint = norms.constraint;
-            let refactor = self.refactors(h, force_refactor || stalled);
+            let refactor = self.refactors(h, force_refactor || stalled || (it == 0 && self.per_step()));
             fresh = refactor;
             if refactor {
                 self.refactor(&k, h)?;
@@ -128,8 +128,15 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         match self.config.newton {
             Newton::Full => true,
             // (Automatic is resolved when the integrator is made.)
-            Newton::Modified { .. } | Newton::Automatic => asked || self.factored_h != Some(h),
+            Newton::Modified { .. } | Newton::PerStep { .. } | Newton::Automatic => {
+                asked || self.factored_h != Some(h)
+            }
         }
+    }
+
+    /// Whether every step starts with a fresh Jacobian ([`Newton::PerStep`]).
+    fn per_step(&self) -> bool {
+        matches!(self.config.newton, Newton::PerStep { .. })
     }
 
     /// The corrector's coefficients for a step of size `h`.
@@ -155,7 +162,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             gamma_p: coefficients.c_v,
             a_p: 1.0 / (self.p.beta * h * h),
             max_rate: match self.config.newton {
-                Newton::Modified { max_rate } => max_rate,
+                Newton::Modified { max_rate } | Newton::PerStep { max_rate } => max_rate,
                 Newton::Automatic => 0.5,
                 Newton::Full => f64::INFINITY,
             },
