@@ -687,3 +687,48 @@ fn dot_state(bar: &State, s: &State) -> f64 {
         + dot(&bar.a_alpha, &s.a_alpha)
         + dot(&bar.lambda, &s.lambda)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::transpose_pattern;
+    use mstar_kkt::Csc;
+
+    /// `A`'s values carried into `Aᵀ`'s pattern by the map, as a dense matrix.
+    fn transposed_dense(a: &Csc, n: usize) -> Vec<Vec<f64>> {
+        let (mut a_t, map) = transpose_pattern(a, n);
+        for (&k, &v) in map.iter().zip(&a.values) {
+            a_t.values[k] = v;
+        }
+        a_t.to_dense()
+    }
+
+    /// A structurally unsymmetric `S` (entry (0, 1) without (1, 0)), `B`
+    /// and `Bᵀ` stored: the whole matrix transposed (written out by hand).
+    #[test]
+    fn whole_kkt_matrix_is_transposed() {
+        // [[1, 2, 4], [0, 3, 5], [4, 5, 0]], column by column.
+        let a = Csc {
+            n: 3,
+            col_ptr: vec![0, 2, 5, 7],
+            row_idx: vec![0, 2, 0, 1, 2, 0, 1],
+            values: vec![1.0, 4.0, 2.0, 3.0, 5.0, 4.0, 5.0],
+        };
+        let want = [[1.0, 0.0, 4.0], [2.0, 3.0, 5.0], [4.0, 5.0, 0.0]];
+        assert_eq!(transposed_dense(&a, 2), want);
+    }
+
+    /// Without the `Bᵀ` block (the Schur backends' structure, read as
+    /// `[S Bᵀ; B 0]`): `S` transposed, `B` where it was.
+    #[test]
+    fn structure_without_b_transpose_keeps_b_below() {
+        // [[1, 2, 0], [0, 3, 0], [4, 5, 0]].
+        let a = Csc {
+            n: 3,
+            col_ptr: vec![0, 2, 5, 5],
+            row_idx: vec![0, 2, 0, 1, 2],
+            values: vec![1.0, 4.0, 2.0, 3.0, 5.0],
+        };
+        let want = [[1.0, 0.0, 0.0], [2.0, 3.0, 0.0], [4.0, 5.0, 0.0]];
+        assert_eq!(transposed_dense(&a, 2), want);
+    }
+}
