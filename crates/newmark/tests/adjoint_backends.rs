@@ -2,16 +2,17 @@
 //! (`Integrator::gradient` factors `Aᵀ` with the forward run's backend):
 //! against the forward sensitivities' `Σ w_nᵀ S_n` made with the same
 //! backend, on a planar slider-crank and a spatial chain of bodies in Euler
-//! parameters, each with a symmetric and an unsymmetric iteration matrix.
+//! parameters, each with a symmetric and an unsymmetric iteration matrix;
+//! and the fallback to the sparse LU when the backend refuses `Aᵀ`'s pattern.
 
-use mstar_kkt::{Backend, KktOptions};
-use mstar_model::System;
+use mstar_kkt::{Backend, Csc, KktBackend, KktError, KktOptions, Registration, Structure};
 use mstar_model::planar::{
     At, PlanarBuilder, PointMass, RigidBody, RotationalSpringDamper, SpringDamper, TimeFunction,
 };
 use mstar_model::spatial::{
     Attach, JointSpec, JointType, SpatialBody, SpatialBuilder, SpatialInertia, SpatialSystem,
 };
+use mstar_model::{Pattern, System};
 use mstar_newmark::{
     Column, Config, Integrator, Memory, Newton, Objective, Parameterized, Scheme, Variant,
 };
@@ -376,6 +377,137 @@ fn spatial_symmetrized_adjoint_matches_forward_with_every_backend() {
             &EVERY_BACKEND,
             &objective,
             0.3,
+        );
+    }
+}
+
+/// A point mass `m` (`p[0]`) in the plane on a rod of length 1 to the
+/// origin, `Φ = (x² + y² − 1)/2`, under gravity and a force `k y` along x
+/// (`k = p[1]`): `∂g/∂u` has the entry `(x, y)` and not `(y, x)`, and the
+/// Hessian `μ I` is diagonal, so `S` (without `BᵀB`) is structurally
+/// unsymmetric and `Aᵀ`'s pattern is not `A`'s.
+struct CrossForced {
+    m: f64,
+    k: f64,
+}
+
+impl System for CrossForced {
+    fn n_coords(&self) -> usize {
+        2
+    }
+    fn n_constraints(&self) -> usize {
+        1
+    }
+    fn mass_pattern(&self) -> Pattern {
+        Pattern::diagonal(2)
+    }
+    fn mass_into(&self, _t: f64, _u: &[f64], mass: &mut [f64]) {
+        mass.fill(self.m);
+    }
+    fn mass_is_constant(&self) -> bool {
+        true
+    }
+    fn forces_into(&self, _t: f64, u: &[f64], _v: &[f64], g: &mut [f64]) {
+        g[0] = self.k * u[1];
+        g[1] = -9.81 * self.m;
+    }
+    fn forces_du_pattern(&self) -> Pattern {
+        Pattern::from_entries(2, 2, vec![(0, 1)])
+    }
+    fn forces_du_into(&self, _t: f64, _u: &[f64], _v: &[f64], g_u: &mut [f64]) {
+        g_u[0] = self.k;
+    }
+    fn forces_dv_pattern(&self) -> Pattern {
+        Pattern::new(2, 2)
+    }
+    fn phi_into(&self, _t: f64, u: &[f64], phi: &mut [f64]) {
+        phi[0] = 0.5 * (u[0] * u[0] + u[1] * u[1] - 1.0);
+    }
+    fn b_pattern(&self) -> Pattern {
+        Pattern::from_entries(1, 2, vec![(0, 0), (0, 1)])
+    }
+    fn b_into(&self, _t: f64, u: &[f64], b: &mut [f64]) {
+        b.copy_from_slice(u);
+    }
+    fn hessian_pattern(&self) -> Pattern {
+        Pattern::diagonal(2)
+    }
+    fn hessian_into(&self, _t: f64, _u: &[f64], mu: &[f64], out: &mut [f64]) {
+        out.fill(mu[0]);
+    }
+}
+
+/// [`CrossForced`] released at rest 0.6 rad from the vertical.
+fn cross_forced(p: &[f64]) -> Model {
+    let (s, c) = 0.6_f64.sin_cos();
+    Model {
+        sys: Box::new(CrossForced { m: p[0], k: p[1] }),
+        u0: vec![s, -c],
+        v0: vec![0.0; 2],
+    }
+}
+
+/// A backend that factors the whole matrix `[S Bᵀ; B 0]` (without `BᵀB`)
+/// densely and refuses a pattern with the entry (row 1, column 0): it takes
+/// [`CrossForced`]'s `A` and not its `Aᵀ`.
+const REFUSES_TRANSPOSE: Backend = Backend::new("test-refuses-transpose");
+
+fn refuses_transpose(a: &Csc, options: &KktOptions) -> Result<Box<dyn KktBackend>, KktError> {
+    if a.position(1, 0).is_some() {
+        return Err(KktError::Structure("the entry (1, 0)".into()));
+    }
+    let dense = Backend::DENSE
+        .registration()
+        .ok_or_else(|| KktError::Structure("no dense backend".into()))?;
+    (dense.analyse)(a, options)
+}
+
+#[test]
+fn a_backend_that_refuses_the_transposed_pattern_falls_back_to_sparse_lu() {
+    mstar_kkt::register(Registration {
+        backend: REFUSES_TRANSPOSE,
+        summary: "dense LU that refuses the entry (1, 0) (a test)",
+        structure: Structure {
+            augmented: false,
+            transpose: true,
+        },
+        symmetric: false,
+        analyse: refuses_transpose,
+        automatic: None,
+        needs_n_primal: false,
+    })
+    .expect("the test backend registers");
+    let nominal = [1.5, 2.0];
+    let ps: Vec<Param> = (0..2)
+        .map(|k| Param {
+            make: cross_forced,
+            nominal: nominal.to_vec(),
+            k,
+        })
+        .collect();
+    let refs: Vec<&dyn Parameterized> = ps.iter().map(|p| p as &dyn Parameterized).collect();
+    let model = cross_forced(&nominal);
+    let config = config(REFUSES_TRANSPOSE);
+    let objective = Objective::Sum(Column::Position(0));
+    let sys = model.sys.as_ref();
+    let mut integ = Integrator::new(sys, config.clone(), 0.0, &model.u0, &model.v0)
+        .expect("the integrator starts");
+    let g = integ
+        .gradient(0.5, &refs, &objective, Memory::Store)
+        .expect("the gradient is computed");
+    assert_eq!(g.backend, Backend::SPARSE_LU);
+    let (f, forward) = forward_gradient(&model, &config, 0.5, &refs, &objective, g.steps);
+    assert_eq!(forward, REFUSES_TRANSPOSE);
+    // As in `check_backends`: N · 1e-12 relative to the largest entry.
+    let scale = f
+        .iter()
+        .chain(&g.values)
+        .fold(0.0_f64, |a, b| a.max(b.abs()));
+    let tolerance = g.steps as f64 * 1e-12 * scale;
+    for (k, (a, f)) in g.values.iter().zip(&f).enumerate() {
+        assert!(
+            (a - f).abs() <= tolerance,
+            "parameter {k}: adjoint {a} against forward {f} (tolerance {tolerance:.1e})"
         );
     }
 }
