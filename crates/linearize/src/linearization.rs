@@ -430,11 +430,7 @@ impl Linearization {
     /// where they are stored `Bᵀλ` and `M ü`.
     fn evaluate<S: System + ?Sized>(&mut self, sys: &S, x: &StateRef<'_>) {
         let StateRef { t, u, v, a, lambda } = *x;
-        if !(self.mass_ready && sys.mass_is_constant()) {
-            sys.mass_into(t, u, &mut self.mass);
-            self.mass_ready = true;
-        }
-        sys.phi_b_into(t, u, &mut self.phi, &mut self.b, &mut self.work);
+        self.eval_matrices(sys, t, u);
         if !(self.forces_ready && sys.forces_are_constant()) {
             sys.forces_into(t, u, v, &mut self.g);
             self.forces_ready = true;
@@ -478,9 +474,25 @@ impl Linearization {
         self.r_max = r_max.value();
     }
 
+    /// Evaluates `M` (once when constant) and `B` (with `Φ`, which
+    /// [`phi`](Self::phi) then holds) at `(t, u)`, without the forces and
+    /// the residual: what [`assemble`](Self::assemble) and products with
+    /// `B` need besides [`eval_jacobians`](Self::eval_jacobians), e.g. to
+    /// refactor the iteration matrix at a state that is already converged
+    /// (the backward pass of `mstar_newmark::Integrator::gradient`).
+    /// [`r`](Self::r), [`g`](Self::g) and the norms keep their last values.
+    pub fn eval_matrices<S: System + ?Sized>(&mut self, sys: &S, t: f64, u: &[f64]) {
+        if !(self.mass_ready && sys.mass_is_constant()) {
+            sys.mass_into(t, u, &mut self.mass);
+            self.mass_ready = true;
+        }
+        sys.phi_b_into(t, u, &mut self.phi, &mut self.b, &mut self.work);
+    }
+
     /// Evaluates the parts of `K_T` and `C_T` (eqs. 6-7): the constraint Hessian
     /// contracted with `λ`, `∂g/∂u`, `∂g/∂u̇` and `∂(M ü)/∂u`. `M` and `B` come
-    /// from the last [`eval_residual`](Self::eval_residual).
+    /// from the last [`eval_residual`](Self::eval_residual) (or
+    /// [`eval_matrices`](Self::eval_matrices)).
     pub fn eval_jacobians<S: System + ?Sized>(&mut self, sys: &S, x: &StateRef<'_>) {
         let StateRef { t, u, v, a, lambda } = *x;
         // (An empty pattern needs no call: the defaults of a constant M or

@@ -25,9 +25,15 @@
 //! `Jᵀ` is solved with a factorization of its own: the backward pass
 //! re-evaluates the Jacobians at each stored state (the forward pass's
 //! factorizations are not kept per step), so forming `Jᵀ` costs what
-//! refactoring `J` would.
+//! refactoring `J` would. The factored matrix `A` (scaled, possibly
+//! augmented `J`) is `[S' Bᵀ; B D]` and `Aᵀ = [S'ᵀ Bᵀ; B D]`: the same
+//! blocks with `S'` transposed. It is assembled in the structure the forward
+//! run's KKT backend reads and factored by that backend (block by block with
+//! `schur-lu`), with the sparse LU of the augmented matrix as the fallback
+//! when the backend refuses `Aᵀ`'s pattern (an `S` pattern that is not
+//! structurally symmetric may break its block structure).
 
-use mstar_kkt::{Backend, Csc, KktOptions, KktSolver, Structure};
+use mstar_kkt::{Backend, Csc, KktError, KktOptions, KktSolver, Structure};
 use mstar_linearize::Linearization;
 use mstar_model::System;
 
@@ -129,6 +135,10 @@ pub struct Gradient {
     pub checkpoint_every: Option<usize>,
     /// Steps recomputed in the backward pass.
     pub recomputed_steps: usize,
+    /// The KKT backend that factored `Aᵀ` in the backward pass: the forward
+    /// run's, or [`Backend::SPARSE_LU`] when that one refused `Aᵀ`'s
+    /// pattern.
+    pub backend: Backend,
 }
 
 /// A converged state, its time and the size of the step that reached it
@@ -162,7 +172,7 @@ struct Snapshot {
 }
 
 /// The transposed KKT matrix `Aᵀ` of the adjoint, its factorization and the
-/// linearization it is assembled from.
+/// linearization it is assembled from (in the structure its backend reads).
 struct Transposed {
     lin: Linearization,
     /// `Aᵀ`'s pattern and values.
@@ -181,13 +191,18 @@ impl Transposed {
     }
 }
 
-/// `Aᵀ`'s pattern, and where each of `A`'s values goes in it.
-fn transpose_pattern(a: &Csc) -> (Csc, Vec<usize>) {
+/// `Aᵀ`'s pattern for `A` stored as a KKT backend reads it, `n` primal
+/// unknowns first, and where each of `A`'s values goes in it. `A = [S' Bᵀ;
+/// B D]` has `Aᵀ = [S'ᵀ Bᵀ; B D]`: the entries of the primal block `S'` move
+/// to their transposed places, those of `B`, of `Bᵀ` (when stored) and of
+/// `D` stay where they are. So a structure without the `Bᵀ` block keeps its
+/// meaning, and a structurally symmetric `S'` keeps its pattern.
+fn transpose_pattern(a: &Csc, n: usize) -> (Csc, Vec<usize>) {
     let mut pairs = Vec::with_capacity(a.nnz());
     for j in 0..a.n {
         for &i in a.column(j) {
-            // Entry (i, j) of A is entry (j, i) of Aᵀ: column i, row j.
-            pairs.push((i, j));
+            // (column, row) in Aᵀ of entry (i, j) of A.
+            pairs.push(if i < n && j < n { (i, j) } else { (j, i) });
         }
     }
     let a_t = Csc::from_pairs(a.n, &pairs);
@@ -269,6 +284,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             .sum();
         let end = self.snapshot();
         let mut transposed = self.transposed()?;
+        let backend = transposed.solver.backend();
         let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
         let mut back = Backward {
             params: &mut sens.params,
@@ -300,6 +316,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             steps,
             checkpoint_every: every,
             recomputed_steps: recomputed,
+            backend,
         })
     }
 
@@ -456,9 +473,11 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     /// `μ = J⁻ᵀ x̄` at the state `rec`, with `x̄` formed from `s̄` (module
     /// documentation). The factored matrix is `A = D₁ L J D₂` with
     /// `D₁ = diag(scale I, I)`, `D₂ = diag(I, I/scale)` and `L = [I c_bb Bᵀ;
-    /// 0 I]` (the augmentation), so `μ = Lᵀ D₁ A⁻ᵀ D₂ x̄`: with
-    /// `z = A⁻ᵀ [x̄_u; x̄_λ/scale]`, `μ_u = scale z_u` and
-    /// `μ_λ = z_λ + c_bb B μ_u`.
+    /// 0 I]` (the augmentation; `L = I` for a structure without it), so
+    /// `μ = Lᵀ D₁ A⁻ᵀ D₂ x̄`: with `z = A⁻ᵀ [x̄_u; x̄_λ/scale]`,
+    /// `μ_u = scale z_u` and `μ_λ = z_λ + c_bb B μ_u`. Only `M`, `B` and the
+    /// Jacobians are evaluated at the state: the residual and the forces are
+    /// not needed.
     fn adjoint_solve(
         &self,
         transposed: &mut Transposed,
@@ -469,7 +488,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         let c = self.p.coefficients(h, self.config.scaling);
         let a_p = 1.0 / (self.p.beta * h * h);
         let x = rec.state.at(rec.t);
-        transposed.lin.eval_residual(self.sys, &x);
+        transposed.lin.eval_matrices(self.sys, rec.t, &rec.state.u);
         transposed.lin.eval_jacobians(self.sys, &x);
         transposed.lin.assemble(&c);
         transposed.fill();
@@ -489,11 +508,13 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         for z in &mut z[..n] {
             *z *= c.scale;
         }
-        let mut b_mu = vec![0.0; self.sys.n_constraints()];
         let lin = &transposed.lin;
-        lin.b_pattern().mul_add(lin.b(), &z[..n], &mut b_mu);
-        for (z, b) in z[n..].iter_mut().zip(&b_mu) {
-            *z += c.c_bb * b;
+        if lin.augmented() {
+            let mut b_mu = vec![0.0; self.sys.n_constraints()];
+            lin.b_pattern().mul_add(lin.b(), &z[..n], &mut b_mu);
+            for (z, b) in z[n..].iter_mut().zip(&b_mu) {
+                *z += c.c_bb * b;
+            }
         }
         if let Some(i) = z.iter().position(|x| !x.is_finite()) {
             return Err(IntegrationError::NonFinite {
@@ -544,29 +565,53 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         }
     }
 
-    /// The linearization (augmented: a singular `M` does not stop it) and
-    /// the sparse LU of the transposed KKT matrix.
+    /// The transposed KKT matrix in the structure of the forward run's
+    /// backend, analysed by that backend; when it refuses the pattern, the
+    /// augmented matrix (a singular `M` does not stop it) with the sparse LU.
     fn transposed(&self) -> Result<Transposed, IntegrationError> {
-        let lin = Linearization::with_structure(self.sys, Structure::AUGMENTED)?;
-        let (a_t, map) = transpose_pattern(lin.kkt());
+        let forward = self.solver.backend();
+        match self.transposed_with(self.lin.structure(), forward)? {
+            Ok(t) => Ok(t),
+            Err(KktError::Structure(_)) if forward != Backend::SPARSE_LU => self
+                .transposed_with(Structure::AUGMENTED, Backend::SPARSE_LU)?
+                .map_err(|source| self.transposed_error(source)),
+            Err(source) => Err(self.transposed_error(source)),
+        }
+    }
+
+    /// [`Transposed`] in `structure`, analysed by `backend` (the inner error
+    /// is the analysis's, for [`transposed`](Self::transposed) to fall back).
+    fn transposed_with(
+        &self,
+        structure: Structure,
+        backend: Backend,
+    ) -> Result<Result<Transposed, KktError>, IntegrationError> {
+        let n = self.sys.n_coords();
+        let lin = Linearization::with_structure(self.sys, structure)?;
+        let (a_t, map) = transpose_pattern(lin.kkt(), n);
+        // The forward run's options (as `linear_algebra` in `mod.rs` sets
+        // them), with its backend resolved.
         let options = KktOptions {
-            backend: Backend::SPARSE_LU,
-            ..KktOptions::default()
+            backend,
+            n_primal: self.config.kkt.n_primal.or(Some(n)),
+            ..self.config.kkt
         };
-        let solver = KktSolver::new(&a_t, &options).map_err(|source| {
-            self.kkt_error(
-                "analysing the transposed KKT pattern",
-                self.t,
-                self.h,
-                source,
-            )
-        })?;
-        Ok(Transposed {
+        Ok(KktSolver::new(&a_t, &options).map(|solver| Transposed {
             lin,
             a_t,
             map,
             solver,
-        })
+        }))
+    }
+
+    /// A failed analysis of `Aᵀ`'s pattern.
+    fn transposed_error(&self, source: KktError) -> IntegrationError {
+        self.kkt_error(
+            "analysing the transposed KKT pattern",
+            self.t,
+            self.h,
+            source,
+        )
     }
 
     /// The state to repeat the steps from; the next step refactors (so the
@@ -641,4 +686,49 @@ fn dot_state(bar: &State, s: &State) -> f64 {
         + dot(&bar.a, &s.a)
         + dot(&bar.a_alpha, &s.a_alpha)
         + dot(&bar.lambda, &s.lambda)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::transpose_pattern;
+    use mstar_kkt::Csc;
+
+    /// `A`'s values carried into `Aᵀ`'s pattern by the map, as a dense matrix.
+    fn transposed_dense(a: &Csc, n: usize) -> Vec<Vec<f64>> {
+        let (mut a_t, map) = transpose_pattern(a, n);
+        for (&k, &v) in map.iter().zip(&a.values) {
+            a_t.values[k] = v;
+        }
+        a_t.to_dense()
+    }
+
+    /// A structurally unsymmetric `S` (entry (0, 1) without (1, 0)), `B`
+    /// and `Bᵀ` stored: the whole matrix transposed (written out by hand).
+    #[test]
+    fn whole_kkt_matrix_is_transposed() {
+        // [[1, 2, 4], [0, 3, 5], [4, 5, 0]], column by column.
+        let a = Csc {
+            n: 3,
+            col_ptr: vec![0, 2, 5, 7],
+            row_idx: vec![0, 2, 0, 1, 2, 0, 1],
+            values: vec![1.0, 4.0, 2.0, 3.0, 5.0, 4.0, 5.0],
+        };
+        let want = [[1.0, 0.0, 4.0], [2.0, 3.0, 5.0], [4.0, 5.0, 0.0]];
+        assert_eq!(transposed_dense(&a, 2), want);
+    }
+
+    /// Without the `Bᵀ` block (the Schur backends' structure, read as
+    /// `[S Bᵀ; B 0]`): `S` transposed, `B` where it was.
+    #[test]
+    fn structure_without_b_transpose_keeps_b_below() {
+        // [[1, 2, 0], [0, 3, 0], [4, 5, 0]].
+        let a = Csc {
+            n: 3,
+            col_ptr: vec![0, 2, 5, 5],
+            row_idx: vec![0, 2, 0, 1, 2],
+            values: vec![1.0, 4.0, 2.0, 3.0, 5.0],
+        };
+        let want = [[1.0, 0.0, 0.0], [2.0, 3.0, 0.0], [4.0, 5.0, 0.0]];
+        assert_eq!(transposed_dense(&a, 2), want);
+    }
 }
