@@ -15,7 +15,7 @@ use mstar::newmark::Short;
 use mstar::pendulum::PendulumRun;
 use mstar::redundant::Expanded;
 use mstar::run::ModelLookup;
-use mstar::sensitivity::{Chained, FileParameter, SensitivityColumns};
+use mstar::sensitivity::{Chained, FileParameter, FileParameters, SensitivityColumns};
 use mstar::{IntegrationError, Integrator, Observer, SampleRef, System, csv};
 
 use crate::output::Stop;
@@ -560,9 +560,11 @@ fn sensitivity_parameters(
     }
     let set = overrides(args);
     let mut params = Vec::with_capacity(args.sensitivity.len());
+    let mut file = FileParameters::new(path, &set);
     for key in &args.sensitivity {
-        let param =
-            FileParameter::new(path, &set, key).with_context(|| format!("--sensitivity {key}"))?;
+        let param = file
+            .parameter(key)
+            .with_context(|| format!("--sensitivity {key}"))?;
         if params
             .iter()
             .any(|p: &FileParameter| p.name() == param.name())
