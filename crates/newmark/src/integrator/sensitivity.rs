@@ -512,6 +512,19 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         out
     }
 
+    /// The partials `[∂r/∂p_k; −∂Φ/∂p_k]` of parameter `k` of `sens` at the
+    /// current state (what [`step_with`](Self::step_with) forms at each
+    /// converged state): central differences of the residual and the
+    /// constraints of the parameter's models at `p ± h_p`, the small model
+    /// scattered into the whole model's rows when
+    /// [`Sensitivities::local`] says so.
+    ///
+    /// # Panics
+    /// If `k` is not below `sens.len()`.
+    pub fn partials(&self, sens: &mut Sensitivities, k: usize) -> Vec<f64> {
+        self.partial_derivatives(&mut sens.params[k])
+    }
+
     /// `[r_p; −Φ_p]` at the converged state: central differences of the
     /// residual and the constraints of the models at `p ± h_p` (the whole
     /// model's or the parameter's small one, scattered into the whole
