@@ -284,3 +284,152 @@ fn touched(elements: &[Element<'_>], own: usize) -> Vec<bool> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A chain `ground – a – b – c` on revolute joints, a spring from `c`
+    /// to the ground, a driver on `a`, a sensor on `b`.
+    const TEXT: &str = r#"
+format = "mstar.planar/1"
+[[body]]
+name = "a"
+mass = 1.0
+inertia = 0.1
+pose = [0.5, 0.0, 0.0]
+[[body]]
+name = "b"
+mass = 1.0
+inertia = 0.1
+pose = [1.5, 0.0, 0.0]
+[[body]]
+name = "c"
+mass = 1.0
+inertia = 0.1
+pose = [2.5, 0.0, 0.0]
+[[joint]]
+name = "j1"
+type = "revolute"
+bodies = ["ground", "a"]
+at = [0.0, 0.0]
+[[joint]]
+name = "j2"
+type = "revolute"
+bodies = ["a", "b"]
+at = [1.0, 0.0]
+[[joint]]
+name = "j3"
+type = "revolute"
+bodies = ["b", "c"]
+at = [2.0, 0.0]
+[[driver]]
+name = "motor"
+body = "a"
+coordinate = "theta"
+function = { linear = { value = 0.0, rate = 1.0 } }
+[[force]]
+name = "spring"
+type = "spring-damper"
+bodies = ["c", "ground"]
+points = [[0.5, 0.0], [3.0, 1.0]]
+stiffness = 10.0
+[[sensor]]
+name = "where"
+type = "position"
+body = "b"
+[output]
+columns = ["t", "sensor:*"]
+"#;
+
+    /// The names of the elements `key`'s small document keeps, by array.
+    fn kept(key: &str) -> Option<Vec<String>> {
+        let root = crate::node::parse_toml(TEXT, "t.toml").expect("the document parses");
+        let small = restrict(&root, key)?;
+        let Value::Table(entries) = &small.value else {
+            return None;
+        };
+        let mut names = Vec::new();
+        for e in entries {
+            if let Value::List(items) = &e.node.value {
+                for item in items {
+                    let Value::Table(fields) = &item.value else {
+                        return None;
+                    };
+                    let name = fields.iter().find(|f| f.key == "name").and_then(|f| {
+                        match &f.node.value {
+                            Value::Str(s) => Some(s.clone()),
+                            _ => None,
+                        }
+                    })?;
+                    names.push(format!("{}.{name}", e.key));
+                }
+            } else {
+                names.push(e.key.clone());
+            }
+        }
+        names.sort();
+        Some(names)
+    }
+
+    #[test]
+    fn a_body_keeps_what_names_it_and_what_that_names() {
+        // b's joints j2, j3 name it; they name a and c; nothing else.
+        assert_eq!(
+            kept("body.b.mass").expect("an element's key"),
+            ["body.a", "body.b", "body.c", "format", "joint.j2", "joint.j3"]
+        );
+        // a's joints and its driver; b through j2.
+        assert_eq!(
+            kept("body.a.inertia").expect("an element's key"),
+            ["body.a", "body.b", "driver.motor", "format", "joint.j1", "joint.j2"]
+        );
+    }
+
+    #[test]
+    fn a_force_or_a_driver_keeps_itself_and_its_bodies() {
+        assert_eq!(
+            kept("force.spring.stiffness").expect("an element's key"),
+            ["body.c", "force.spring", "format"]
+        );
+        assert_eq!(
+            kept("driver.motor.function.linear.rate").expect("an element's key"),
+            ["body.a", "driver.motor", "format"]
+        );
+        assert_eq!(
+            kept("joint.j3.at").expect("an element's key"),
+            ["body.b", "body.c", "format", "joint.j3"]
+        );
+    }
+
+    #[test]
+    fn keys_of_no_element_have_no_small_model() {
+        for key in ["gravity", "body.b", "body.nobody.mass", "sensor.where.x", "output.every"] {
+            assert_eq!(kept(key), None, "{key}");
+        }
+    }
+
+    /// The small model reads and keeps the whole model's names.
+    #[test]
+    fn the_small_model_reads_with_the_whole_models_names() {
+        let dir = std::env::temp_dir().join(format!("mstar-file-document-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("a scratch directory");
+        let path = dir.join("chain.toml");
+        std::fs::write(&path, TEXT).expect("written");
+        let doc = ModelDocument::load(&path, &[]).expect("the file reads");
+        let small = doc
+            .element_model("body.b.mass", &["body.b.mass=2.5".into()])
+            .expect("the override applies")
+            .expect("a small model");
+        let sys = small.mechanism.system();
+        let names: Vec<String> = (0..sys.n_coords()).map(|i| sys.coord_name(i)).collect();
+        assert_eq!(names[3..6], ["b.x", "b.y", "b.theta"]);
+        let rows: Vec<String> = (0..sys.n_constraints())
+            .map(|j| sys.constraint_name(j))
+            .collect();
+        assert_eq!(rows, ["j2.x", "j2.y", "j3.x", "j3.y"]);
+        let whole = doc.read_with(&[]).expect("the whole model");
+        assert_eq!(whole.mechanism.system().n_coords(), 9);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
