@@ -377,12 +377,21 @@ columns = ["t", "sensor:*"]
         // b's joints j2, j3 name it; they name a and c; nothing else.
         assert_eq!(
             kept("body.b.mass").expect("an element's key"),
-            ["body.a", "body.b", "body.c", "format", "joint.j2", "joint.j3"]
+            [
+                "body.a", "body.b", "body.c", "format", "joint.j2", "joint.j3"
+            ]
         );
         // a's joints and its driver; b through j2.
         assert_eq!(
             kept("body.a.inertia").expect("an element's key"),
-            ["body.a", "body.b", "driver.motor", "format", "joint.j1", "joint.j2"]
+            [
+                "body.a",
+                "body.b",
+                "driver.motor",
+                "format",
+                "joint.j1",
+                "joint.j2"
+            ]
         );
     }
 
@@ -404,7 +413,13 @@ columns = ["t", "sensor:*"]
 
     #[test]
     fn keys_of_no_element_have_no_small_model() {
-        for key in ["gravity", "body.b", "body.nobody.mass", "sensor.where.x", "output.every"] {
+        for key in [
+            "gravity",
+            "body.b",
+            "body.nobody.mass",
+            "sensor.where.x",
+            "output.every",
+        ] {
             assert_eq!(kept(key), None, "{key}");
         }
     }

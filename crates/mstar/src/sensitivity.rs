@@ -90,10 +90,9 @@ impl FileParameters {
     pub fn parameter(&mut self, key: &str) -> Result<FileParameter, FileError> {
         let document = match &self.document {
             Some(d) => d,
-            None => self.document.insert(Arc::new(ModelDocument::load(
-                &self.path,
-                &self.overrides,
-            )?)),
+            None => self
+                .document
+                .insert(Arc::new(ModelDocument::load(&self.path, &self.overrides)?)),
         };
         FileParameter::in_document(document, key)
     }

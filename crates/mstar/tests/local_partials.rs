@@ -211,7 +211,10 @@ fn local_equals_whole(name: &str, text: &str, keys: &[&str]) {
 }
 
 /// `max(‖g‖∞, ‖Bᵀλ‖∞, ‖M ü‖∞, ‖λ‖∞, ‖u‖∞, 1)` at the integrator's state.
-fn scale_at(sys: &dyn mstar::run::ModelLookup, integ: &Integrator<'_, dyn mstar::run::ModelLookup>) -> f64 {
+fn scale_at(
+    sys: &dyn mstar::run::ModelLookup,
+    integ: &Integrator<'_, dyn mstar::run::ModelLookup>,
+) -> f64 {
     let s = integ.view();
     let mut lin = Linearization::new(sys).expect("a linearization");
     lin.eval_residual(

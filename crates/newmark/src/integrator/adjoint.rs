@@ -625,7 +625,9 @@ impl<S: System + ?Sized> Integrator<'_, S> {
 /// forward sensitivities form them.
 fn partials_dot(param: &mut Parameter, x: &mstar_model::StateRef<'_>, mu: &[f64], n: usize) -> f64 {
     let mut dot = 0.0;
-    param.partials.each(x, n, param.step, |k, c| dot += mu[k] * c);
+    param
+        .partials
+        .each(x, n, param.step, |k, c| dot += mu[k] * c);
     dot
 }
 

@@ -119,7 +119,13 @@ impl Partials {
     /// then calls `f(k, c_k)` for each entry of `c = [∂r/∂p; −∂Φ/∂p]` that
     /// the parameter can change (`k` indexes the whole model's `[u; λ]`;
     /// `n` its coordinates).
-    pub(super) fn each(&mut self, x: &StateRef<'_>, n: usize, h: f64, mut f: impl FnMut(usize, f64)) {
+    pub(super) fn each(
+        &mut self,
+        x: &StateRef<'_>,
+        n: usize,
+        h: f64,
+        mut f: impl FnMut(usize, f64),
+    ) {
         let at = match &self.places {
             None => *x,
             Some(places) => {
@@ -134,7 +140,9 @@ impl Partials {
             }
         };
         self.plus.lin.eval_residual(self.plus.variant.system(), &at);
-        self.minus.lin.eval_residual(self.minus.variant.system(), &at);
+        self.minus
+            .lin
+            .eval_residual(self.minus.variant.system(), &at);
         let (lp, lm) = (&self.plus.lin, &self.minus.lin);
         let central = |a: f64, b: f64| (a - b) / (2.0 * h);
         match &self.places {
@@ -348,13 +356,21 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         let partials = match local {
             Some(partials) => partials,
             None => {
-                let lin = |v: &dyn Variant| self.lin.like(v.system()).map_or_else(
-                    || Linearization::new(v.system()).map_err(|e| bad(e.to_string())),
-                    Ok,
-                );
+                let lin = |v: &dyn Variant| {
+                    self.lin.like(v.system()).map_or_else(
+                        || Linearization::new(v.system()).map_err(|e| bad(e.to_string())),
+                        Ok,
+                    )
+                };
                 Partials {
-                    plus: Side { lin: lin(plus.as_ref())?, variant: plus },
-                    minus: Side { lin: lin(minus.as_ref())?, variant: minus },
+                    plus: Side {
+                        lin: lin(plus.as_ref())?,
+                        variant: plus,
+                    },
+                    minus: Side {
+                        lin: lin(minus.as_ref())?,
+                        variant: minus,
+                    },
                     places: None,
                     gathered: State::zeros(0, 0),
                 }
@@ -582,7 +598,9 @@ pub(super) struct Names {
 impl Names {
     fn of<S: System + ?Sized>(sys: &S) -> Self {
         Self {
-            coords: (0..sys.n_coords()).map(|i| (sys.coord_name(i), i)).collect(),
+            coords: (0..sys.n_coords())
+                .map(|i| (sys.coord_name(i), i))
+                .collect(),
             rows: (0..sys.n_constraints())
                 .map(|j| (sys.constraint_name(j), j))
                 .collect(),
