@@ -14,11 +14,21 @@ use crate::{FileError, Format, MechanismFile, document, keys, read, settings};
 /// A model file's document, parsed (a URDF expanded) with the command
 /// line's overrides applied: read into a model as often as needed, with
 /// further overrides, without touching the file again.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 pub struct ModelDocument {
     origin: String,
     text: String,
     root: Node,
+}
+
+impl std::fmt::Debug for ModelDocument {
+    /// The file's name and size, not its text.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ModelDocument")
+            .field("origin", &self.origin)
+            .field("bytes", &self.text.len())
+            .finish_non_exhaustive()
+    }
 }
 
 impl ModelDocument {
