@@ -483,8 +483,10 @@ fn integrate<S: System + ?Sized>(
     let wall = clock.elapsed().as_secs_f64();
     if let Some((sens, _)) = &sens {
         say!(
-            "sensitivities: {} parameter(s); {} solves, {} factorizations of their own",
+            "sensitivities: {} parameter(s), {} with local partials; {} solves, {} factorizations \
+             of their own",
             sens.len(),
+            (0..sens.len()).filter(|&k| sens.local(k)).count(),
             sens.solves(),
             sens.factorizations()
         );
