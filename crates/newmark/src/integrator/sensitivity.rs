@@ -355,26 +355,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         };
         let partials = match local {
             Some(partials) => partials,
-            None => {
-                let lin = |v: &dyn Variant| {
-                    self.lin.like(v.system()).map_or_else(
-                        || Linearization::new(v.system()).map_err(|e| bad(e.to_string())),
-                        Ok,
-                    )
-                };
-                Partials {
-                    plus: Side {
-                        lin: lin(plus.as_ref())?,
-                        variant: plus,
-                    },
-                    minus: Side {
-                        lin: lin(minus.as_ref())?,
-                        variant: minus,
-                    },
-                    places: None,
-                    gathered: State::zeros(0, 0),
-                }
-            }
+            None => self.whole_partials(plus, minus).map_err(bad)?,
         };
         Ok(Parameter {
             name,
@@ -382,6 +363,28 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             step,
             partials,
             s,
+        })
+    }
+
+    /// The partials from the whole models at `p ± h_p`, linearized on this
+    /// integrator's structure when their patterns are the same.
+    fn whole_partials(
+        &self,
+        plus: Box<dyn Variant>,
+        minus: Box<dyn Variant>,
+    ) -> Result<Partials, String> {
+        let side = |variant: Box<dyn Variant>| -> Result<Side, String> {
+            let lin = match self.lin.like(variant.system()) {
+                Some(lin) => lin,
+                None => Linearization::new(variant.system()).map_err(|e| e.to_string())?,
+            };
+            Ok(Side { variant, lin })
+        };
+        Ok(Partials {
+            plus: side(plus)?,
+            minus: side(minus)?,
+            places: None,
+            gathered: State::zeros(0, 0),
         })
     }
 
