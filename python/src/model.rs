@@ -11,7 +11,7 @@ use mstar::file::{FileError, Format, Mechanism, MechanismFile, Simulation};
 use mstar::model::sensor::Sensor;
 use mstar::newmark::Parameterized;
 use mstar::run::{CheckReport, RunError};
-use mstar::sensitivity::{Chained, FileParameter, SensitivityColumns};
+use mstar::sensitivity::{Chained, FileParameter, FileParameters, SensitivityColumns};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -139,13 +139,14 @@ impl NativeModel {
             )));
         };
         let mut params: Vec<FileParameter> = Vec::with_capacity(keys.len());
+        let mut file = FileParameters::new(path, overrides);
         for (i, key) in keys.iter().enumerate() {
             if keys[..i].iter().any(|k| k.trim() == key.trim()) {
                 return Err(ModelError::new_err(format!(
                     "sensitivities: '{key}' is given twice"
                 )));
             }
-            params.push(FileParameter::new(path, overrides, key).map_err(|e| model_error(&e))?);
+            params.push(file.parameter(key).map_err(|e| model_error(&e))?);
         }
         Ok(params)
     }

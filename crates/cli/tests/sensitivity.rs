@@ -208,6 +208,12 @@ fn columns_choose_sensitivities_and_npz_holds_them() {
         &out.display().to_string(),
     ]);
     assert!(o.status.success(), "{}", text(&o.stderr));
+    // Both keys belong to a body: their partials come from its small model.
+    let report = text(&o.stdout);
+    assert!(
+        report.contains("sensitivities: 2 parameter(s), 2 with local partials;"),
+        "{report}"
+    );
     let csv = std::fs::read_to_string(&out).expect("the CSV is written");
     assert_eq!(
         csv.lines().next(),

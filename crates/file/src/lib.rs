@@ -39,6 +39,7 @@
 //! URDF name its line and column too.
 
 mod bodies;
+mod document;
 mod fields;
 mod functions;
 mod keys;
@@ -52,6 +53,7 @@ mod urdf;
 
 use std::path::Path;
 
+pub use document::ModelDocument;
 pub use fields::MAX_MAGNITUDE;
 pub use planar::FORMAT;
 pub use settings::{
@@ -346,25 +348,7 @@ impl MechanismFile {
     /// closest numeric keys of the file, or a key of `[simulation]` or
     /// `[output]` (settings of the run, not of the model).
     pub fn parameter(path: &Path, overrides: &[String], key: &str) -> Result<f64, FileError> {
-        let origin = path.display().to_string();
-        if let Some(table) = ["simulation", "output"]
-            .into_iter()
-            .find(|t| key.split('.').next().map(str::trim) == Some(*t))
-        {
-            return Err(FileError::unplaced(
-                &origin,
-                format!(
-                    "'{key}' is a setting of the run ([{table}]), not a parameter of the \
-                     model: give a key of a body, joint, force, driver or other element"
-                ),
-            )
-            .of_override());
-        }
-        let text = std::fs::read_to_string(path).map_err(|e| {
-            FileError::unplaced(&origin, format!("cannot read the model file: {e}"))
-        })?;
-        let (root, _, _) = document(&text, &origin, Format::of(path), overrides)?;
-        keys::number(&root, key).map_err(|why| FileError::unplaced(&origin, why).of_override())
+        ModelDocument::load(path, overrides)?.parameter(key)
     }
 }
 

@@ -284,6 +284,40 @@ impl Linearization {
         })
     }
 
+    /// A linearization of `sys` on this one's KKT structure, without
+    /// building the structure again (its layout is most of
+    /// [`with_structure`](Self::with_structure)'s cost): for a model that
+    /// differs from this one's in values only, such as the model at a
+    /// parameter's `p ± h_p`. Nothing evaluated is carried over (a constant
+    /// `M` or constant forces are evaluated again). `None` when a pattern of
+    /// `sys` differs from the one this linearization was built for, or its
+    /// workspace length does.
+    #[must_use]
+    pub fn like<S: System + ?Sized>(&self, sys: &S) -> Option<Self> {
+        let mut lin = self.clone();
+        lin.reset_for(sys).then_some(lin)
+    }
+
+    /// Makes this linearization one of `sys` (as [`like`](Self::like),
+    /// in place) and returns `true`; `false`, and nothing changed, when a
+    /// pattern of `sys` or its workspace length differs from this one's.
+    pub fn reset_for<S: System + ?Sized>(&mut self, sys: &S) -> bool {
+        let Ok(p) = Patterns::read(sys) else {
+            return false;
+        };
+        let [hessian, g_u, g_v, mass_du] = &self.tangent_patterns;
+        let same = (p.n, p.m) == (self.n, self.m)
+            && p.mass == self.mass_pattern
+            && p.b == self.b_pattern
+            && (&p.hessian, &p.g_u, &p.g_v, &p.mass_du) == (hessian, g_u, g_v, mass_du)
+            && sys.workspace_len() == self.work.len();
+        if same {
+            self.mass_ready = false;
+            self.forces_ready = false;
+        }
+        same
+    }
+
     /// The KKT structure assembled.
     #[must_use]
     pub fn structure(&self) -> Structure {

@@ -6,9 +6,10 @@
 //! [`mstar_newmark::Sensitivities`].
 
 use std::cell::RefCell;
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use std::sync::Arc;
 
-use mstar_file::{FileError, Mechanism, MechanismFile};
+use mstar_file::{FileError, Mechanism, ModelDocument};
 use mstar_model::{SampleRef, System};
 use mstar_newmark::{Parameterized, Sensitivities, Variant};
 
@@ -17,29 +18,83 @@ use crate::columns::Columns;
 /// A numeric key of a model file as a parameter of its model.
 #[derive(Clone, Debug)]
 pub struct FileParameter {
-    path: PathBuf,
-    overrides: Vec<String>,
+    document: Arc<ModelDocument>,
     key: String,
     value: f64,
 }
 
 impl FileParameter {
     /// The key `key` of the model file at `path` with `overrides` (`--set`
-    /// assignments) applied, its value read from the file.
+    /// assignments) applied, its value read from the file. For several
+    /// keys of one file, [`in_document`](Self::in_document) reads the file
+    /// once.
     ///
     /// # Errors
     /// [`FileError`] for a file that cannot be read, a key that names no
     /// number (with the closest numeric keys), or a key of `[simulation]`
-    /// or `[output]` ([`MechanismFile::parameter`]).
+    /// or `[output]` ([`mstar_file::MechanismFile::parameter`]).
     pub fn new(path: &Path, overrides: &[String], key: &str) -> Result<Self, FileError> {
+        let document = Arc::new(ModelDocument::load(path, overrides)?);
+        Self::in_document(&document, key)
+    }
+
+    /// The key `key` of a model file already parsed (with its overrides):
+    /// the parameters of one run share the document, and their models at
+    /// `p ± h_p` are read from it without parsing the file again.
+    ///
+    /// # Errors
+    /// As [`new`](Self::new), but for the document's reading.
+    pub fn in_document(document: &Arc<ModelDocument>, key: &str) -> Result<Self, FileError> {
         let key = key.trim();
-        let value = MechanismFile::parameter(path, overrides, key)?;
+        let value = document.parameter(key)?;
         Ok(Self {
-            path: path.to_path_buf(),
-            overrides: overrides.to_vec(),
+            document: Arc::clone(document),
             key: key.to_string(),
             value,
         })
+    }
+
+    /// The override that sets the key to `value`; `{:?}` writes the
+    /// shortest decimal that reads back as `value`.
+    fn set(&self, value: f64) -> [String; 1] {
+        [format!("{}={value:?}", self.key)]
+    }
+}
+
+/// The parameters of one model file, sharing its document: the file is
+/// read and parsed at the first [`parameter`](Self::parameter), once for
+/// all of them (what `mstar run --sensitivity`/`--gradient` with many keys
+/// does).
+#[derive(Debug)]
+pub struct FileParameters {
+    path: std::path::PathBuf,
+    overrides: Vec<String>,
+    document: Option<Arc<ModelDocument>>,
+}
+
+impl FileParameters {
+    /// The parameters of the model file at `path` with `overrides`.
+    #[must_use]
+    pub fn new(path: &Path, overrides: &[String]) -> Self {
+        Self {
+            path: path.to_path_buf(),
+            overrides: overrides.to_vec(),
+            document: None,
+        }
+    }
+
+    /// The key `key` as a parameter ([`FileParameter::new`]).
+    ///
+    /// # Errors
+    /// As [`FileParameter::new`].
+    pub fn parameter(&mut self, key: &str) -> Result<FileParameter, FileError> {
+        let document = match &self.document {
+            Some(d) => d,
+            None => self
+                .document
+                .insert(Arc::new(ModelDocument::load(&self.path, &self.overrides)?)),
+        };
+        FileParameter::in_document(document, key)
     }
 }
 
@@ -72,10 +127,9 @@ impl Parameterized for FileParameter {
     }
 
     fn at(&self, value: f64) -> Result<Box<dyn Variant>, String> {
-        let mut overrides = self.overrides.clone();
-        // `{:?}` writes the shortest decimal that reads back as `value`.
-        overrides.push(format!("{}={value:?}", self.key));
-        let file = MechanismFile::load_with(&self.path, &overrides)
+        let file = self
+            .document
+            .read_with(&self.set(value))
             .map_err(|e| format!("the model at {} = {value:?}: {e}", self.key))?;
         let sys = crate::run::lookup(&file.mechanism);
         let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
@@ -83,6 +137,23 @@ impl Parameterized for FileParameter {
             mechanism: file.mechanism,
             u0,
             v0,
+        }))
+    }
+
+    /// The key's element, the elements that refer to it and the bodies
+    /// they act on ([`ModelDocument::element_model`]); `None` for a key of
+    /// no element.
+    fn local_at(&self, value: f64) -> Result<Option<Box<dyn Variant>>, String> {
+        let file = self
+            .document
+            .element_model(&self.key, &self.set(value))
+            .map_err(|e| format!("the model at {} = {value:?}: {e}", self.key))?;
+        Ok(file.map(|file| {
+            Box::new(FileVariant {
+                mechanism: file.mechanism,
+                u0: Vec::new(),
+                v0: Vec::new(),
+            }) as Box<dyn Variant>
         }))
     }
 }

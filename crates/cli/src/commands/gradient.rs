@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
 use mstar::newmark::{Column, Memory, Objective, Parameterized};
-use mstar::sensitivity::FileParameter;
+use mstar::sensitivity::{FileParameter, FileParameters};
 use mstar::{Integrator, System, csv};
 
 use crate::output::usage;
@@ -212,8 +212,10 @@ pub fn run<S: System + ?Sized>(
         }
     };
     let mut params = Vec::with_capacity(request.keys.len());
+    let mut file = FileParameters::new(path, request.set);
     for key in request.keys {
-        let p = FileParameter::new(path, request.set, key)
+        let p = file
+            .parameter(key)
             .with_context(|| format!("--gradient {key}"))?;
         if params.iter().any(|q: &FileParameter| q.name() == p.name()) {
             return Err(usage(format!("--gradient {key}: the key is given twice")));

@@ -15,7 +15,7 @@ use mstar::newmark::Short;
 use mstar::pendulum::PendulumRun;
 use mstar::redundant::Expanded;
 use mstar::run::ModelLookup;
-use mstar::sensitivity::{Chained, FileParameter, SensitivityColumns};
+use mstar::sensitivity::{Chained, FileParameter, FileParameters, SensitivityColumns};
 use mstar::{IntegrationError, Integrator, Observer, SampleRef, System, csv};
 
 use crate::output::Stop;
@@ -483,8 +483,10 @@ fn integrate<S: System + ?Sized>(
     let wall = clock.elapsed().as_secs_f64();
     if let Some((sens, _)) = &sens {
         say!(
-            "sensitivities: {} parameter(s); {} solves, {} factorizations of their own",
+            "sensitivities: {} parameter(s), {} with local partials; {} solves, {} factorizations \
+             of their own",
             sens.len(),
+            (0..sens.len()).filter(|&k| sens.local(k)).count(),
             sens.solves(),
             sens.factorizations()
         );
@@ -560,9 +562,11 @@ fn sensitivity_parameters(
     }
     let set = overrides(args);
     let mut params = Vec::with_capacity(args.sensitivity.len());
+    let mut file = FileParameters::new(path, &set);
     for key in &args.sensitivity {
-        let param =
-            FileParameter::new(path, &set, key).with_context(|| format!("--sensitivity {key}"))?;
+        let param = file
+            .parameter(key)
+            .with_context(|| format!("--sensitivity {key}"))?;
         if params
             .iter()
             .any(|p: &FileParameter| p.name() == param.name())

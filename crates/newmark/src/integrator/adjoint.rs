@@ -37,7 +37,7 @@ use mstar_kkt::{Backend, Csc, KktError, KktOptions, KktSolver, Structure};
 use mstar_linearize::Linearization;
 use mstar_model::System;
 
-use super::sensitivity::{Parameter, Parameterized, central};
+use super::sensitivity::{Parameter, Parameterized};
 use super::{Integrator, State};
 use crate::{IntegrationError, RunStats};
 
@@ -665,17 +665,15 @@ impl<S: System + ?Sized> Integrator<'_, S> {
 }
 
 /// `μᵀ c` with `c = [r_p; −Φ_p]` at `x`: central differences of the
-/// residual and the constraints of the parameter's models at `p ± h_p`, as
-/// the forward sensitivities form them.
+/// residual and the constraints of the parameter's models at `p ± h_p` (the
+/// whole model's, or its small one's on the rows it changes), as the
+/// forward sensitivities form them.
 fn partials_dot(param: &mut Parameter, x: &mstar_model::StateRef<'_>, mu: &[f64], n: usize) -> f64 {
-    param.lin_plus.eval_residual(param.plus.system(), x);
-    param.lin_minus.eval_residual(param.minus.system(), x);
-    let (lp, lm, h) = (&param.lin_plus, &param.lin_minus, param.step);
-    let r_p = central(lp.r(), lm.r(), h);
-    let phi_p = central(lp.phi(), lm.phi(), h);
-    let top: f64 = mu[..n].iter().zip(&r_p).map(|(a, b)| a * b).sum();
-    let bottom: f64 = mu[n..].iter().zip(&phi_p).map(|(a, b)| a * b).sum();
-    top - bottom
+    let mut dot = 0.0;
+    param
+        .partials
+        .each(x, n, param.step, |k, c| dot += mu[k] * c);
+    dot
 }
 
 /// `s̄ᵀ S` over all five parts of the state.

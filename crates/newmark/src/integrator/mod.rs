@@ -206,6 +206,40 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             });
         }
         let (lin, solver) = linear_algebra(sys, &config, t0, u0)?;
+        Self::started(sys, config, p, (t0, u0, v0), lin, solver)
+    }
+
+    /// [`new`](Self::new) with the linearization and the KKT solver given
+    /// (those of a model with the same structure; the start of a
+    /// parameter's model at `p ± h_p`, `sensitivity.rs`).
+    pub(super) fn with_linear_algebra(
+        sys: &'s S,
+        config: Config,
+        (t0, u0, v0): (f64, &[f64], &[f64]),
+        lin: Linearization,
+        solver: KktSolver,
+    ) -> Result<Self, IntegrationError> {
+        let p = config.validate()?;
+        let n = sys.n_coords();
+        for (what, got) in [("u0", u0.len()), ("v0", v0.len())] {
+            if got != n {
+                return Err(IntegrationError::Dimension { what, got, want: n });
+            }
+        }
+        Self::started(sys, config, p, (t0, u0, v0), lin, solver)
+    }
+
+    /// The integrator on `lin` and `solver`, its initial state made
+    /// consistent and started (the rest of [`new`](Self::new)).
+    fn started(
+        sys: &'s S,
+        config: Config,
+        p: AlphaParams,
+        (t0, u0, v0): (f64, &[f64], &[f64]),
+        lin: Linearization,
+        solver: KktSolver,
+    ) -> Result<Self, IntegrationError> {
+        let (n, m) = (sys.n_coords(), sys.n_constraints());
         let config = Config {
             newton: config.newton.resolve(solver.backend()),
             ..config

@@ -19,8 +19,11 @@
 //! central differences of the whole start (projection, consistent
 //! accelerations, the start on the discrete solution) at `p ± h_p`.
 
+use std::collections::HashMap;
+
+use mstar_kkt::{KktOptions, KktSolver, SharedAnalyses};
 use mstar_linearize::Linearization;
-use mstar_model::System;
+use mstar_model::{StateRef, System};
 
 use super::{Integrator, State};
 use crate::IntegrationError;
@@ -48,6 +51,24 @@ pub trait Parameterized {
     /// # Errors
     /// Why the model cannot be made at that value.
     fn at(&self, value: f64) -> Result<Box<dyn Variant>, String>;
+
+    /// The part of the model the parameter enters, at `value`: a small
+    /// system whose residual rows and constraints that change with the
+    /// parameter are those of the whole model, its coordinates and
+    /// constraint rows named as the whole model's (for a model file, the
+    /// parameter's element and the bodies it acts on). The partials
+    /// `∂r/∂p`, `∂Φ/∂p` are then central differences of the small system,
+    /// scattered into the whole model's rows: a few rows a step instead of
+    /// two residuals of the whole model. `None` (the default) for a global
+    /// parameter: central differences of the whole model. Only its
+    /// [`system`](Variant::system) is read.
+    ///
+    /// # Errors
+    /// Why the small system cannot be made at that value.
+    fn local_at(&self, value: f64) -> Result<Option<Box<dyn Variant>>, String> {
+        let _ = value;
+        Ok(None)
+    }
 }
 
 /// The central-difference step relative to `|p|` (absolute when `p = 0`):
@@ -55,18 +76,99 @@ pub trait Parameterized {
 /// against the rounding error `ε |R| / h_p`, both then `≈ 1e-10` relative.
 pub const DIFFERENCE_STEP: f64 = 1e-5;
 
-/// One parameter's models at `p ± h_p`, their linearizations, and the
-/// sensitivities of the state.
+/// One parameter: its partials' models at `p ± h_p` and the sensitivities
+/// of the state.
 pub(super) struct Parameter {
     name: String,
     value: f64,
     pub(super) step: f64,
-    pub(super) plus: Box<dyn Variant>,
-    pub(super) minus: Box<dyn Variant>,
-    pub(super) lin_plus: Linearization,
-    pub(super) lin_minus: Linearization,
+    pub(super) partials: Partials,
     /// `∂(u, u̇, ü, a, λ)/∂p` of the current state.
     pub(super) s: State,
+}
+
+/// What the partials `c = [∂r/∂p; −∂Φ/∂p]` of one parameter are formed
+/// from: the models at `p ± h_p` (the whole model's, or a small one's with
+/// the places of its coordinates and rows in the whole model) and their
+/// linearizations.
+pub(super) struct Partials {
+    plus: Side,
+    minus: Side,
+    /// `None`: the whole model.
+    places: Option<Places>,
+    /// The whole model's state gathered onto the small model's coordinates
+    /// and rows (unused for the whole model).
+    gathered: State,
+}
+
+/// The model at one side of the difference and its linearization.
+struct Side {
+    variant: Box<dyn Variant>,
+    lin: Linearization,
+}
+
+/// Where a small model's coordinates and constraint rows are in the whole
+/// model's.
+struct Places {
+    coords: Vec<usize>,
+    rows: Vec<usize>,
+}
+
+impl Partials {
+    /// Evaluates both sides' residuals at `x`, the whole model's state,
+    /// then calls `f(k, c_k)` for each entry of `c = [∂r/∂p; −∂Φ/∂p]` that
+    /// the parameter can change (`k` indexes the whole model's `[u; λ]`;
+    /// `n` its coordinates).
+    pub(super) fn each(
+        &mut self,
+        x: &StateRef<'_>,
+        n: usize,
+        h: f64,
+        mut f: impl FnMut(usize, f64),
+    ) {
+        let at = match &self.places {
+            None => *x,
+            Some(places) => {
+                let g = &mut self.gathered;
+                for (i, &k) in places.coords.iter().enumerate() {
+                    (g.u[i], g.v[i], g.a[i]) = (x.u[k], x.v[k], x.a[k]);
+                }
+                for (j, &k) in places.rows.iter().enumerate() {
+                    g.lambda[j] = x.lambda[k];
+                }
+                g.at(x.t)
+            }
+        };
+        self.plus.lin.eval_residual(self.plus.variant.system(), &at);
+        self.minus
+            .lin
+            .eval_residual(self.minus.variant.system(), &at);
+        let (lp, lm) = (&self.plus.lin, &self.minus.lin);
+        let central = |a: f64, b: f64| (a - b) / (2.0 * h);
+        match &self.places {
+            None => {
+                for (i, (a, b)) in lp.r().iter().zip(lm.r()).enumerate() {
+                    f(i, central(*a, *b));
+                }
+                for (j, (a, b)) in lp.phi().iter().zip(lm.phi()).enumerate() {
+                    f(n + j, -central(*a, *b));
+                }
+            }
+            Some(places) => {
+                for ((a, b), &k) in lp.r().iter().zip(lm.r()).zip(&places.coords) {
+                    f(k, central(*a, *b));
+                }
+                for ((a, b), &k) in lp.phi().iter().zip(lm.phi()).zip(&places.rows) {
+                    f(n + k, -central(*a, *b));
+                }
+            }
+        }
+    }
+
+    /// Whether the partials are of a small model.
+    fn local(&self) -> bool {
+        self.places.is_some()
+    }
 }
 
 /// Forward sensitivities `∂x/∂p` of the integrator's discrete solution to
@@ -138,6 +240,14 @@ impl Sensitivities {
         &self.params[k].s.lambda
     }
 
+    /// Whether parameter `k`'s partials `∂r/∂p`, `∂Φ/∂p` are formed from
+    /// the small model of [`Parameterized::local_at`] (else from the whole
+    /// model at `p ± h_p`).
+    #[must_use]
+    pub fn local(&self, k: usize) -> bool {
+        self.params[k].partials.local()
+    }
+
     /// Solves made so far: one per parameter and step.
     #[must_use]
     pub fn solves(&self) -> usize {
@@ -187,9 +297,12 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 "sensitivities start at the initial state, before the first step".into(),
             ));
         }
+        // The models at p ± h_p share the analysis of the KKT pattern.
+        let _shared = SharedAnalyses::begin();
+        let (mut names, mut scratch) = (None, None);
         let mut out = Vec::with_capacity(params.len());
         for param in params {
-            out.push(self.parameter(*param)?);
+            out.push(self.parameter(*param, &mut names, &mut scratch)?);
         }
         Ok(Sensitivities {
             params: out,
@@ -198,8 +311,15 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         })
     }
 
-    /// One parameter's models at `p ± h_p` and its initial sensitivities.
-    fn parameter(&self, param: &dyn Parameterized) -> Result<Parameter, IntegrationError> {
+    /// One parameter's initial sensitivities and the models its partials
+    /// are formed from (`names`: the whole model's names, indexed when a
+    /// small model first needs them).
+    fn parameter(
+        &self,
+        param: &dyn Parameterized,
+        names: &mut Option<Names>,
+        scratch: &mut Option<(Linearization, KktSolver)>,
+    ) -> Result<Parameter, IntegrationError> {
         let name = param.name();
         let value = param.value();
         let step = difference_step(value);
@@ -217,17 +337,8 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 )));
             }
         }
-        let start = |v: &dyn Variant| -> Result<State, IntegrationError> {
-            let integ = Integrator::new(
-                v.system(),
-                self.config.clone(),
-                self.t,
-                v.initial_position(),
-                v.initial_velocity(),
-            )?;
-            Ok(integ.state)
-        };
-        let (s_plus, s_minus) = (start(plus.as_ref())?, start(minus.as_ref())?);
+        let s_plus = self.start_of(plus.as_ref(), scratch)?;
+        let s_minus = self.start_of(minus.as_ref(), scratch)?;
         let s = State {
             u: central(&s_plus.u, &s_minus.u, step),
             v: central(&s_plus.v, &s_minus.v, step),
@@ -235,17 +346,85 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             a_alpha: central(&s_plus.a_alpha, &s_minus.a_alpha, step),
             lambda: central(&s_plus.lambda, &s_minus.lambda, step),
         };
-        let lin = |v: &dyn Variant| Linearization::new(v.system()).map_err(|e| bad(e.to_string()));
+        let local = match (
+            param.local_at(value + step).map_err(bad)?,
+            param.local_at(value - step).map_err(bad)?,
+        ) {
+            (Some(p), Some(q)) => local_partials(self.sys, names, p, q),
+            _ => None,
+        };
+        let partials = match local {
+            Some(partials) => partials,
+            None => self.whole_partials(plus, minus).map_err(bad)?,
+        };
         Ok(Parameter {
-            lin_plus: lin(plus.as_ref())?,
-            lin_minus: lin(minus.as_ref())?,
             name,
             value,
             step,
-            plus,
-            minus,
+            partials,
             s,
         })
+    }
+
+    /// The partials from the whole models at `p ± h_p`, linearized on this
+    /// integrator's structure when their patterns are the same.
+    fn whole_partials(
+        &self,
+        plus: Box<dyn Variant>,
+        minus: Box<dyn Variant>,
+    ) -> Result<Partials, String> {
+        let side = |variant: Box<dyn Variant>| -> Result<Side, String> {
+            let lin = match self.lin.like(variant.system()) {
+                Some(lin) => lin,
+                None => Linearization::new(variant.system()).map_err(|e| e.to_string())?,
+            };
+            Ok(Side { variant, lin })
+        };
+        Ok(Partials {
+            plus: side(plus)?,
+            minus: side(minus)?,
+            places: None,
+            gathered: State::zeros(0, 0),
+        })
+    }
+
+    /// The start of the model `v` (a parameter's model at `p ± h_p`) with
+    /// this integrator's configuration. When its patterns are this
+    /// model's, on the linearization and the solver of `scratch` (made
+    /// once, from this integrator's, and reused by every parameter's
+    /// starts: no structure built or analysed again); else as
+    /// [`Integrator::new`].
+    fn start_of(
+        &self,
+        v: &dyn Variant,
+        scratch: &mut Option<(Linearization, KktSolver)>,
+    ) -> Result<State, IntegrationError> {
+        let sys = v.system();
+        let x0 = (self.t, v.initial_position(), v.initial_velocity());
+        let reused = match scratch.take() {
+            Some((mut lin, solver)) => lin.reset_for(sys).then_some((lin, solver)),
+            None => match self.lin.like(sys) {
+                Some(lin) => {
+                    let options = KktOptions {
+                        backend: self.solver.backend(),
+                        n_primal: self.config.kkt.n_primal.or(Some(sys.n_coords())),
+                        ..self.config.kkt
+                    };
+                    let solver = KktSolver::new(lin.kkt(), &options).map_err(|e| {
+                        self.kkt_error("analysing a parameter's model", self.t, 0.0, e)
+                    })?;
+                    Some((lin, solver))
+                }
+                None => None,
+            },
+        };
+        let Some((lin, solver)) = reused else {
+            let integ = Integrator::new(sys, self.config.clone(), x0.0, x0.1, x0.2)?;
+            return Ok(integ.state);
+        };
+        let integ = Integrator::with_linear_algebra(sys, self.config.clone(), x0, lin, solver)?;
+        *scratch = Some((integ.lin, integ.solver));
+        Ok(integ.state)
     }
 
     /// [`step`](Self::step), then the sensitivities carried to the new state.
@@ -352,20 +531,28 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         out
     }
 
+    /// The partials `[∂r/∂p_k; −∂Φ/∂p_k]` of parameter `k` of `sens` at the
+    /// current state (what [`step_with`](Self::step_with) forms at each
+    /// converged state): central differences of the residual and the
+    /// constraints of the parameter's models at `p ± h_p`, the small model
+    /// scattered into the whole model's rows when
+    /// [`Sensitivities::local`] says so.
+    ///
+    /// # Panics
+    /// If `k` is not below `sens.len()`.
+    pub fn partials(&self, sens: &mut Sensitivities, k: usize) -> Vec<f64> {
+        self.partial_derivatives(&mut sens.params[k])
+    }
+
     /// `[r_p; −Φ_p]` at the converged state: central differences of the
-    /// residual and the constraints of the models at `p ± h_p`.
+    /// residual and the constraints of the models at `p ± h_p` (the whole
+    /// model's or the parameter's small one, scattered into the whole
+    /// model's rows).
     fn partial_derivatives(&self, param: &mut Parameter) -> Vec<f64> {
+        let n = self.sys.n_coords();
+        let mut rhs = vec![0.0; n + self.sys.n_constraints()];
         let x = self.state.at(self.t);
-        param.lin_plus.eval_residual(param.plus.system(), &x);
-        param.lin_minus.eval_residual(param.minus.system(), &x);
-        let (lp, lm, h) = (&param.lin_plus, &param.lin_minus, param.step);
-        let mut rhs = central(lp.r(), lm.r(), h);
-        rhs.extend(
-            lp.phi()
-                .iter()
-                .zip(lm.phi())
-                .map(|(a, b)| -(a - b) / (2.0 * h)),
-        );
+        param.partials.each(&x, n, param.step, |k, c| rhs[k] = c);
         rhs
     }
 
@@ -403,4 +590,65 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         self.factored_h = Some(h);
         Ok(())
     }
+}
+
+/// The whole model's coordinates and constraint rows by name.
+pub(super) struct Names {
+    coords: HashMap<String, usize>,
+    rows: HashMap<String, usize>,
+}
+
+impl Names {
+    fn of<S: System + ?Sized>(sys: &S) -> Self {
+        Self {
+            coords: (0..sys.n_coords())
+                .map(|i| (sys.coord_name(i), i))
+                .collect(),
+            rows: (0..sys.n_constraints())
+                .map(|j| (sys.constraint_name(j), j))
+                .collect(),
+        }
+    }
+
+    /// The places of `small`'s coordinates and rows in the whole model;
+    /// `None` when one of its names is not the whole model's.
+    fn places(&self, small: &dyn System) -> Option<Places> {
+        let coords = (0..small.n_coords())
+            .map(|i| self.coords.get(&small.coord_name(i)).copied())
+            .collect::<Option<Vec<_>>>()?;
+        let rows = (0..small.n_constraints())
+            .map(|j| self.rows.get(&small.constraint_name(j)).copied())
+            .collect::<Option<Vec<_>>>()?;
+        Some(Places { coords, rows })
+    }
+}
+
+/// The partials of a parameter from its small models at `p ± h_p`; `None`
+/// (the whole model's central differences are used) when their names are
+/// not all the whole model's, the two differ in their coordinates or rows,
+/// or they cannot be linearized.
+fn local_partials<S: System + ?Sized>(
+    sys: &S,
+    names: &mut Option<Names>,
+    plus: Box<dyn Variant>,
+    minus: Box<dyn Variant>,
+) -> Option<Partials> {
+    let names = names.get_or_insert_with(|| Names::of(sys));
+    let places = names.places(plus.system())?;
+    let other = names.places(minus.system())?;
+    if (&places.coords, &places.rows) != (&other.coords, &other.rows) {
+        return None;
+    }
+    let (n, m) = (places.coords.len(), places.rows.len());
+    let side = |variant: Box<dyn Variant>| {
+        Linearization::new(variant.system())
+            .ok()
+            .map(|lin| Side { variant, lin })
+    };
+    Some(Partials {
+        plus: side(plus)?,
+        minus: side(minus)?,
+        places: Some(places),
+        gathered: State::zeros(n, m),
+    })
 }
