@@ -19,9 +19,18 @@ use nalgebra::{DMatrix, DVector};
 
 mod sparse;
 
-/// Largest `m × n` whose rows are sorted out densely (modified Gram–Schmidt,
-/// [`dense_rows`]); above it, by a sparse elimination ([`sparse_rows`]).
+/// Largest `m × n` that takes the dense computations: minimum-norm
+/// multipliers (a pseudo-inverse of `Bᵀ`), and the least fill budget of the
+/// sparse elimination ([`fill_budget`], the memory of the dense `B`).
 pub const DENSE_LIMIT: usize = 4_000_000;
+
+/// Largest `m × n` whose rows are sorted out densely (modified Gram–Schmidt,
+/// [`dense_rows`], `O(m n rank)`); above it, by the sparse elimination
+/// ([`sparse_rows`]), which finds the same rows. Dense up to 4·10⁶ took
+/// 0.16 s of a 0.26 s run of a 100-bar spatial chain (700 × 400, 300 steps;
+/// docs/performance.md, "Set-up of a model file"); a chain's sparse
+/// elimination costs `O(nnz)`.
+pub const SPARSE_FROM: usize = 40_000;
 
 /// The rows of `B` at a state: which are independent, which depend on the
 /// rows before them.
@@ -56,14 +65,14 @@ pub struct NotComputed {
     pub budget: usize,
 }
 
-/// The rows of `B(t, u)`: densely up to `n · m` = [`DENSE_LIMIT`], sparsely
+/// The rows of `B(t, u)`: densely up to `n · m` = [`SPARSE_FROM`], sparsely
 /// above.
 ///
 /// # Errors
 /// [`NotComputed`] when the sparse elimination exceeds its budget of
 /// [`fill_budget`] entries.
 pub fn rows<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Result<Rows, NotComputed> {
-    if sys.n_coords() * sys.n_constraints() > DENSE_LIMIT {
+    if sys.n_coords() * sys.n_constraints() > SPARSE_FROM {
         let budget = fill_budget(sys.b_pattern().len());
         sparse_rows(sys, t, u, budget)
     } else {
