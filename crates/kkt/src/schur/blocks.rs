@@ -358,6 +358,61 @@ mod tests {
         }
     }
 
+    /// A body's block with its own row (the normalization's `2pᵀ`): the
+    /// fixed path of 4 unknowns and 1 local row gives the generic path's
+    /// values to the bit, and the inverse is that of the saddle point.
+    #[test]
+    fn a_block_with_its_own_row_equals_the_generic_path_to_the_bit() {
+        let k = 4;
+        let a = sample(k);
+        let own = [0.6, -0.8, 0.2, 0.4];
+        let s: Vec<(usize, usize, usize)> = (0..k * k).map(|p| (p, p / k, p % k)).collect();
+        // Rows 0 and 1 of B go to C, row 2 is the block's own.
+        let mut values = a.clone();
+        values.extend((0..2 * k).map(|q| 1.0 + q as f64 * 0.25));
+        values.extend(own);
+        let b: Vec<(usize, usize, usize)> = (0..3 * k).map(|q| (k * k + q, q / k, q % k)).collect();
+        let pairs = [(0u16, 0u16, 0u32), (1, 0, 1), (0, 1, 2), (1, 1, 3)];
+        let lists = Lists {
+            s_entries: &s,
+            b_entries: &b,
+            pairs: &pairs,
+            n_rows: 2,
+        };
+        let run = |fixed: bool| {
+            let (mut block, mut bk, mut w) = (vec![0.0; 25], vec![0.0; 2 * k], vec![0.0; 2 * k]);
+            let mut scratch = Scratch {
+                block: &mut block,
+                bk: &mut bk,
+                w: &mut w,
+            };
+            let (mut inv, mut c) = (vec![0.0; 25], vec![0.0; 4]);
+            let r = if fixed {
+                factor_block((k, k + 1), &lists, &values, &mut inv, &mut scratch, &mut c)
+            } else {
+                factor_dynamic((k, k + 1), &lists, &values, &mut inv, &mut scratch, &mut c)
+            };
+            assert_eq!(r, Ok(()));
+            (inv, c)
+        };
+        let (inv_f, c_f) = run(true);
+        assert_eq!((&inv_f, &c_f), (&run(false).0, &run(false).1));
+        // [[S, rᵀ], [r, 0]] times the inverse is I, independently of either path.
+        let saddle = |i: usize, j: usize| match (i < k, j < k) {
+            (true, true) => a[i * k + j],
+            (true, false) => own[i],
+            (false, true) => own[j],
+            (false, false) => 0.0,
+        };
+        for i in 0..=k {
+            for j in 0..=k {
+                let p: f64 = (0..=k).map(|l| saddle(i, l) * inv_f[l * 5 + j]).sum();
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((p - want).abs() < 1e-10, "({i}, {j}) = {p}");
+            }
+        }
+    }
+
     #[test]
     fn fixed_size_inverse_reports_the_singular_column() {
         let values = [1.0, 2.0, 2.0, 4.0];
