@@ -22,7 +22,13 @@
 //!
 //! The blocks are the connected components of the pattern of `S` (entries
 //! `(i, j)` with `i, j < n_primal`); a component larger than
-//! [`MAX_BLOCK`] unknowns makes the analysis fail (use LDLᵀ then). The
+//! [`MAX_BLOCK`] unknowns makes the analysis fail (use LDLᵀ then). A
+//! constraint row whose `B` entries all lie in one block of two or more
+//! unknowns, with no entry of `D` in its row or column (a body's
+//! normalization `pᵀp = 1`), is eliminated with that block: the block's
+//! inverse is that of the saddle point `[[S_K, B_lᵀ], [B_l, 0]]`, and `C`
+//! holds the other rows only (for a chain of bodies in Euler parameters,
+//! 3 rows a spherical joint instead of 4 a bar: a smaller `C`, fewer pairs). The
 //! backend reads `S`, `B` and `D` only (the matrix is symmetric), keeps
 //! compact copies of them, and computes its own products and norm for the
 //! residual check of `KktSolver`.
