@@ -55,7 +55,7 @@ pub(super) fn factor_block(
     c_values: &mut [f64],
 ) -> Result<(), usize> {
     match sizes {
-        (1, 1) => factor_fixed::<1, 1>(lists, values, inverse, scratch, c_values),
+        (1, 1) => factor_scalar(lists, values, inverse, scratch, c_values),
         (2, 2) => factor_fixed::<2, 2>(lists, values, inverse, scratch, c_values),
         (3, 3) => factor_fixed::<3, 3>(lists, values, inverse, scratch, c_values),
         (4, 4) => factor_fixed::<4, 4>(lists, values, inverse, scratch, c_values),
@@ -63,6 +63,45 @@ pub(super) fn factor_block(
         (4, 5) => factor_fixed::<4, 5>(lists, values, inverse, scratch, c_values),
         (k, size) => factor_dynamic((k, size), lists, values, inverse, scratch, c_values),
     }
+}
+
+/// [`factor_block`] for one unknown (a body's `x`, `y` or `z`): `1 / s` and
+/// `C += b_r (1 / s) b_s`, the arithmetic of [`factor_fixed`] for `K = 1`
+/// (whose sums from `−0.0` add one term: the same values to the bit) without
+/// its buffers.
+fn factor_scalar(
+    lists: &Lists<'_>,
+    values: &[f64],
+    inverse: &mut [f64],
+    scratch: &mut Scratch<'_>,
+    c_values: &mut [f64],
+) -> Result<(), usize> {
+    let mut s = 0.0;
+    for &(p, _, _) in lists.s_entries {
+        s += values[p];
+    }
+    // Gauss-Jordan's test for one unknown (`invert_fixed`).
+    if s.abs() <= f64::EPSILON * s.abs() || s == 0.0 {
+        return Err(0);
+    }
+    let inv = 1.0 / s;
+    inverse[0] = inv;
+    let nr = lists.n_rows;
+    let mut b_stack = [0.0; STACK_ROWS];
+    let b = if nr <= STACK_ROWS {
+        &mut b_stack[..nr]
+    } else {
+        let b = &mut scratch.bk[..nr];
+        b.fill(0.0);
+        b
+    };
+    for &(p, r, _) in lists.b_entries {
+        b[r] += values[p];
+    }
+    for &(r, s, slot) in lists.pairs {
+        c_values[slot as usize] += b[usize::from(r)] * inv * b[usize::from(s)];
+    }
+    Ok(())
 }
 
 /// [`factor_block`] for `K` primal unknowns and `A − K` local rows.
