@@ -18,8 +18,12 @@ pub(super) struct Parts {
     pub(super) s_entries: Vec<(usize, usize, usize)>,
     /// `(KKT value position, local row, local column)` of every block's `B`.
     pub(super) b_entries: Vec<(usize, usize, usize)>,
-    /// Each block's rows (original constraint indices), block after block.
+    /// Each block's rows (original constraint indices), block after block:
+    /// the rows that stay in `C` (those of other blocks too).
     pub(super) rows: Vec<usize>,
+    /// Whether each constraint row is local to a block (absorbed into it:
+    /// see [`local_candidates`]) rather than a row of `C`.
+    pub(super) local: Vec<bool>,
     /// Total size of the blocks' dense inverses, the largest block and the
     /// most rows a block touches (scratch sizes).
     pub(super) inverse_len: usize,
@@ -34,6 +38,8 @@ pub(super) struct BColumns {
     pub(super) col_ptr: Vec<u32>,
     pub(super) rows: Vec<u32>,
     pub(super) pos: Vec<u32>,
+    /// Each entry's row in the constraints' own order.
+    pub(super) orig: Vec<u32>,
 }
 
 /// How `C` is factored and its order: `fwd[k]` is the constraint in position
@@ -70,13 +76,15 @@ impl Schur {
     ) -> Result<Self, KktError> {
         let n = n_primal;
         let m = a.n - n;
-        let mut parts = Parts::gather(a, n, &components(a, n))?;
         // Every entry of the multiplier block D: (KKT value position, row, column).
         let d_all: Vec<(usize, usize, usize)> = (n..a.n)
             .flat_map(|j| (a.col_ptr[j]..a.col_ptr[j + 1]).map(move |p| (p, j)))
             .filter(|&(p, _)| a.row_idx[p] >= n)
             .map(|(p, j)| (p, a.row_idx[p] - n, j - n))
             .collect();
+        let members = components(a, n);
+        let candidates = local_candidates(a, n, &members, &d_all);
+        let mut parts = Parts::gather(a, n, &members, &candidates)?;
         let order = COrder::choose(&parts, &d_all, m, symmetry)?;
         let pairs = pair_slots(&mut parts, &order)?;
         let b = BColumns::new(a, n, &order.inv)?;
@@ -97,8 +105,9 @@ impl Schur {
         d_all: Vec<(usize, usize, usize)>,
         b: BColumns,
     ) -> Result<Self, KktError> {
-        let n = parts.coords.len();
+        let n = parts.blocks.iter().map(|b| b.k).sum::<usize>();
         let m = dim - n;
+        let m_c = parts.local.iter().filter(|&&l| !l).count();
         // Index in `d_all` of each entry of D in the read triangle, and its slot.
         let d_entries = d_all
             .iter()
@@ -153,12 +162,14 @@ impl Schur {
             block: vec![0.0; parts.max_k * parts.max_k],
             bk: vec![0.0; parts.max_rows * parts.max_k],
             w: vec![0.0; parts.max_rows * parts.max_k],
-            x: vec![0.0; n],
+            x: vec![0.0; dim],
             y: vec![0.0; m],
+            m_c,
             b_values: vec![0.0; b.rows.len()],
             natural,
             row_sums: vec![0.0; dim],
             b_col_ptr: b.col_ptr,
+            b_orig: if natural { Vec::new() } else { b.orig },
             b_rows: b.rows,
             b_pos: b.pos,
             refine: false,
@@ -202,11 +213,58 @@ fn components(a: &Csc, n: usize) -> Vec<Vec<usize>> {
     members
 }
 
+/// The constraint rows that may join a block of `S` (`candidates[r]`): every
+/// `B` entry of row `r` lies in one block, and `D` has no entry in its row or
+/// column. Such a row (a body's normalization `pᵀp = 1`) is eliminated with
+/// its block: the block becomes the saddle point `[[S_K, B_rᵀ], [B_r, 0]]`,
+/// inverted densely, and `C` keeps only the rows that join blocks.
+fn local_candidates(
+    a: &Csc,
+    n: usize,
+    members: &[Vec<usize>],
+    d_all: &[(usize, usize, usize)],
+) -> Vec<bool> {
+    const NONE: usize = usize::MAX;
+    const MANY: usize = usize::MAX - 1;
+    let m = a.n - n;
+    let mut block_of = vec![0usize; n];
+    for (b, group) in members.iter().enumerate() {
+        for &i in group {
+            block_of[i] = b;
+        }
+    }
+    // The block of each row's B entries: NONE yet, MANY when they differ.
+    let mut row_block = vec![NONE; m];
+    for j in 0..n {
+        for &i in a.column(j) {
+            if i >= n {
+                let rb = &mut row_block[i - n];
+                *rb = match *rb {
+                    NONE => block_of[j],
+                    b if b == block_of[j] => b,
+                    _ => MANY,
+                };
+            }
+        }
+    }
+    for &(_, r, s) in d_all {
+        row_block[r] = MANY;
+        row_block[s] = MANY;
+    }
+    row_block.iter().map(|&b| b < MANY).collect()
+}
+
 impl Parts {
     /// The blocks of the given components with their `S` entries and rows of
     /// `B` (rows ascending, then local indices: for one unknown, the order of
-    /// its column's `B` entries).
-    fn gather(a: &Csc, n: usize, members: &[Vec<usize>]) -> Result<Self, KktError> {
+    /// its column's `B` entries). A block takes the rows local to it
+    /// (`candidates`) as long as it stays within [`MAX_BLOCK`] unknowns.
+    fn gather(
+        a: &Csc,
+        n: usize,
+        members: &[Vec<usize>],
+        candidates: &[bool],
+    ) -> Result<Self, KktError> {
         let m = a.n - n;
         let mut local = vec![0usize; n];
         let mut row_local = vec![usize::MAX; m];
@@ -216,6 +274,7 @@ impl Parts {
             s_entries: Vec::new(),
             b_entries: Vec::new(),
             rows: Vec::new(),
+            local: vec![false; m],
             inverse_len: 0,
             max_k: 0,
             max_rows: 0,
@@ -231,7 +290,7 @@ impl Parts {
             for (l, &i) in group.iter().enumerate() {
                 local[i] = l;
             }
-            this.push_block(a, n, group, &local, &mut row_local);
+            this.push_block(a, n, group, &local, &mut row_local, candidates);
         }
         if this.max_rows > usize::from(u16::MAX) {
             return Err(KktError::Structure(format!(
@@ -244,7 +303,10 @@ impl Parts {
     }
 
     /// Appends the block of the unknowns `group` (`local` their local
-    /// indices; `row_local` is `usize::MAX` everywhere on entry and exit).
+    /// indices; `row_local` is `usize::MAX` everywhere on entry and exit):
+    /// its rows of `C` get local rows `0..n_rows`, its own rows (`candidates`,
+    /// while the block stays within [`MAX_BLOCK`]) the local rows after them
+    /// and the block's unknowns `n + r` after its primal ones.
     fn push_block(
         &mut self,
         a: &Csc,
@@ -252,6 +314,7 @@ impl Parts {
         group: &[usize],
         local: &[usize],
         row_local: &mut [usize],
+        candidates: &[bool],
     ) {
         let (c0, s0, b0, r0) = (
             self.coords.len(),
@@ -260,6 +323,7 @@ impl Parts {
             self.rows.len(),
         );
         self.coords.extend_from_slice(group);
+        let mut own = Vec::new();
         for &j in group {
             for p in a.col_ptr[j]..a.col_ptr[j + 1] {
                 let i = a.row_idx[p];
@@ -267,13 +331,33 @@ impl Parts {
                     self.s_entries.push((p, local[i], local[j]));
                 } else if row_local[i - n] == usize::MAX {
                     row_local[i - n] = 0;
-                    self.rows.push(i - n);
+                    if candidates[i - n] {
+                        own.push(i - n);
+                    } else {
+                        self.rows.push(i - n);
+                    }
                 }
             }
         }
         self.rows[r0..].sort_unstable();
-        for (l, &r) in self.rows[r0..].iter().enumerate() {
+        own.sort_unstable();
+        // Rows beyond MAX_BLOCK unknowns stay rows of C, and so do the rows
+        // of a single unknown (which keeps a diagonal S on its fast paths).
+        let keep = if group.len() < 2 {
+            0
+        } else {
+            own.len().min(MAX_BLOCK - group.len())
+        };
+        self.rows.extend_from_slice(&own[keep..]);
+        own.truncate(keep);
+        self.rows[r0..].sort_unstable();
+        let n_rows = self.rows.len() - r0;
+        for (l, &r) in self.rows[r0..].iter().chain(&own).enumerate() {
             row_local[r] = l;
+        }
+        for &r in &own {
+            self.local[r] = true;
+            self.coords.push(n + r);
         }
         for &j in group {
             for p in a.col_ptr[j]..a.col_ptr[j + 1] {
@@ -283,12 +367,13 @@ impl Parts {
                 }
             }
         }
-        for &r in &self.rows[r0..] {
+        for &r in self.rows[r0..].iter().chain(&own) {
             row_local[r] = usize::MAX;
         }
-        let (k, n_rows) = (group.len(), self.rows.len() - r0);
+        let size = self.coords.len() - c0;
         self.blocks.push(Block {
             coords: c0..self.coords.len(),
+            k: group.len(),
             s_entries: s0..self.s_entries.len(),
             b_entries: b0..self.b_entries.len(),
             rows: r0..self.rows.len(),
@@ -296,8 +381,8 @@ impl Parts {
             inverse: self.inverse_len,
             pairs: 0..0,
         });
-        self.inverse_len += k * k;
-        self.max_k = self.max_k.max(k);
+        self.inverse_len += size * size;
+        self.max_k = self.max_k.max(size);
         self.max_rows = self.max_rows.max(n_rows);
     }
 }
@@ -311,9 +396,51 @@ impl COrder {
     /// reads (faer then factors it in place). With [`Symmetry::General`] the
     /// envelope is factored by LU on both triangles, and there is no
     /// fallback: a wider envelope is an error.
+    ///
+    /// Rows local to a block ([`Parts::local`]) are not rows of `C`: `C`'s
+    /// rows are the others in their own order, and the local rows follow
+    /// them in the multipliers' order (`inv[r] ≥ C`'s dimension).
     fn choose(
         parts: &Parts,
         d_all: &[(usize, usize, usize)],
+        m: usize,
+        symmetry: Symmetry,
+    ) -> Result<Self, KktError> {
+        // compact[r]: row r's index among the rows of C (MAX for a local row).
+        let mut compact = vec![usize::MAX; m];
+        let mut m_c = 0;
+        for (c, _) in compact.iter_mut().zip(&parts.local).filter(|(_, l)| !**l) {
+            *c = m_c;
+            m_c += 1;
+        }
+        let c_order = Self::choose_compact(parts, d_all, &compact, m_c, symmetry)?;
+        let mut inv = vec![0; m];
+        let mut next_local = m_c;
+        for (r, slot) in inv.iter_mut().enumerate() {
+            *slot = if parts.local[r] {
+                next_local += 1;
+                next_local - 1
+            } else {
+                c_order.inv[compact[r]]
+            };
+        }
+        let mut fwd = vec![0; m];
+        for (r, &k) in inv.iter().enumerate() {
+            fwd[k] = r;
+        }
+        Ok(Self {
+            fwd,
+            inv,
+            factor: c_order.factor,
+        })
+    }
+
+    /// [`choose`](Self::choose) on the `m_c` rows of `C` (row `r`'s index
+    /// among them `compact[r]`): the order and factor of `C` alone.
+    fn choose_compact(
+        parts: &Parts,
+        d_all: &[(usize, usize, usize)],
+        compact: &[usize],
         m: usize,
         symmetry: Symmetry,
     ) -> Result<Self, KktError> {
@@ -325,11 +452,12 @@ impl COrder {
             let rows = &parts.rows[b.rows.clone()];
             for &r in rows {
                 for &s in rows {
-                    pattern.push((s, r));
+                    pattern.push((compact[s], compact[r]));
                 }
             }
         }
-        pattern.extend(d_all.iter().map(|&(_, r, s)| (s, r)));
+        // D's rows are never local (`local_candidates`).
+        pattern.extend(d_all.iter().map(|&(_, r, s)| (compact[s], compact[r])));
         pattern.extend((0..m).map(|r| (r, r)));
         // csc_of sorts and deduplicates `pattern`: it is C's entry list.
         let c_orig = csc_of(m, &mut pattern);
@@ -434,17 +562,24 @@ impl BColumns {
             })
         };
         let (mut col_ptr, mut rows, mut pos) = (vec![0; n + 1], Vec::new(), Vec::new());
+        let mut orig = Vec::new();
         for j in 0..n {
             for p in a.col_ptr[j]..a.col_ptr[j + 1] {
                 let i = a.row_idx[p];
                 if i >= n {
                     rows.push(fits(c_inv[i - n])?);
+                    orig.push(fits(i - n)?);
                     pos.push(fits(p)?);
                 }
             }
             col_ptr[j + 1] = fits(rows.len())?;
         }
-        Ok(Self { col_ptr, rows, pos })
+        Ok(Self {
+            col_ptr,
+            rows,
+            pos,
+            orig,
+        })
     }
 }
 

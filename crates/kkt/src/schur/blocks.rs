@@ -24,6 +24,10 @@ pub(super) struct Lists<'a> {
     pub(super) n_rows: usize,
 }
 
+/// The most rows of `B` whose `B_K` and `W` [`factor_fixed`] keeps on the
+/// stack.
+const STACK_ROWS: usize = 8;
+
 /// Reused buffers: `B_K` and `W` (at least `n_rows × k` each) and, for the
 /// generic path, the block (`k × k`).
 pub(super) struct Scratch<'a> {
@@ -32,51 +36,115 @@ pub(super) struct Scratch<'a> {
     pub(super) w: &'a mut [f64],
 }
 
-/// Factors one block of `k` unknowns: writes `S_K⁻¹` (row-major) into
-/// `inverse` and adds `W B_Kᵀ` into `c_values`.
+/// Factors one block of `sizes = (k, size)`: `k` primal unknowns and
+/// `size − k` local rows (their `B` entries are those of `lists.b_entries`
+/// with a local row `≥ n_rows`). Writes the inverse of the saddle point
+/// `[[S_K, B_lᵀ], [B_l, 0]]` (`size × size`, row-major; `S_K⁻¹` without
+/// local rows) into `inverse` and adds `W B_Kᵀ` into `c_values`, `W = B_K P`
+/// with `P` the inverse's leading `k × k` block (the local rows' columns of
+/// `B_K` are zero).
 ///
 /// # Errors
-/// The local column without a pivot when `S_K` is singular.
+/// The local column without a pivot when the block is singular.
 pub(super) fn factor_block(
-    k: usize,
+    sizes: (usize, usize),
     lists: &Lists<'_>,
     values: &[f64],
     inverse: &mut [f64],
     scratch: &mut Scratch<'_>,
     c_values: &mut [f64],
 ) -> Result<(), usize> {
-    match k {
-        1 => factor_fixed::<1>(lists, values, inverse, scratch, c_values),
-        2 => factor_fixed::<2>(lists, values, inverse, scratch, c_values),
-        3 => factor_fixed::<3>(lists, values, inverse, scratch, c_values),
-        4 => factor_fixed::<4>(lists, values, inverse, scratch, c_values),
-        _ => factor_dynamic(k, lists, values, inverse, scratch, c_values),
+    match sizes {
+        (1, 1) => factor_scalar(lists, values, inverse, scratch, c_values),
+        (2, 2) => factor_fixed::<2, 2>(lists, values, inverse, scratch, c_values),
+        (3, 3) => factor_fixed::<3, 3>(lists, values, inverse, scratch, c_values),
+        (4, 4) => factor_fixed::<4, 4>(lists, values, inverse, scratch, c_values),
+        // A body in Euler parameters with its normalization row.
+        (4, 5) => factor_fixed::<4, 5>(lists, values, inverse, scratch, c_values),
+        (k, size) => factor_dynamic((k, size), lists, values, inverse, scratch, c_values),
     }
 }
 
-fn factor_fixed<const K: usize>(
+/// [`factor_block`] for one unknown (a body's `x`, `y` or `z`): `1 / s` and
+/// `C += b_r (1 / s) b_s`, the arithmetic of [`factor_fixed`] for `K = 1`
+/// (whose sums from `−0.0` add one term: the same values to the bit) without
+/// its buffers.
+fn factor_scalar(
     lists: &Lists<'_>,
     values: &[f64],
     inverse: &mut [f64],
     scratch: &mut Scratch<'_>,
     c_values: &mut [f64],
 ) -> Result<(), usize> {
-    let mut a = [[0.0; K]; K];
+    let mut s = 0.0;
+    for &(p, _, _) in lists.s_entries {
+        s += values[p];
+    }
+    // Gauss-Jordan's test for one unknown (`invert_fixed`).
+    if s.abs() <= f64::EPSILON * s.abs() || s == 0.0 {
+        return Err(0);
+    }
+    let inv = 1.0 / s;
+    inverse[0] = inv;
+    let nr = lists.n_rows;
+    let mut b_stack = [0.0; STACK_ROWS];
+    let b = if nr <= STACK_ROWS {
+        &mut b_stack[..nr]
+    } else {
+        let b = &mut scratch.bk[..nr];
+        b.fill(0.0);
+        b
+    };
+    for &(p, r, _) in lists.b_entries {
+        b[r] += values[p];
+    }
+    for &(r, s, slot) in lists.pairs {
+        c_values[slot as usize] += b[usize::from(r)] * inv * b[usize::from(s)];
+    }
+    Ok(())
+}
+
+/// [`factor_block`] for `K` primal unknowns and `A − K` local rows.
+fn factor_fixed<const K: usize, const A: usize>(
+    lists: &Lists<'_>,
+    values: &[f64],
+    inverse: &mut [f64],
+    scratch: &mut Scratch<'_>,
+    c_values: &mut [f64],
+) -> Result<(), usize> {
+    let nr = lists.n_rows;
+    let mut a = [[0.0; A]; A];
     for &(p, i, j) in lists.s_entries {
         a[i][j] += values[p];
     }
-    let mut inv = [[0.0; K]; K];
+    // B_K and W on the stack when they fit (a body's blocks: 2 and 6 rows),
+    // else in the scratch: no call to zero a few values.
+    let (mut bk_stack, mut w_stack) = ([[0.0; K]; STACK_ROWS], [[0.0; K]; STACK_ROWS]);
+    let (bk, w): (&mut [f64], &mut [f64]) = if nr <= STACK_ROWS {
+        (
+            &mut bk_stack.as_flattened_mut()[..nr * K],
+            &mut w_stack.as_flattened_mut()[..nr * K],
+        )
+    } else {
+        let bk = &mut scratch.bk[..nr * K];
+        bk.fill(0.0);
+        (bk, &mut scratch.w[..nr * K])
+    };
+    for &(p, r, j) in lists.b_entries {
+        if r < nr {
+            bk[r * K + j] += values[p];
+        } else {
+            // A local row: B_l below S_K and its mirror Bᵀ beside it.
+            let l = K + r - nr;
+            a[l][j] += values[p];
+            a[j][l] += values[p];
+        }
+    }
+    let mut inv = [[0.0; A]; A];
     invert_fixed(&mut a, &mut inv)?;
-    for (out, row) in inverse.chunks_exact_mut(K).zip(&inv) {
+    for (out, row) in inverse.chunks_exact_mut(A).zip(&inv) {
         out.copy_from_slice(row);
     }
-    let nr = lists.n_rows;
-    let bk = &mut scratch.bk[..nr * K];
-    bk.fill(0.0);
-    for &(p, r, j) in lists.b_entries {
-        bk[r * K + j] += values[p];
-    }
-    let w = &mut scratch.w[..nr * K];
     for (wr, br) in w.chunks_exact_mut(K).zip(bk.chunks_exact(K)) {
         for l in 0..K {
             // As `Iterator::sum`: from −0.0, term by term.
@@ -101,29 +169,35 @@ fn factor_fixed<const K: usize>(
 }
 
 fn factor_dynamic(
-    k: usize,
+    (k, size): (usize, usize),
     lists: &Lists<'_>,
     values: &[f64],
     inverse: &mut [f64],
     scratch: &mut Scratch<'_>,
     c_values: &mut [f64],
 ) -> Result<(), usize> {
-    let blk = &mut scratch.block[..k * k];
+    let nr = lists.n_rows;
+    let blk = &mut scratch.block[..size * size];
     blk.fill(0.0);
     for &(p, i, j) in lists.s_entries {
-        blk[i * k + j] += values[p];
+        blk[i * size + j] += values[p];
     }
-    invert(blk, inverse, k)?;
-    let nr = lists.n_rows;
     let bk = &mut scratch.bk[..nr * k];
     bk.fill(0.0);
     for &(p, r, j) in lists.b_entries {
-        bk[r * k + j] += values[p];
+        if r < nr {
+            bk[r * k + j] += values[p];
+        } else {
+            let l = k + r - nr;
+            blk[l * size + j] += values[p];
+            blk[j * size + l] += values[p];
+        }
     }
+    invert(blk, inverse, size)?;
     let w = &mut scratch.w[..nr * k];
     for r in 0..nr {
         for l in 0..k {
-            w[r * k + l] = (0..k).map(|j| bk[r * k + j] * inverse[j * k + l]).sum();
+            w[r * k + l] = (0..k).map(|j| bk[r * k + j] * inverse[j * size + l]).sum();
         }
     }
     for &(r, s, slot) in lists.pairs {
@@ -134,12 +208,14 @@ fn factor_dynamic(
     Ok(())
 }
 
-/// `x = S_K⁻¹ f` on the block's unknowns `coords` (`inverse` row-major).
+/// `x = S_K⁻¹ f` on the block's unknowns `coords` (`inverse` row-major;
+/// with local rows, `f` and `x` include their multipliers).
 #[inline]
 pub(super) fn apply_block(coords: &[usize], inverse: &[f64], f: &[f64], x: &mut [f64]) {
     match coords.len() {
         1 => apply_fixed::<1>(coords, inverse, f, x),
         4 => apply_fixed::<4>(coords, inverse, f, x),
+        5 => apply_fixed::<5>(coords, inverse, f, x),
         k => {
             for (i, &ci) in coords.iter().enumerate() {
                 let row = &inverse[i * k..(i + 1) * k];
@@ -293,9 +369,9 @@ mod tests {
             };
             let (mut inv, mut c) = (vec![0.0; k * k], vec![0.0; 3]);
             let r = if fixed {
-                factor_block(k, &lists, &values, &mut inv, &mut scratch, &mut c)
+                factor_block((k, k), &lists, &values, &mut inv, &mut scratch, &mut c)
             } else {
-                factor_dynamic(k, &lists, &values, &mut inv, &mut scratch, &mut c)
+                factor_dynamic((k, k), &lists, &values, &mut inv, &mut scratch, &mut c)
             };
             assert_eq!(r, Ok(()));
             (inv, c)
@@ -321,6 +397,61 @@ mod tests {
         }
     }
 
+    /// A body's block with its own row (the normalization's `2pᵀ`): the
+    /// fixed path of 4 unknowns and 1 local row gives the generic path's
+    /// values to the bit, and the inverse is that of the saddle point.
+    #[test]
+    fn a_block_with_its_own_row_equals_the_generic_path_to_the_bit() {
+        let k = 4;
+        let a = sample(k);
+        let own = [0.6, -0.8, 0.2, 0.4];
+        let s: Vec<(usize, usize, usize)> = (0..k * k).map(|p| (p, p / k, p % k)).collect();
+        // Rows 0 and 1 of B go to C, row 2 is the block's own.
+        let mut values = a.clone();
+        values.extend((0..2 * k).map(|q| 1.0 + q as f64 * 0.25));
+        values.extend(own);
+        let b: Vec<(usize, usize, usize)> = (0..3 * k).map(|q| (k * k + q, q / k, q % k)).collect();
+        let pairs = [(0u16, 0u16, 0u32), (1, 0, 1), (0, 1, 2), (1, 1, 3)];
+        let lists = Lists {
+            s_entries: &s,
+            b_entries: &b,
+            pairs: &pairs,
+            n_rows: 2,
+        };
+        let run = |fixed: bool| {
+            let (mut block, mut bk, mut w) = (vec![0.0; 25], vec![0.0; 2 * k], vec![0.0; 2 * k]);
+            let mut scratch = Scratch {
+                block: &mut block,
+                bk: &mut bk,
+                w: &mut w,
+            };
+            let (mut inv, mut c) = (vec![0.0; 25], vec![0.0; 4]);
+            let r = if fixed {
+                factor_block((k, k + 1), &lists, &values, &mut inv, &mut scratch, &mut c)
+            } else {
+                factor_dynamic((k, k + 1), &lists, &values, &mut inv, &mut scratch, &mut c)
+            };
+            assert_eq!(r, Ok(()));
+            (inv, c)
+        };
+        let (inv_f, c_f) = run(true);
+        assert_eq!((&inv_f, &c_f), (&run(false).0, &run(false).1));
+        // [[S, rᵀ], [r, 0]] times the inverse is I, independently of either path.
+        let saddle = |i: usize, j: usize| match (i < k, j < k) {
+            (true, true) => a[i * k + j],
+            (true, false) => own[i],
+            (false, true) => own[j],
+            (false, false) => 0.0,
+        };
+        for i in 0..=k {
+            for j in 0..=k {
+                let p: f64 = (0..=k).map(|l| saddle(i, l) * inv_f[l * 5 + j]).sum();
+                let want = if i == j { 1.0 } else { 0.0 };
+                assert!((p - want).abs() < 1e-10, "({i}, {j}) = {p}");
+            }
+        }
+    }
+
     #[test]
     fn fixed_size_inverse_reports_the_singular_column() {
         let values = [1.0, 2.0, 2.0, 4.0];
@@ -337,7 +468,14 @@ mod tests {
             bk: &mut bk,
             w: &mut w,
         };
-        let r = factor_block(2, &lists, &values, &mut [0.0; 4], &mut scratch, &mut []);
+        let r = factor_block(
+            (2, 2),
+            &lists,
+            &values,
+            &mut [0.0; 4],
+            &mut scratch,
+            &mut [],
+        );
         assert_eq!(r, Err(1));
     }
 }

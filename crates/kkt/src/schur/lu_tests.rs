@@ -1,7 +1,9 @@
 //! The `schur-lu` backend against dense LU on random KKT matrices
 //! `[[S, Bᵀ], [B, 0]]` whose `S` is block-diagonal with unsymmetric blocks of
 //! 1 and 4 unknowns (a body in Euler parameters: `x`, `y`, `z`, `p`), and
-//! whose `B` joins consecutive bodies (a chain: `C` has a narrow envelope).
+//! whose `B` joins consecutive bodies (a chain: `C` has a narrow envelope),
+//! with or without a row of each body's own (a normalization `pᵀp = 1`,
+//! eliminated with the body's 4 × 4 block).
 
 use crate::testing::{Lcg, relative_difference, relative_residual, vector};
 use crate::{Backend, Csc, KktError, KktOptions, KktSolver};
@@ -14,12 +16,17 @@ const ROWS: usize = 4;
 /// symmetric part positive definite), then `B` (rows after `K n` unknowns),
 /// and with `transpose` the `Bᵀ` block. `singular_block`: body whose 4 × 4
 /// block is made singular (two equal rows); `duplicate`: a constraint row
-/// repeated (a redundant constraint), appended last.
+/// repeated (a redundant constraint), appended last; `own_row`: each body
+/// has a fifth row touching only its 4 × 4 block, after its other rows (with
+/// `Some(k)`, body `k`'s is all zeros: no pivot); `symmetric`: `S` symmetric.
+#[derive(Default)]
 struct Chain {
     n_bodies: usize,
     seed: u64,
     singular_block: Option<usize>,
     duplicate: Option<usize>,
+    own_row: Option<Option<usize>>,
+    symmetric: bool,
 }
 
 impl Chain {
@@ -45,6 +52,13 @@ impl Chain {
             if self.singular_block == Some(k) {
                 s[3] = s[2];
             }
+            if self.symmetric {
+                for i in 0..4 {
+                    for j in 0..i {
+                        s[i][j] = s[j][i];
+                    }
+                }
+            }
             for (i, row) in s.iter().enumerate() {
                 for (j, &v) in row.iter().enumerate() {
                     e.push((x + 3 + i, x + 3 + j, v));
@@ -61,6 +75,14 @@ impl Chain {
                     row.extend((0..K).map(|i| (K * (k - 1) + i, rng.range(-1.0, 1.0))));
                 }
                 rows.push(row);
+            }
+            if let Some(zero) = self.own_row {
+                let scale = if zero == Some(k) { 0.0 } else { 1.0 };
+                rows.push(
+                    (3..K)
+                        .map(|i| (K * k + i, scale * rng.range(0.5, 1.5)))
+                        .collect(),
+                );
             }
         }
         if let Some(r) = self.duplicate {
@@ -118,8 +140,7 @@ fn schur_lu_solves_unsymmetric_block_diagonal_s_as_dense_lu_does() {
         let chain = Chain {
             n_bodies,
             seed,
-            singular_block: None,
-            duplicate: None,
+            ..Chain::default()
         };
         let whole = chain.csc(true);
         // S is not symmetric: the symmetric Schur backend would be wrong.
@@ -148,6 +169,7 @@ fn schur_lu_names_a_singular_block_and_a_redundant_constraint() {
         seed: 5,
         singular_block,
         duplicate,
+        ..Chain::default()
     };
     let block = chain(Some(2), None);
     let b = vector(block.csc(true).n, 1);
@@ -166,6 +188,69 @@ fn schur_lu_names_a_singular_block_and_a_redundant_constraint() {
         solve(&redundant, Backend::SCHUR_LU, &b),
         Err(KktError::Singular {
             unknown: Some(m_dup)
+        })
+    );
+}
+
+/// Each body's own row is eliminated with its block (`C` keeps the joining
+/// rows only), and the solution is dense LU's: with `schur-lu` on unsymmetric
+/// blocks and with `schur` on symmetric ones. The bounds are those of the
+/// test above (a well-conditioned chain: round-off times a small growth).
+#[test]
+fn a_row_of_one_body_is_eliminated_with_its_block() {
+    for (n_bodies, seed) in [(1, 6), (3, 7), (8, 8)] {
+        for (backend, symmetric) in [(Backend::SCHUR_LU, false), (Backend::SCHUR, true)] {
+            let chain = Chain {
+                n_bodies,
+                seed,
+                own_row: Some(None),
+                symmetric,
+                ..Chain::default()
+            };
+            let whole = chain.csc(true);
+            let np = chain.n_primal();
+            let schur = super::Schur::with_symmetry(
+                &chain.csc(false),
+                np,
+                if symmetric {
+                    super::Symmetry::Symmetric
+                } else {
+                    super::Symmetry::General
+                },
+            )
+            .expect("analysed");
+            // 4 joining rows a body stay in C; the fifth is local.
+            assert_eq!(schur.m_c, ROWS * n_bodies, "N = {n_bodies}");
+            let b = vector(whole.n, seed);
+            let dense = solve(&chain, Backend::DENSE, &b).expect("dense LU");
+            let x = solve(&chain, backend, &b).expect("schur");
+            let (diff, res) = (
+                relative_difference(&x, &dense),
+                relative_residual(&whole, &x, &b),
+            );
+            assert!(diff <= 1e-12, "{backend:?}, N = {n_bodies}: {diff:e}");
+            assert!(res <= 1e-14, "{backend:?}, N = {n_bodies}: {res:e}");
+        }
+    }
+}
+
+/// A body's own row of zeros leaves its block without a pivot for that
+/// row's multiplier, which the error names.
+#[test]
+fn a_zero_row_of_one_body_is_named() {
+    let chain = Chain {
+        n_bodies: 4,
+        seed: 9,
+        own_row: Some(Some(2)),
+        ..Chain::default()
+    };
+    let b = vector(chain.csc(true).n, 3);
+    // Body 2's own row is the fifth of its rows.
+    let row = (ROWS + 1) * 2 + ROWS;
+    assert_eq!(
+        solve(&chain, Backend::SCHUR_LU, &b),
+        Err(KktError::Singular {
+            unknown: Some(chain.n_primal() + row)
         })
     );
 }

@@ -22,7 +22,13 @@
 //!
 //! The blocks are the connected components of the pattern of `S` (entries
 //! `(i, j)` with `i, j < n_primal`); a component larger than
-//! [`MAX_BLOCK`] unknowns makes the analysis fail (use LDLᵀ then). The
+//! [`MAX_BLOCK`] unknowns makes the analysis fail (use LDLᵀ then). A
+//! constraint row whose `B` entries all lie in one block of two or more
+//! unknowns, with no entry of `D` in its row or column (a body's
+//! normalization `pᵀp = 1`), is eliminated with that block: the block's
+//! inverse is that of the saddle point `[[S_K, B_lᵀ], [B_l, 0]]`, and `C`
+//! holds the other rows only (for a chain of bodies in Euler parameters,
+//! 3 rows a spherical joint instead of 4 a bar: a smaller `C`, fewer pairs). The
 //! backend reads `S`, `B` and `D` only (the matrix is symmetric), keeps
 //! compact copies of them, and computes its own products and norm for the
 //! residual check of `KktSolver`.
@@ -98,17 +104,23 @@ const FILL_SLACK: f64 = 1.25;
 /// One diagonal block of `S`.
 #[derive(Clone, Debug)]
 struct Block {
-    /// The block's unknowns, ascending (global indices `< n_primal`).
+    /// The block's unknowns in the KKT system: its `k` primal unknowns
+    /// ascending, then `n_primal + r` for each constraint row `r` local to
+    /// it (eliminated with the block, not a row of `C`), ascending.
     coords: std::ops::Range<usize>,
+    /// Number of its primal unknowns.
+    k: usize,
     /// Its entries of `S`: `(position in the KKT values, local i, local j)`.
     s_entries: std::ops::Range<usize>,
     /// Its entries of `B`: `(position in the KKT values, local row, local j)`.
     b_entries: std::ops::Range<usize>,
     /// Its rows in `analyse::Parts::rows` (original constraint indices).
     rows: std::ops::Range<usize>,
-    /// Number of constraint rows touching it.
+    /// Number of its rows of `C` (its local rows are not counted).
     n_rows: usize,
-    /// Offset of its inverse (`k × k`, row-major) in `inverse`.
+    /// Offset of its inverse (row-major, of the primal unknowns and the local
+    /// rows' multipliers: the saddle point `[[S_K, B_lᵀ], [B_l, 0]]`) in
+    /// `inverse`.
     inverse: usize,
     /// Its contributions to `C`: `(local row, local row, slot in C)`.
     pairs: std::ops::Range<usize>,
@@ -158,9 +170,12 @@ pub(crate) struct Schur {
     block: Vec<f64>,
     bk: Vec<f64>,
     w: Vec<f64>,
-    /// Scratch of length `n_primal` and `m` (in `C`'s order).
+    /// Scratch of length `n_primal + m` (the blocks' unknowns, with their
+    /// local multipliers) and `m` (in `C`'s order; the rows of `C` first).
     x: Vec<f64>,
     y: Vec<f64>,
+    /// The dimension of `C`: the constraint rows not local to a block.
+    m_c: usize,
     /// The `B` entries of the KKT matrix by primal column (column `j`'s are
     /// `b_col_ptr[j]..b_col_ptr[j + 1]`): the position of the row in C's
     /// order, and the position in the KKT values. Apart and on 32 bits: the
@@ -168,6 +183,9 @@ pub(crate) struct Schur {
     b_col_ptr: Vec<u32>,
     b_rows: Vec<u32>,
     b_pos: Vec<u32>,
+    /// The same entries' rows in the constraints' own order when that is not
+    /// `C`'s (empty when it is): for the products and row sums.
+    b_orig: Vec<u32>,
     /// Whether `C`'s order is the constraints' own (`c_fwd` the identity).
     natural: bool,
     /// Absolute row sums of the last factored matrix (`n + m`).
@@ -246,18 +264,18 @@ impl Schur {
         let (wp, wm) = self.row_sums.split_at_mut(n);
         for (j, w) in wp.iter_mut().enumerate() {
             let mut column = 0.0;
+            let rows = if self.natural {
+                &self.b_rows
+            } else {
+                &self.b_orig
+            };
             for q in range(&self.b_col_ptr, j) {
-                let (row, p) = (self.b_rows[q], self.b_pos[q]);
+                let (row, p) = (rows[q], self.b_pos[q]);
                 let v = values[p as usize];
                 self.b_values[q] = v;
                 finite.push(v);
                 column += v.abs();
-                let r = if self.natural {
-                    row as usize
-                } else {
-                    self.c_fwd[row as usize]
-                };
-                wm[r] += v.abs();
+                wm[row as usize] += v.abs();
             }
             *w = column;
         }
@@ -379,19 +397,20 @@ impl Schur {
             w: &mut self.w,
         };
         for b in &self.blocks {
-            let k = b.coords.len();
+            let size = b.coords.len();
             let lists = blocks::Lists {
                 s_entries: &self.s_entries[b.s_entries.clone()],
                 b_entries: &self.b_entries[b.b_entries.clone()],
                 pairs: &self.pairs[b.pairs.clone()],
                 n_rows: b.n_rows,
             };
-            let inv = &mut self.inverse[b.inverse..b.inverse + k * k];
-            blocks::factor_block(k, &lists, values, inv, &mut scratch, c_values).map_err(|l| {
-                KktError::Singular {
+            let inv = &mut self.inverse[b.inverse..b.inverse + size * size];
+            let sizes = (b.k, size);
+            blocks::factor_block(sizes, &lists, values, inv, &mut scratch, c_values).map_err(
+                |l| KktError::Singular {
                     unknown: Some(self.coords[b.coords.start + l]),
-                }
-            })?;
+                },
+            )?;
         }
         Ok(())
     }
@@ -423,15 +442,19 @@ impl Schur {
         } else {
             self.for_each_s(|i, j, v| yp[i] += v * xp[j]);
         }
-        for j in 0..n {
-            let (mut acc, xj) = (yp[j], xp[j]);
-            for q in range(&self.b_col_ptr, j) {
-                let row = self.b_rows[q] as usize;
-                let r = if self.natural { row } else { self.c_fwd[row] };
-                acc += self.b_values[q] * xm[r];
-                ym[r] += self.b_values[q] * xj;
+        let rows = if self.natural {
+            &self.b_rows
+        } else {
+            &self.b_orig
+        };
+        for (j, (yj, &xj)) in yp.iter_mut().zip(xp).enumerate() {
+            let col = range(&self.b_col_ptr, j);
+            let mut acc = *yj;
+            for (&row, &b) in rows[col.clone()].iter().zip(&self.b_values[col]) {
+                acc += b * xm[row as usize];
+                ym[row as usize] += b * xj;
             }
-            yp[j] = acc;
+            *yj = acc;
         }
         for (&(_, r, s), &v) in self.d_all.iter().zip(&self.d_values) {
             ym[r] += v * xm[s];
@@ -586,52 +609,62 @@ impl Schur {
         (f_max, primal_res.value())
     }
 
-    /// The solve for block-diagonal `S` or `C` in another order.
+    /// The solve for block-diagonal `S` or `C` in another order. Each
+    /// block's unknowns include the multipliers of its local rows, so a
+    /// block's inverse reads and writes both parts of `rhs`.
     fn solve_general(&mut self, rhs: &mut [f64]) -> f64 {
         let n = self.n_primal;
-        let (f, g) = rhs.split_at_mut(n);
         // y = −g in C's order, x = S⁻¹ f, then y += B x: C y = B S⁻¹ f − g.
         if self.natural {
-            for (y, &gr) in self.y.iter_mut().zip(g.iter()) {
+            for (y, &gr) in self.y.iter_mut().zip(&rhs[n..]) {
                 *y = -gr;
             }
         } else {
-            for (r, &gr) in g.iter().enumerate() {
+            for (r, &gr) in rhs[n..].iter().enumerate() {
                 self.y[self.c_inv[r]] = -gr;
             }
         }
-        self.apply_inverse(f);
-        for j in 0..n {
-            let xj = self.x[j];
-            for q in range(&self.b_col_ptr, j) {
-                self.y[self.b_rows[q] as usize] += self.b_values[q] * xj;
+        self.apply_inverse(rhs);
+        for (j, &xj) in self.x[..n].iter().enumerate() {
+            let col = range(&self.b_col_ptr, j);
+            for (&row, &b) in self.b_rows[col.clone()].iter().zip(&self.b_values[col]) {
+                self.y[row as usize] += b * xj;
             }
         }
-        self.cf.solve_in_place(&mut self.y);
-        // x = S⁻¹ (f − Bᵀ y).
-        for (j, fj) in f.iter_mut().enumerate() {
+        // The local rows (after C's) take no part in C y = …, nor in Bᵀ y.
+        let m_c = self.m_c;
+        self.y[m_c..].fill(0.0);
+        self.cf.solve_in_place(&mut self.y[..m_c]);
+        // x = S⁻¹ (f − Bᵀ y), with the local rows' g as it came.
+        for (j, fj) in rhs[..n].iter_mut().enumerate() {
+            let col = range(&self.b_col_ptr, j);
             let mut s = *fj;
-            for q in range(&self.b_col_ptr, j) {
-                s -= self.b_values[q] * self.y[self.b_rows[q] as usize];
+            for (&row, &b) in self.b_rows[col.clone()].iter().zip(&self.b_values[col]) {
+                s -= b * self.y[row as usize];
             }
             *fj = s;
         }
-        self.apply_inverse(f);
-        f.copy_from_slice(&self.x);
+        self.apply_inverse(rhs);
+        let (f, g) = rhs.split_at_mut(n);
+        f.copy_from_slice(&self.x[..n]);
         if self.natural {
-            g.copy_from_slice(&self.y);
+            // Local rows, if any, are the last ones (after C's), in order.
+            g[..m_c].copy_from_slice(&self.y[..m_c]);
+            g[m_c..].copy_from_slice(&self.x[n + m_c..]);
         } else {
             for (r, gr) in g.iter_mut().enumerate() {
-                *gr = self.y[self.c_inv[r]];
+                let k = self.c_inv[r];
+                *gr = if k < m_c { self.y[k] } else { self.x[n + r] };
             }
         }
         max_abs(rhs)
     }
 
-    /// `self.x = S⁻¹ f` block by block.
-    fn apply_inverse(&mut self, f: &[f64]) {
+    /// `self.x = S⁻¹ rhs` block by block (a block with local rows reads and
+    /// writes their multipliers too).
+    fn apply_inverse(&mut self, rhs: &[f64]) {
         if self.diagonal {
-            for ((x, &fi), &d) in self.x.iter_mut().zip(f).zip(&self.inverse) {
+            for ((x, &fi), &d) in self.x.iter_mut().zip(rhs).zip(&self.inverse) {
                 *x = d * fi;
             }
             return;
@@ -639,7 +672,7 @@ impl Schur {
         for b in &self.blocks {
             let k = b.coords.len();
             let inv = &self.inverse[b.inverse..b.inverse + k * k];
-            blocks::apply_block(&self.coords[b.coords.clone()], inv, f, &mut self.x);
+            blocks::apply_block(&self.coords[b.coords.clone()], inv, rhs, &mut self.x);
         }
     }
 }
