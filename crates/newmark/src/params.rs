@@ -281,7 +281,9 @@ impl std::fmt::Display for Newton {
                 "once per step (a fresh Jacobian at each step's first iteration, kept while the step's iterations contract by {} or better)",
                 crate::Short(*max_rate)
             ),
-            Self::Automatic => f.write_str("automatic (once per step with schur-lu, else modified)"),
+            Self::Automatic => {
+                f.write_str("automatic (once per step with schur-lu, else modified)")
+            }
         }
     }
 }

@@ -73,8 +73,5 @@ fn modified_newton_factors_less_than_once_a_step() {
     // factorization across steps, so it factors fewer times than there are
     // steps (the check that `PER_STEP` is not `MODIFIED` under another name).
     let (_, modified) = run(Newton::MODIFIED);
-    assert!(
-        modified.factorizations < modified.steps,
-        "{modified:?}"
-    );
+    assert!(modified.factorizations < modified.steps, "{modified:?}");
 }

@@ -99,7 +99,8 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 return Err(norms.not_converged(it));
             }
             previous_constraint = norms.constraint;
-            let refactor = self.refactors(h, force_refactor || stalled || (it == 0 && self.per_step()));
+            let refactor =
+                self.refactors(h, force_refactor || stalled || (it == 0 && self.per_step()));
             fresh = refactor;
             if refactor {
                 self.refactor(&k, h)?;
