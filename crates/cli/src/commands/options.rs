@@ -17,8 +17,7 @@ pub enum Integrator {
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum NewtonArg {
-    /// Refactor at every iteration: one iteration per step on chains, the
-    /// fastest there (the default of `mstar chain`).
+    /// Refactor at every iteration (the paper's setting).
     Full,
     /// Reuse the factorization while the iteration contracts fast.
     Modified,
@@ -65,7 +64,7 @@ pub struct IntegratorArgs {
     /// HHT α in [−1/3, 0] [default: −0.1].
     #[arg(long, allow_hyphen_values = true)]
     pub alpha: Option<f64>,
-    /// Newton variant [default: modified; chain and paper: full].
+    /// Newton variant [default: per-step with schur-lu, else modified; chain: per-step; paper: full].
     #[arg(long, value_enum)]
     pub newton: Option<NewtonArg>,
     /// KKT solver [default: auto: dense LU up to 24 unknowns; above, Schur when
