@@ -65,6 +65,15 @@ pub trait KktBackend: Send {
     /// non-finite `x`).
     fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64;
 
+    /// [`solve_in_place`](Self::solve_in_place) without a refinement step
+    /// the backend makes on its own (`schur-lu`'s, `schur/refine.rs`), for a
+    /// right-hand side whose solution is a small correction, where the
+    /// forward error that step removes is small against the solution it
+    /// corrects. The default solves as `solve_in_place`.
+    fn solve_in_place_unrefined(&mut self, rhs: &mut [f64]) -> f64 {
+        self.solve_in_place(rhs)
+    }
+
     /// `y = A x` for the last factored matrix.
     fn mul(&self, x: &[f64], y: &mut [f64]);
 

@@ -15,6 +15,9 @@ pub struct KktSolver {
     factored: bool,
     /// Whether a solve has checked the current factorization's residual.
     verified: bool,
+    /// Whether the solve under way skips the backend's own refinement
+    /// ([`solve_correction`](Self::solve_correction)).
+    unrefined: bool,
     tol: f64,
     /// `‖A‖∞` of the last factorization.
     a_norm: f64,
@@ -97,6 +100,7 @@ impl KktSolver {
             n,
             factored: false,
             verified: false,
+            unrefined: false,
             tol: options.residual_tolerance,
             a_norm: 0.0,
             rhs: vec![0.0; n],
@@ -173,6 +177,24 @@ impl KktSolver {
         self.solve_in_place_with_norm(rhs, rhs_norm)
     }
 
+    /// [`solve_in_place_with_norm`](Self::solve_in_place_with_norm) for a
+    /// right-hand side whose solution is a small correction (a later Newton
+    /// iteration with the factorization of an earlier one): once the
+    /// factorization has been checked by a solve, without the backend's own
+    /// refinement step ([`KktBackend::solve_in_place_unrefined`]).
+    ///
+    /// # Errors
+    /// As [`solve_in_place`](Self::solve_in_place).
+    ///
+    /// # Panics
+    /// If `rhs.len()` differs from the dimension.
+    pub fn solve_correction(&mut self, rhs: &mut [f64], rhs_norm: f64) -> Result<(), KktError> {
+        self.unrefined = true;
+        let solved = self.solve_in_place_with_norm(rhs, rhs_norm);
+        self.unrefined = false;
+        solved
+    }
+
     /// [`solve_in_place`](Self::solve_in_place) for a caller that knows
     /// `rhs_norm = ‖rhs‖∞` already (NaN or infinite if `rhs` has a NaN or an
     /// infinity), which saves a pass over `rhs`.
@@ -237,7 +259,11 @@ impl KktSolver {
         if !self.verified || refine {
             self.rhs.copy_from_slice(rhs);
         }
-        let mut xn = self.inner.solve_in_place(rhs);
+        let mut xn = if self.unrefined && self.verified {
+            self.inner.solve_in_place_unrefined(rhs)
+        } else {
+            self.inner.solve_in_place(rhs)
+        };
         if refine {
             self.refine(rhs, bn);
             xn = max_abs(rhs);

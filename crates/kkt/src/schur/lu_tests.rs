@@ -254,3 +254,58 @@ fn a_zero_row_of_one_body_is_named() {
         })
     );
 }
+
+/// `KktSolver::solve_correction` (a later Newton iteration's solve): once
+/// the factorization is checked, `schur-lu` solves without its refinement
+/// step, still to a backward-stable residual and close to dense LU; the
+/// other Schur backend, which does not refine, solves as before to the bit.
+#[test]
+fn a_correction_solves_without_the_refinement_step() {
+    let chain = Chain {
+        n_bodies: 8,
+        seed: 3,
+        ..Chain::default()
+    };
+    let whole = chain.csc(true);
+    let b = vector(whole.n, 7);
+    let dense = solve(&chain, Backend::DENSE, &b).expect("dense LU");
+    let a = chain.csc(false);
+    let options = KktOptions {
+        backend: Backend::SCHUR_LU,
+        n_primal: Some(chain.n_primal()),
+        ..KktOptions::default()
+    };
+    let mut s = KktSolver::new(&a, &options).expect("analysis");
+    s.factor(&a.values).expect("factorization");
+    let mut refined = b.clone();
+    s.solve_in_place(&mut refined)
+        .expect("the first solve checks it");
+    let mut correction = b.clone();
+    let norm = crate::max_abs(&correction);
+    s.solve_correction(&mut correction, norm).expect("solve");
+    assert_ne!(correction, refined, "the refinement step was skipped");
+    let (diff, res) = (
+        relative_difference(&correction, &dense),
+        relative_residual(&whole, &correction, &b),
+    );
+    assert!(diff <= 1e-10, "‖x − x_dense‖/‖x‖ = {diff:e}");
+    assert!(res <= 1e-14, "relative residual {res:e}");
+
+    let sym = Chain {
+        symmetric: true,
+        ..chain
+    };
+    let a = sym.csc(true);
+    let options = KktOptions {
+        backend: Backend::SCHUR,
+        n_primal: Some(sym.n_primal()),
+        ..KktOptions::default()
+    };
+    let mut s = KktSolver::new(&a, &options).expect("analysis");
+    s.factor(&a.values).expect("factorization");
+    let mut x = b.clone();
+    s.solve_in_place(&mut x).expect("solve");
+    let mut y = b.clone();
+    s.solve_correction(&mut y, norm).expect("solve");
+    assert_eq!(x, y, "schur has no refinement to skip");
+}

@@ -687,6 +687,13 @@ impl KktBackend for Schur {
         self.solve(rhs)
     }
 
+    fn solve_in_place_unrefined(&mut self, rhs: &mut [f64]) -> f64 {
+        if self.refine {
+            return self.solve_general(rhs);
+        }
+        self.solve(rhs)
+    }
+
     fn mul(&self, x: &[f64], y: &mut [f64]) {
         self.product(x, y);
     }

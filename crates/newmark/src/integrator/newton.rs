@@ -107,12 +107,22 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 force_refactor = false;
                 previous_step = f64::INFINITY;
             }
-            self.solver
-                .solve_in_place_with_norm(&mut self.rhs, norms.rhs)
-                .map_err(|source| Failure::Kkt {
-                    context: "solving with the iteration matrix",
-                    source,
-                })?;
+            // A later iteration of a step with the step's own factorization
+            // solves for a small correction: the refinement that keeps the
+            // first correction's multipliers accurate (`schur-lu`) is not
+            // needed for it (docs/performance.md, "The second Newton
+            // iteration at 10⁵ bodies").
+            let small = !refactor && it > 0 && self.per_step();
+            let solved = if small {
+                self.solver.solve_correction(&mut self.rhs, norms.rhs)
+            } else {
+                self.solver
+                    .solve_in_place_with_norm(&mut self.rhs, norms.rhs)
+            };
+            solved.map_err(|source| Failure::Kkt {
+                context: "solving with the iteration matrix",
+                source,
+            })?;
             let step;
             (step, u_max) = self.correct(&k);
             if step > k.max_rate * previous_step {
