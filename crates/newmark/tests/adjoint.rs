@@ -4,37 +4,20 @@
 //! Richardson extrapolation, and its stored and checkpointed modes against
 //! each other.
 
+mod common;
+
+use common::{Model, Param, column_of};
+use mstar_model::PendulumChain;
 use mstar_model::planar::{
     At, PlanarBuilder, PointMass, RigidBody, RotationalSpringDamper, SpringDamper, TimeFunction,
 };
-use mstar_model::{PendulumChain, System};
 use mstar_newmark::{
     Column, Config, IntegrationError, Integrator, Memory, Newton, Objective, Parameterized, Scheme,
-    Variant,
 };
 
 /// Newton tolerance of every run here (the finite differences divide the
 /// runs' own errors by the difference step).
 const TOL: f64 = 1e-12;
-
-/// A model at one set of parameter values: its system and initial state.
-struct Model {
-    sys: Box<dyn System>,
-    u0: Vec<f64>,
-    v0: Vec<f64>,
-}
-
-impl Variant for Model {
-    fn system(&self) -> &dyn System {
-        self.sys.as_ref()
-    }
-    fn initial_position(&self) -> &[f64] {
-        &self.u0
-    }
-    fn initial_velocity(&self) -> &[f64] {
-        &self.v0
-    }
-}
 
 /// The paper's pendulum of mass `p[0]` and length `p[1]` (g = 9.81),
 /// released at rest from θ₀ = 1 rad.
@@ -136,26 +119,6 @@ fn slider_crank(p: &[f64]) -> Model {
 }
 
 /// Parameter `k` of a model family `make` at the values `nominal`.
-struct Param {
-    make: fn(&[f64]) -> Model,
-    nominal: Vec<f64>,
-    k: usize,
-}
-
-impl Parameterized for Param {
-    fn name(&self) -> String {
-        format!("p{}", self.k)
-    }
-    fn value(&self) -> f64 {
-        self.nominal[self.k]
-    }
-    fn at(&self, value: f64) -> Result<Box<dyn Variant>, String> {
-        let mut p = self.nominal.clone();
-        p[self.k] = value;
-        Ok(Box::new((self.make)(&p)))
-    }
-}
-
 fn params(make: fn(&[f64]) -> Model, nominal: &[f64]) -> Vec<Param> {
     (0..nominal.len())
         .map(|k| Param {
@@ -173,15 +136,6 @@ fn config(newton: Newton, rho: f64) -> Config {
         newton,
         scheme: Scheme::GeneralizedAlpha { rho_inf: rho },
         ..Config::default()
-    }
-}
-
-fn column_of(u: &[f64], v: &[f64], a: &[f64], lambda: &[f64], c: Column) -> f64 {
-    match c {
-        Column::Position(i) => u[i],
-        Column::Velocity(i) => v[i],
-        Column::Acceleration(i) => a[i],
-        Column::Multiplier(i) => lambda[i],
     }
 }
 

@@ -5,6 +5,9 @@
 //! parameters, each with a symmetric and an unsymmetric iteration matrix;
 //! and the fallback to the sparse LU when the backend refuses `Aᵀ`'s pattern.
 
+mod common;
+
+use common::{Model, Param, column_of};
 use mstar_kkt::{Backend, Csc, KktBackend, KktError, KktOptions, Registration, Structure};
 use mstar_model::planar::{
     At, PlanarBuilder, PointMass, RigidBody, RotationalSpringDamper, SpringDamper, TimeFunction,
@@ -13,28 +16,7 @@ use mstar_model::spatial::{
     Attach, JointSpec, JointType, SpatialBody, SpatialBuilder, SpatialInertia, SpatialSystem,
 };
 use mstar_model::{Pattern, System};
-use mstar_newmark::{
-    Column, Config, Integrator, Memory, Newton, Objective, Parameterized, Scheme, Variant,
-};
-
-/// A model at one set of parameter values: its system and initial state.
-struct Model {
-    sys: Box<dyn System>,
-    u0: Vec<f64>,
-    v0: Vec<f64>,
-}
-
-impl Variant for Model {
-    fn system(&self) -> &dyn System {
-        self.sys.as_ref()
-    }
-    fn initial_position(&self) -> &[f64] {
-        &self.u0
-    }
-    fn initial_velocity(&self) -> &[f64] {
-        &self.v0
-    }
-}
+use mstar_newmark::{Column, Config, Integrator, Memory, Newton, Objective, Parameterized, Scheme};
 
 /// A slider-crank driven by a constant torque, with a spring from a point
 /// above the mechanism to the coupler and a rotational damper at the crank.
@@ -159,35 +141,6 @@ fn spatial_symmetric(p: &[f64]) -> Model {
 }
 
 /// Parameter `k` of a model family `make` at the values `nominal`.
-struct Param {
-    make: fn(&[f64]) -> Model,
-    nominal: Vec<f64>,
-    k: usize,
-}
-
-impl Parameterized for Param {
-    fn name(&self) -> String {
-        format!("p{}", self.k)
-    }
-    fn value(&self) -> f64 {
-        self.nominal[self.k]
-    }
-    fn at(&self, value: f64) -> Result<Box<dyn Variant>, String> {
-        let mut p = self.nominal.clone();
-        p[self.k] = value;
-        Ok(Box::new((self.make)(&p)))
-    }
-}
-
-fn column_of(u: &[f64], v: &[f64], a: &[f64], lambda: &[f64], c: Column) -> f64 {
-    match c {
-        Column::Position(i) => u[i],
-        Column::Velocity(i) => v[i],
-        Column::Acceleration(i) => a[i],
-        Column::Multiplier(i) => lambda[i],
-    }
-}
-
 /// `∂Ψ/∂y_n` of sample `n` of `last` (the objectives' definitions written
 /// out independently of the library; no fits here).
 fn weight(objective: &Objective, n: usize, last: usize) -> f64 {

@@ -112,7 +112,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             // first correction's multipliers accurate (`schur-lu`) is not
             // needed for it (docs/performance.md, "The second Newton
             // iteration at 10⁵ bodies").
-            let small = !refactor && it > 0 && self.per_step();
+            let small = !refactor && self.per_step();
             let solved = if small {
                 self.solver.solve_correction(&mut self.rhs, norms.rhs)
             } else {
