@@ -438,8 +438,9 @@ fn scrambled_multipliers(a: &Csc, np: usize) -> Csc {
 
 #[test]
 fn schur_solves_constraints_in_any_order() {
-    // Scrambled, the constraints' own order has a wide envelope and C is
-    // factored after AMD instead.
+    // Scrambled, the constraints' own order has a wide envelope: C is
+    // factored by its envelope in the reverse Cuthill–McKee order, which
+    // brings a chain's rows back together.
     for n_bodies in [10, 1000] {
         let a = scrambled_multipliers(&chain_with(n_bodies, 5, None, false), 3 * n_bodies);
         let mut b = vec![0.0; a.n];
@@ -447,18 +448,93 @@ fn schur_solves_constraints_in_any_order() {
         let schur = solve(Backend::SCHUR, n_bodies, &a, &b).expect("regular chain");
         let lu = solve(Backend::SPARSE_LU, n_bodies, &a, &b).expect("regular chain");
         assert!(relative_difference(&schur, &lu) <= 1e-10, "N = {n_bodies}");
+        // (envelope, own order, the one-pass factorization)
         let envelope = |a: &Csc| {
-            Schur::new(a, 3 * n_bodies)
-                .expect("structure")
-                .uses_envelope()
+            let s = Schur::new(a, 3 * n_bodies).expect("structure");
+            (s.uses_envelope(), s.natural_order(), s.is_banded())
         };
-        assert!(!envelope(&a), "N = {n_bodies}: scrambled, AMD");
-        assert!(
+        assert_eq!(
+            envelope(&a),
+            (true, false, true),
+            "N = {n_bodies}: scrambled, RCM"
+        );
+        assert_eq!(
             envelope(&chain_with(n_bodies, 5, None, false)),
+            (true, true, true),
             "in order, envelope"
         );
         assert!(relative_residual(&a, &schur, &b) <= 1e-12, "N = {n_bodies}");
     }
+}
+
+/// The KKT matrix (both triangles) of `k × k` planar bodies on a grid, each
+/// joined to its right and upper neighbour by one random row (a distance,
+/// say; 2k(k − 1) rows on 3k² coordinates, of full rank): `C`'s graph
+/// is a grid, whose envelope in any order holds about `k` times the values
+/// of its factor after AMD.
+fn grid(k: usize, seed: u64) -> Csc {
+    let mut rng = crate::testing::Lcg::new(seed);
+    let (n_bodies, body) = (k * k, |i: usize, j: usize| 3 * (i * k + j));
+    let mut rows: Vec<Vec<(usize, f64)>> = Vec::new();
+    for i in 0..k {
+        for j in 0..k {
+            for (di, dj) in [(0, 1), (1, 0)] {
+                if i + di < k && j + dj < k {
+                    let (p, q) = (body(i, j), body(i + di, j + dj));
+                    let mut row: Vec<(usize, f64)> =
+                        (0..3).map(|c| (p + c, rng.range(-1.0, 1.0))).collect();
+                    row.extend((0..3).map(|c| (q + c, rng.range(-1.0, 1.0))));
+                    rows.push(row);
+                }
+            }
+        }
+    }
+    let np = 3 * n_bodies;
+    let mut pairs = Vec::new();
+    for i in 0..np {
+        pairs.push((i, i, rng.range(0.5, 2.0)));
+    }
+    for (r, row) in rows.iter().enumerate() {
+        pairs.push((np + r, np + r, 0.0));
+        for &(p, v) in row {
+            pairs.extend([(p, np + r, v), (np + r, p, v)]);
+        }
+    }
+    let n = np + rows.len();
+    pairs.sort_by_key(|&(i, j, _)| (j, i));
+    let mut a = Csc {
+        n,
+        col_ptr: vec![0; n + 1],
+        ..Csc::default()
+    };
+    for &(i, j, v) in &pairs {
+        a.col_ptr[j + 1] += 1;
+        a.row_idx.push(i);
+        a.values.push(v);
+    }
+    for j in 0..n {
+        a.col_ptr[j + 1] += a.col_ptr[j];
+    }
+    a
+}
+
+#[test]
+fn schur_factors_a_grid_after_amd() {
+    // No order gives a grid's C a narrow envelope: faer's sparse LDLᵀ
+    // after AMD, against sparse LU.
+    let k = 20;
+    let a = grid(k, 3);
+    let mut b = vec![0.0; a.n];
+    a.mul(&vector(a.n, 4), &mut b);
+    assert!(
+        !Schur::new(&a, 3 * k * k)
+            .expect("structure")
+            .uses_envelope()
+    );
+    let schur = solve(Backend::SCHUR, k * k, &a, &b).expect("regular grid");
+    let lu = solve(Backend::SPARSE_LU, k * k, &a, &b).expect("regular grid");
+    assert!(relative_difference(&schur, &lu) <= 1e-10);
+    assert!(relative_residual(&a, &schur, &b) <= 1e-12);
 }
 
 #[test]
@@ -527,15 +603,22 @@ fn with_multiplier_diagonal(a: &Csc, np: usize, d: f64) -> Csc {
 
 #[test]
 fn the_residual_check_inside_the_schur_solve_is_the_residual() {
-    for (n_bodies, d) in [(1, 0.0), (10, 0.0), (1000, 0.0), (10, -0.3), (1000, -0.3)] {
+    // A chain in order, and scrambled (C in the reverse Cuthill–McKee order).
+    let cases = [(1, 0.0), (10, 0.0), (1000, 0.0), (10, -0.3), (1000, -0.3)];
+    for ((n_bodies, d), scrambled) in cases.into_iter().flat_map(|c| [(c, false), (c, true)]) {
         let np = 3 * n_bodies;
         let a = with_multiplier_diagonal(&chain_with(n_bodies, 8, None, false), np, d);
+        let a = if scrambled {
+            scrambled_multipliers(&a, np)
+        } else {
+            a
+        };
         let b = vector(a.n, 5);
         let mut schur = Schur::new(&a, np).expect("structure");
         let a_norm = schur.factor(&a.values).expect("regular");
         assert!(
             schur.is_banded() && schur.checks_in_solve(),
-            "a chain in order"
+            "N = {n_bodies}, scrambled: {scrambled}"
         );
         let mut x = b.clone();
         let (x_norm, fused) = schur.solve_checked(&mut x);

@@ -55,11 +55,6 @@ impl EnvelopeLdlt {
         })
     }
 
-    /// The size of the envelope (stored values).
-    pub(crate) fn len(&self) -> usize {
-        self.values.len()
-    }
-
     /// The positions of row `i` in `values` and its first stored column.
     #[inline]
     fn row(&self, i: usize) -> (std::ops::Range<usize>, usize) {

@@ -82,6 +82,7 @@ mod dense;
 mod envelope;
 mod envelope_lu;
 mod norm;
+mod rcm;
 pub(crate) mod schur;
 mod solver;
 mod sparse_ldlt;

@@ -240,11 +240,14 @@ pub enum Newton {
         max_rate: f64,
     },
     /// Chosen with the KKT backend when the integrator is made
-    /// ([`Newton::resolve`]): once per step with `schur-lu` (spatial bodies'
-    /// exact, unsymmetric tangent: one iteration a step, 1.5–1.8× faster
-    /// than modified Newton on the spatial chain), modified Newton with the
-    /// others (on the N-four-bar with `schur` at 10⁴ bodies modified Newton
-    /// is the faster; docs/performance.md, "Newton variant"). The default.
+    /// ([`Newton::resolve`]): once per step with the Schur backends
+    /// (`schur-lu`: spatial bodies' exact, unsymmetric tangent, one
+    /// iteration a step, 1.5–1.8× faster than modified Newton on the spatial
+    /// chain; `schur`: the N-four-bar from 7 to 10⁵ bodies, 1.04–1.36
+    /// iterations a step against modified Newton's 3.1–3.3, 10–35 % less
+    /// time), modified Newton with the others (a dense or sparse LU's
+    /// factorization costs more than the two iterations it saves;
+    /// docs/performance.md, "Newton variant"). The default.
     #[default]
     Automatic,
 }
@@ -260,8 +263,11 @@ impl Newton {
     /// resolved, the others as they are.
     #[must_use]
     pub fn resolve(self, backend: mstar_kkt::Backend) -> Self {
+        use mstar_kkt::Backend;
         match self {
-            Self::Automatic if backend == mstar_kkt::Backend::SCHUR_LU => Self::PER_STEP,
+            Self::Automatic if backend == Backend::SCHUR_LU || backend == Backend::SCHUR => {
+                Self::PER_STEP
+            }
             Self::Automatic => Self::MODIFIED,
             chosen => chosen,
         }
@@ -283,7 +289,7 @@ impl std::fmt::Display for Newton {
                 crate::Short(*max_rate)
             ),
             Self::Automatic => {
-                f.write_str("automatic (once per step with schur-lu, else modified)")
+                f.write_str("automatic (once per step with schur and schur-lu, else modified)")
             }
         }
     }

@@ -122,9 +122,10 @@ impl Schur {
                 .iter()
                 .all(|b| b.coords.len() == 1 && b.s_entries.len() == 1);
         let natural = order.fwd.iter().enumerate().all(|(k, &r)| k == r);
-        let banded = diagonal && natural && matches!(order.factor, CFactor::Envelope(_));
-        // The one-pass factorization of a chain computes C's slots from the
-        // envelope: no table of pairs (8 bytes a pair, about 20 pairs a bar).
+        let banded = diagonal && matches!(order.factor, CFactor::Envelope(_));
+        // The one-pass factorization of a chain (or of a closed loop in the
+        // reverse Cuthill–McKee order) computes C's slots from the envelope:
+        // no table of pairs (8 bytes a pair, about 20 pairs a bar).
         let (diag_s, pair_ptr, pairs) = match (diagonal, banded) {
             (false, _) => (Vec::new(), Vec::new(), pairs),
             (true, banded) => (
@@ -164,6 +165,11 @@ impl Schur {
             w: vec![0.0; parts.max_rows * parts.max_k],
             x: vec![0.0; dim],
             y: vec![0.0; m],
+            g_ordered: if diagonal && !natural {
+                vec![0.0; m]
+            } else {
+                Vec::new()
+            },
             m_c,
             b_values: vec![0.0; b.rows.len()],
             natural,
@@ -389,11 +395,13 @@ impl Parts {
 
 impl COrder {
     /// `C`'s pattern is every block's row pairs, `D`'s entries and the
-    /// diagonal. It is factored in the constraints' own order by its envelope
-    /// when that is at most `FILL_SLACK` times the factor AMD gives (a chain's
-    /// joints in order: a band of width 3, factored and solved in sequential
-    /// passes), else by faer's sparse LDLᵀ after AMD, on the one triangle it
-    /// reads (faer then factors it in place). With [`Symmetry::General`] the
+    /// diagonal. It is factored by its envelope when that is at most
+    /// `FILL_SLACK` times the factor AMD gives, in the constraints' own order
+    /// (a chain's joints in order: a band of width 3, factored and solved in
+    /// sequential passes) or else in the reverse Cuthill–McKee order (a
+    /// closed loop's rows brought together: the N-four-bar's `C` in a band),
+    /// else by faer's sparse LDLᵀ after AMD, on the one triangle it reads
+    /// (faer then factors it in place). With [`Symmetry::General`] the
     /// envelope is factored by LU on both triangles, and there is no
     /// fallback: a wider envelope is an error.
     ///
@@ -461,35 +469,29 @@ impl COrder {
         pattern.extend((0..m).map(|r| (r, r)));
         // csc_of sorts and deduplicates `pattern`: it is C's entry list.
         let c_orig = csc_of(m, &mut pattern);
-        let first: Vec<usize> = (0..m).map(|i| c_orig.column(i)[0].min(i)).collect();
-        // (None: too large for its 32-bit row pointers.)
-        let envelope = EnvelopeLdlt::new(&first);
         let (fwd, inv) = kkt_ordering(&c_orig, m, Default::default())?;
         let mut permuted: Vec<(usize, usize)> =
             pattern.iter().map(|&(s, r)| (inv[s], inv[r])).collect();
         let c_amd = csc_of(m, &mut permuted);
         let amd = SparseLdlt::preordered(&c_amd)?;
-        let narrow = envelope.filter(|e| e.len() as f64 <= FILL_SLACK * amd.factor_len() as f64);
-        if let Some(envelope) = narrow {
+        if let Some(order) = narrow_envelope(&c_orig, FILL_SLACK * amd.factor_len() as f64) {
             let factor = match symmetry {
-                Symmetry::Symmetric => Some(CFactor::Envelope(envelope)),
-                // The same envelope: None only beyond 32-bit row pointers,
-                // which the LDLᵀ's has already excluded.
-                Symmetry::General => EnvelopeLu::new(&first).map(CFactor::EnvelopeLu),
+                Symmetry::Symmetric => EnvelopeLdlt::new(&order.first).map(CFactor::Envelope),
+                Symmetry::General => EnvelopeLu::new(&order.first).map(CFactor::EnvelopeLu),
             };
+            // (None: too large for its 32-bit row pointers.)
             if let Some(factor) = factor {
-                let identity: Vec<usize> = (0..m).collect();
                 return Ok(Self {
-                    fwd: identity.clone(),
-                    inv: identity,
+                    fwd: order.fwd,
+                    inv: order.inv,
                     factor,
                 });
             }
         }
         if symmetry == Symmetry::General {
             return Err(KktError::Structure(
-                "the schur-lu backend factors C = B S⁻¹ Bᵀ by its envelope in the constraints' own \
-                 order, and this one is too wide (use lu)"
+                "the schur-lu backend factors C = B S⁻¹ Bᵀ by its envelope, in the constraints' own \
+                 order or the reverse Cuthill–McKee order, and both are too wide (use lu)"
                     .to_string(),
             ));
         }
@@ -499,6 +501,54 @@ impl COrder {
             factor: sparse_c_factor(c_amd, amd)?,
         })
     }
+}
+
+/// An order of `C` and the first stored column of each of its rows there.
+struct EnvelopeOrder {
+    fwd: Vec<usize>,
+    inv: Vec<usize>,
+    first: Vec<usize>,
+}
+
+/// The order in which `C`'s envelope holds at most `limit` values: the
+/// constraints' own order (a chain's), else the reverse Cuthill–McKee order
+/// (a closed loop's rows brought together; `crate::rcm`); `None` when
+/// neither does.
+fn narrow_envelope(c: &Csc, limit: f64) -> Option<EnvelopeOrder> {
+    let m = c.n;
+    // The envelope's size: row k holds columns first[k] ..= k.
+    let size = |first: &[usize]| {
+        first
+            .iter()
+            .enumerate()
+            .map(|(k, &f)| k - f + 1)
+            .sum::<usize>()
+    };
+    let own: Vec<usize> = (0..m).map(|i| c.column(i)[0].min(i)).collect();
+    if size(&own) as f64 <= limit {
+        let identity: Vec<usize> = (0..m).collect();
+        return Some(EnvelopeOrder {
+            fwd: identity.clone(),
+            inv: identity,
+            first: own,
+        });
+    }
+    let fwd = crate::rcm::reverse_cuthill_mckee(c);
+    let mut inv = vec![0; m];
+    for (k, &r) in fwd.iter().enumerate() {
+        inv[r] = k;
+    }
+    let first: Vec<usize> = (0..m)
+        .map(|k| {
+            c.column(fwd[k])
+                .iter()
+                .map(|&r| inv[r])
+                .min()
+                .unwrap_or(k)
+                .min(k)
+        })
+        .collect();
+    (size(&first) as f64 <= limit).then_some(EnvelopeOrder { fwd, inv, first })
 }
 
 /// `C` (stored with both triangles, in AMD order) factored by faer, on the one

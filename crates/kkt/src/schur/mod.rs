@@ -15,8 +15,10 @@
 //! whose pattern is that of `B Bᵀ`: block-tridiagonal for a chain, so its
 //! factorization costs O(m). `C` is factored by its envelope
 //! (`crate::envelope`) in the constraints' own order when that is at most
-//! `FILL_SLACK` times the factor AMD gives, else by faer's sparse LDLᵀ after
-//! AMD on the triangle faer reads. `C` is symmetric positive definite when `S` is and
+//! `FILL_SLACK` times the factor AMD gives, else in the reverse
+//! Cuthill–McKee order (`crate::rcm`; a closed loop's rows, which the
+//! constraints' own order spreads apart) when that one is, else by faer's
+//! sparse LDLᵀ after AMD on the triangle faer reads. `C` is symmetric positive definite when `S` is and
 //! `B` has full row rank; a block without an inverse, or a pivot of `C` at the
 //! rounding level (a redundant constraint), is an error naming the unknown.
 //!
@@ -97,8 +99,9 @@ pub(crate) enum Symmetry {
 /// The largest diagonal block of `S` that the Schur backend inverts densely.
 pub const MAX_BLOCK: usize = 12;
 
-/// How much larger (in stored values) the factor of `C` in the constraints'
-/// own order may be than with AMD and still be preferred for its locality.
+/// How much larger (in stored values) the envelope of `C` (in the
+/// constraints' own order or the reverse Cuthill–McKee order) may be than
+/// its factor with AMD and still be preferred for its locality.
 const FILL_SLACK: f64 = 1.25;
 
 /// One diagonal block of `S`.
@@ -186,6 +189,9 @@ pub(crate) struct Schur {
     /// The same entries' rows in the constraints' own order when that is not
     /// `C`'s (empty when it is): for the products and row sums.
     b_orig: Vec<u32>,
+    /// The multipliers' part of a right-hand side in `C`'s order, for the
+    /// solve of a diagonal `S` when that order is not the constraints' own.
+    g_ordered: Vec<f64>,
     /// Whether `C`'s order is the constraints' own (`c_fwd` the identity).
     natural: bool,
     /// Absolute row sums of the last factored matrix (`n + m`).
@@ -210,6 +216,12 @@ impl Schur {
     #[cfg(test)]
     pub(crate) fn uses_envelope(&self) -> bool {
         matches!(self.cf, CFactor::Envelope(_))
+    }
+
+    /// Whether `C`'s order is the constraints' own.
+    #[cfg(test)]
+    pub(crate) fn natural_order(&self) -> bool {
+        self.natural
     }
 
     /// Whether the last factorization took the one-pass path.
@@ -303,7 +315,8 @@ impl Schur {
     }
 
     /// [`factor_matrix`](Self::factor_matrix) for a diagonal `S` and `C` in its envelope
-    /// in the constraints' own order (a chain), in one pass over the columns:
+    /// (a chain in the constraints' own order, a closed loop in the reverse
+    /// Cuthill–McKee order), in one pass over the columns:
     /// `S_jj` and column `j` of `B` gathered and checked, `C += b_r b_s / S_jj`
     /// into slots computed from the envelope's row pointers, and the absolute
     /// row sums of the whole matrix for `‖A‖∞` (kept in [`Self::norm`]). The
@@ -339,11 +352,13 @@ impl Schur {
             }
             let w = column + s.abs();
             wp_max = if w > wp_max { w } else { wp_max };
-            // The lower triangle of b bᵀ / S_jj (rows ascending in a column).
+            // The lower triangle of b bᵀ / S_jj (a column's rows ascend in
+            // the constraints' own order, not always in C's).
             let (rows, bv) = (&self.b_rows[col.clone()], &self.b_values[col]);
             for (a, (&r, &br)) in rows.iter().zip(bv).enumerate() {
                 for (&s_row, &bs) in rows[..=a].iter().zip(bv) {
-                    env.add(r as usize, s_row as usize, br * inv * bs);
+                    let (hi, lo) = if r >= s_row { (r, s_row) } else { (s_row, r) };
+                    env.add(hi as usize, lo as usize, br * inv * bs);
                 }
             }
         }
@@ -490,17 +505,16 @@ impl Schur {
         if self.refine {
             return self.solve_refined(rhs).0;
         }
-        if self.diagonal && self.natural {
+        if self.diagonal {
             return self.solve_diagonal(rhs, false).0;
         }
         self.solve_general(rhs)
     }
 
     /// Whether [`solve_checked`](Self::solve_checked) forms the residual on
-    /// the way (`S` diagonal and `C` in the constraints' own order, or a
-    /// refined solve, which forms it anyway).
+    /// the way (`S` diagonal, or a refined solve, which forms it anyway).
     pub(crate) fn checks_in_solve(&self) -> bool {
-        self.refine || (self.diagonal && self.natural)
+        self.refine || self.diagonal
     }
 
     /// [`solve`](Self::solve) that also returns
@@ -516,7 +530,28 @@ impl Schur {
         self.solve_diagonal(rhs, true)
     }
 
-    /// The solve for a diagonal `S` and `C` in the constraints' own order:
+    /// The solve for a diagonal `S`, its multipliers' part in `C`'s order
+    /// ([`solve_diagonal_in_order`](Self::solve_diagonal_in_order), on a
+    /// copy in that order when it is not the constraints' own).
+    fn solve_diagonal(&mut self, rhs: &mut [f64], check: bool) -> (f64, f64) {
+        let n = self.n_primal;
+        let (f, g) = rhs.split_at_mut(n);
+        if self.natural {
+            return self.solve_diagonal_in_order(f, g, check);
+        }
+        let mut ordered = std::mem::take(&mut self.g_ordered);
+        for (r, &gr) in g.iter().enumerate() {
+            ordered[self.c_inv[r]] = gr;
+        }
+        let out = self.solve_diagonal_in_order(f, &mut ordered, check);
+        for (r, gr) in g.iter_mut().enumerate() {
+            *gr = ordered[self.c_inv[r]];
+        }
+        self.g_ordered = ordered;
+        out
+    }
+
+    /// The solve for a diagonal `S`, `g` in `C`'s order:
     /// the steps of the general path in two sweeps over `B` and no scratch
     /// (on a long chain each pass over `B` streams it from memory):
     /// `g ← B S⁻¹ f − g`, `g ← C⁻¹ g`, `f ← S⁻¹ (f − Bᵀ g)`. With `check`, the
@@ -525,9 +560,7 @@ impl Schur {
     /// constraint row `(B x + D y − g)_r`, accumulated in the scratch `y`
     /// from `−g` and the `x_j` as they come. Returns
     /// `(‖x‖∞, ‖A x − b‖∞)` (the residual 0 without `check`).
-    fn solve_diagonal(&mut self, rhs: &mut [f64], check: bool) -> (f64, f64) {
-        let n = self.n_primal;
-        let (f, g) = rhs.split_at_mut(n);
+    fn solve_diagonal_in_order(&mut self, f: &mut [f64], g: &mut [f64], check: bool) -> (f64, f64) {
         if check {
             // The constraint rows' residual starts at D y − g.
             for (r, &gr) in self.y.iter_mut().zip(g.iter()) {
@@ -536,8 +569,9 @@ impl Schur {
         }
         let g_norm = self.diagonal_multipliers(f, g);
         if check {
+            // D's entries are indexed in the constraints' own order.
             for (&(_, r, c), &v) in self.d_all.iter().zip(&self.d_values) {
-                self.y[r] += v * g[c];
+                self.y[self.c_inv[r]] += v * g[self.c_inv[c]];
             }
         }
         let (f_max, primal_res) = self.diagonal_primal(f, g, check);
@@ -549,8 +583,16 @@ impl Schur {
         let x_norm = if f_max.is_finite() {
             f_max.finite_max().max(g_norm)
         } else {
-            // A NaN or an infinity: max_abs tells which (a rare path).
-            max_abs(rhs)
+            // A NaN or an infinity: max_abs tells which (a rare path;
+            // `f64::max` would drop a NaN).
+            let (a, b) = (max_abs(f), max_abs(g));
+            if a.is_infinite() || b.is_infinite() {
+                f64::INFINITY
+            } else if a.is_nan() || b.is_nan() {
+                f64::NAN
+            } else {
+                a.max(b)
+            }
         };
         (x_norm, residual)
     }
