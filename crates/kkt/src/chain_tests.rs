@@ -500,22 +500,7 @@ fn grid(k: usize, seed: u64) -> Csc {
             pairs.extend([(p, np + r, v), (np + r, p, v)]);
         }
     }
-    let n = np + rows.len();
-    pairs.sort_by_key(|&(i, j, _)| (j, i));
-    let mut a = Csc {
-        n,
-        col_ptr: vec![0; n + 1],
-        ..Csc::default()
-    };
-    for &(i, j, v) in &pairs {
-        a.col_ptr[j + 1] += 1;
-        a.row_idx.push(i);
-        a.values.push(v);
-    }
-    for j in 0..n {
-        a.col_ptr[j + 1] += a.col_ptr[j];
-    }
-    a
+    crate::testing::csc_of_entries(np + rows.len(), pairs)
 }
 
 #[test]

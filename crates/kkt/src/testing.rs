@@ -111,6 +111,26 @@ pub(crate) fn chain_with(
     a
 }
 
+/// The `n × n` matrix of the entries `(row, column, value)`, each
+/// position at most once.
+pub(crate) fn csc_of_entries(n: usize, mut entries: Vec<(usize, usize, f64)>) -> Csc {
+    entries.sort_by_key(|&(i, j, _)| (j, i));
+    let mut a = Csc {
+        n,
+        col_ptr: vec![0; n + 1],
+        ..Csc::default()
+    };
+    for &(i, j, v) in &entries {
+        a.col_ptr[j + 1] += 1;
+        a.row_idx.push(i);
+        a.values.push(v);
+    }
+    for j in 0..n {
+        a.col_ptr[j + 1] += a.col_ptr[j];
+    }
+    a
+}
+
 /// A vector of `n` entries in `[-1, 1)`.
 pub(crate) fn vector(n: usize, seed: u64) -> Vec<f64> {
     let mut rng = Lcg::new(seed.wrapping_add(17));

@@ -5,7 +5,7 @@
 //! with or without a row of each body's own (a normalization `pᵀp = 1`,
 //! eliminated with the body's 4 × 4 block).
 
-use crate::testing::{Lcg, relative_difference, relative_residual, vector};
+use crate::testing::{Lcg, csc_of_entries, relative_difference, relative_residual, vector};
 use crate::{Backend, Csc, KktError, KktOptions, KktSolver};
 
 /// Unknowns per body and constraint rows per body.
@@ -101,22 +101,8 @@ impl Chain {
 
     /// The matrix as the Schur backends read it (no `Bᵀ`), or whole.
     fn csc(&self, transpose: bool) -> Csc {
-        let (n, mut e) = self.entries(transpose);
-        e.sort_by_key(|&(i, j, _)| (j, i));
-        let mut a = Csc {
-            n,
-            col_ptr: vec![0; n + 1],
-            ..Csc::default()
-        };
-        for &(i, j, v) in &e {
-            a.col_ptr[j + 1] += 1;
-            a.row_idx.push(i);
-            a.values.push(v);
-        }
-        for j in 0..n {
-            a.col_ptr[j + 1] += a.col_ptr[j];
-        }
-        a
+        let (n, e) = self.entries(transpose);
+        csc_of_entries(n, e)
     }
 }
 
