@@ -6,7 +6,7 @@
 use super::{Block, CFactor, FILL_SLACK, MAX_BLOCK, Schur, Symmetry};
 use crate::envelope::EnvelopeLdlt;
 use crate::envelope_lu::EnvelopeLu;
-use crate::sparse_ldlt::{SparseLdlt, kkt_ordering};
+use crate::sparse_ldlt::{SparseLdlt, is_symmetric_structure, kkt_ordering};
 use crate::{Csc, KktError};
 
 /// The block structure of `S` and each block's rows of `B`.
@@ -463,28 +463,29 @@ impl COrder {
         let c_orig = csc_of(m, &mut pattern);
         let first: Vec<usize> = (0..m).map(|i| c_orig.column(i)[0].min(i)).collect();
         // (None: too large for its 32-bit row pointers.)
-        let envelope = EnvelopeLdlt::new(&first);
+        let mut envelope = EnvelopeLdlt::new(&first);
+        // Every factor of C in any order stores at least C's lower triangle
+        // (fill only adds entries, and for a symmetric pattern the
+        // triangle's size does not depend on the order): an envelope within
+        // FILL_SLACK of it is within FILL_SLACK of AMD's factor, and the
+        // AMD analysis would only confirm the envelope. (On a chain of 10⁵
+        // bodies that analysis was two thirds of the Schur set-up.)
+        let surely_narrow = envelope.as_ref().is_some_and(|e| {
+            e.len() as f64 <= FILL_SLACK * lower_len(&c_orig) as f64
+                && is_symmetric_structure(&c_orig)
+        });
+        // (Some for an envelope: `envelope` says why it could be None.)
+        if surely_narrow && let Some(this) = Self::envelope(&first, envelope.take(), symmetry) {
+            return Ok(this);
+        }
         let (fwd, inv) = kkt_ordering(&c_orig, m, Default::default())?;
         let mut permuted: Vec<(usize, usize)> =
             pattern.iter().map(|&(s, r)| (inv[s], inv[r])).collect();
         let c_amd = csc_of(m, &mut permuted);
         let amd = SparseLdlt::preordered(&c_amd)?;
         let narrow = envelope.filter(|e| e.len() as f64 <= FILL_SLACK * amd.factor_len() as f64);
-        if let Some(envelope) = narrow {
-            let factor = match symmetry {
-                Symmetry::Symmetric => Some(CFactor::Envelope(envelope)),
-                // The same envelope: None only beyond 32-bit row pointers,
-                // which the LDLᵀ's has already excluded.
-                Symmetry::General => EnvelopeLu::new(&first).map(CFactor::EnvelopeLu),
-            };
-            if let Some(factor) = factor {
-                let identity: Vec<usize> = (0..m).collect();
-                return Ok(Self {
-                    fwd: identity.clone(),
-                    inv: identity,
-                    factor,
-                });
-            }
+        if let Some(this) = narrow.and_then(|e| Self::envelope(&first, Some(e), symmetry)) {
+            return Ok(this);
         }
         if symmetry == Symmetry::General {
             return Err(KktError::Structure(
@@ -499,6 +500,38 @@ impl COrder {
             factor: sparse_c_factor(c_amd, amd)?,
         })
     }
+
+    /// `C` factored in the constraints' own order on its envelope (of the
+    /// rows' first columns `first`), by LDLᵀ or LU as `symmetry` says;
+    /// `None` when there is no such envelope (beyond 32-bit row pointers).
+    fn envelope(
+        first: &[usize],
+        envelope: Option<EnvelopeLdlt>,
+        symmetry: Symmetry,
+    ) -> Option<Self> {
+        let factor = match symmetry {
+            Symmetry::Symmetric => CFactor::Envelope(envelope?),
+            // The same envelope: None only beyond 32-bit row pointers,
+            // which the LDLᵀ's has already excluded.
+            Symmetry::General => EnvelopeLu::new(first).map(CFactor::EnvelopeLu)?,
+        };
+        let identity: Vec<usize> = (0..first.len()).collect();
+        Some(Self {
+            fwd: identity.clone(),
+            inv: identity,
+            factor,
+        })
+    }
+}
+
+/// The number of entries of `c` on or below the diagonal.
+fn lower_len(c: &Csc) -> usize {
+    (0..c.n)
+        .map(|j| {
+            let col = c.column(j);
+            col.len() - col.partition_point(|&i| i < j)
+        })
+        .sum()
 }
 
 /// `C` (stored with both triangles, in AMD order) factored by faer, on the one
@@ -590,4 +623,42 @@ pub(super) fn csc_of(n: usize, pairs: &mut Vec<(usize, usize)>) -> Csc {
     pairs.clear();
     pairs.extend((0..n).flat_map(|j| c.column(j).iter().map(move |&i| (j, i))));
     c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{csc_of, is_symmetric_structure, kkt_ordering, lower_len};
+    use crate::Csc;
+    use crate::sparse_ldlt::SparseLdlt;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// What lets `COrder::choose` keep an envelope without AMD: the
+        /// factor AMD gives stores at least the lower triangle of `C`
+        /// (counted here by brute force over the pairs).
+        #[test]
+        fn amd_factor_holds_the_lower_triangle(
+            m in 1usize..40,
+            offdiag in proptest::collection::vec((0usize..40, 0usize..40), 0..120),
+        ) {
+            let mut pattern: Vec<(usize, usize)> = (0..m).map(|i| (i, i)).collect();
+            for &(i, j) in &offdiag {
+                let (i, j) = (i % m, j % m);
+                pattern.extend([(i, j), (j, i)]);
+            }
+            let mut distinct = pattern.clone();
+            distinct.sort_unstable();
+            distinct.dedup();
+            let want_lower = distinct.iter().filter(|&&(j, i)| i >= j).count();
+            let c = csc_of(m, &mut pattern);
+            prop_assert!(is_symmetric_structure(&c));
+            prop_assert_eq!(lower_len(&c), want_lower);
+            let (_, inv) = kkt_ordering(&c, m, Default::default()).expect("valid");
+            let mut permuted: Vec<(usize, usize)> =
+                pattern.iter().map(|&(s, r)| (inv[s], inv[r])).collect();
+            let c_amd: Csc = csc_of(m, &mut permuted);
+            let amd = SparseLdlt::preordered(&c_amd).expect("symmetric");
+            prop_assert!(amd.factor_len() >= want_lower, "{} < {want_lower}", amd.factor_len());
+        }
+    }
 }
