@@ -11,11 +11,11 @@ pub(crate) fn from_terms<T: TryFrom<usize>>(
     n: usize,
     terms: &[&[(usize, usize)]],
 ) -> (Csc, Result<Vec<Vec<T>>, T::Error>) {
-    // Sized at once (collected from a flat_map, it grew by copies).
-    let mut all: Vec<(usize, usize)> = Vec::with_capacity(terms.iter().map(|t| t.len()).sum());
-    all.extend(terms.iter().flat_map(|t| t.iter().map(|&(i, j)| (j, i))));
-    let c = Csc::from_pairs(n, &all);
-    drop(all);
+    // Read from the terms twice (counted, then placed), not copied into
+    // one list of pairs first.
+    let c = Csc::from_pairs_of(n, || {
+        terms.iter().flat_map(|t| t.iter().map(|&(i, j)| (j, i)))
+    });
     let slots = terms
         .iter()
         .map(|t| {

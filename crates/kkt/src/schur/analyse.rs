@@ -31,6 +31,16 @@ pub(super) struct Parts {
     pub(super) max_rows: usize,
 }
 
+/// [`Parts::gather`]'s buffers, reused block after block (one allocation
+/// for all blocks, not one each).
+struct Scratch {
+    /// Each constraint row's local row in the block being gathered, or
+    /// `usize::MAX`.
+    row_local: Vec<usize>,
+    /// The rows local to the block being gathered.
+    own: Vec<usize>,
+}
+
 /// `B` by primal column (column `j`'s entries are `col_ptr[j]..col_ptr[j + 1]`):
 /// each entry's row in `C`'s order and its position in the KKT values, on 32
 /// bits and apart (the solve reads the rows only).
@@ -267,7 +277,10 @@ impl Parts {
     ) -> Result<Self, KktError> {
         let m = a.n - n;
         let mut local = vec![0usize; n];
-        let mut row_local = vec![usize::MAX; m];
+        let mut scratch = Scratch {
+            row_local: vec![usize::MAX; m],
+            own: Vec::new(),
+        };
         let mut this = Self {
             blocks: Vec::new(),
             coords: Vec::with_capacity(n),
@@ -290,7 +303,7 @@ impl Parts {
             for (l, &i) in group.iter().enumerate() {
                 local[i] = l;
             }
-            this.push_block(a, n, group, &local, &mut row_local, candidates);
+            this.push_block(a, n, group, &local, candidates, &mut scratch);
         }
         if this.max_rows > usize::from(u16::MAX) {
             return Err(KktError::Structure(format!(
@@ -303,7 +316,8 @@ impl Parts {
     }
 
     /// Appends the block of the unknowns `group` (`local` their local
-    /// indices; `row_local` is `usize::MAX` everywhere on entry and exit):
+    /// indices; `scratch.row_local` is `usize::MAX` everywhere on entry and
+    /// exit):
     /// its rows of `C` get local rows `0..n_rows`, its own rows (`candidates`,
     /// while the block stays within [`MAX_BLOCK`]) the local rows after them
     /// and the block's unknowns `n + r` after its primal ones.
@@ -313,9 +327,11 @@ impl Parts {
         n: usize,
         group: &[usize],
         local: &[usize],
-        row_local: &mut [usize],
         candidates: &[bool],
+        scratch: &mut Scratch,
     ) {
+        let Scratch { row_local, own } = scratch;
+        own.clear();
         let (c0, s0, b0, r0) = (
             self.coords.len(),
             self.s_entries.len(),
@@ -323,7 +339,6 @@ impl Parts {
             self.rows.len(),
         );
         self.coords.extend_from_slice(group);
-        let mut own = Vec::new();
         for &j in group {
             for p in a.col_ptr[j]..a.col_ptr[j + 1] {
                 let i = a.row_idx[p];
@@ -352,10 +367,10 @@ impl Parts {
         own.truncate(keep);
         self.rows[r0..].sort_unstable();
         let n_rows = self.rows.len() - r0;
-        for (l, &r) in self.rows[r0..].iter().chain(&own).enumerate() {
+        for (l, &r) in self.rows[r0..].iter().chain(own.iter()).enumerate() {
             row_local[r] = l;
         }
-        for &r in &own {
+        for &r in own.iter() {
             self.local[r] = true;
             self.coords.push(n + r);
         }
@@ -367,7 +382,7 @@ impl Parts {
                 }
             }
         }
-        for &r in self.rows[r0..].iter().chain(&own) {
+        for &r in self.rows[r0..].iter().chain(own.iter()) {
             row_local[r] = usize::MAX;
         }
         let size = self.coords.len() - c0;
