@@ -103,8 +103,10 @@ impl<P: Copy> Bodies<P> {
 /// name may be used once in a file.
 #[derive(Debug, Default)]
 pub(crate) struct Names {
-    /// What carries the name (`<kind> '<name>'`), where, and its kind.
-    by_name: HashMap<String, (String, Option<Range<usize>>, &'static str)>,
+    /// Where the name is given and the kind of what carries it (described
+    /// as `<kind> '<name>'` when a message needs it, not stored: 10⁵-body
+    /// files have 2.5·10⁵ names).
+    by_name: HashMap<String, (Option<Range<usize>>, &'static str)>,
 }
 
 impl Names {
@@ -139,7 +141,8 @@ impl Names {
                 ),
             ));
         }
-        if let Some((other, at, _)) = self.by_name.get(&name) {
+        if let Some((at, other_kind)) = self.by_name.get(&name) {
+            let other = described(other_kind, &name);
             let line = at
                 .as_ref()
                 .map(|s| format!(" (line {})", super::node::line_column(doc.text, s.start).0))
@@ -155,14 +158,13 @@ impl Names {
                 format!("a {kind} may not be called 'ground': that is the fixed frame"),
             ));
         }
-        self.by_name
-            .insert(name.clone(), (f.what.clone(), span, kind));
+        self.by_name.insert(name.clone(), (span, kind));
         Ok((f, name))
     }
 
     /// The kind of element (`body`, `joint`, `driver`, …) called `name`.
     pub(crate) fn kind_of(&self, name: &str) -> Option<&'static str> {
-        self.by_name.get(name).map(|&(_, _, kind)| kind)
+        self.by_name.get(name).map(|&(_, kind)| kind)
     }
 
     /// The names of the elements of the `kinds`, sorted.
@@ -170,7 +172,7 @@ impl Names {
         let mut names: Vec<&str> = self
             .by_name
             .iter()
-            .filter(|(_, (_, _, kind))| kinds.contains(kind))
+            .filter(|(_, (_, kind))| kinds.contains(kind))
             .map(|(name, _)| name.as_str())
             .collect();
         names.sort_unstable();
@@ -187,7 +189,10 @@ impl Names {
             _ => (String::new(), e.to_string()),
         };
         match self.by_name.get(&element) {
-            Some((what, span, _)) => doc.error(span.as_ref(), format!("{what}: {message}")),
+            Some((span, kind)) => doc.error(
+                span.as_ref(),
+                format!("{}: {message}", described(kind, &element)),
+            ),
             None => doc.error(None, format!("{element}: {message}")),
         }
     }

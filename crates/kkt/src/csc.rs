@@ -27,16 +27,30 @@ impl Csc {
     /// If a column is not below `n`.
     #[must_use]
     pub fn from_pairs(n: usize, pairs: &[(usize, usize)]) -> Self {
+        Self::from_pairs_of(n, || pairs.iter().copied())
+    }
+
+    /// As [`from_pairs`](Self::from_pairs), the pairs given by `pairs()`
+    /// (called twice, the same pairs each time): no list of them is made
+    /// when they come from several lists or are computed.
+    ///
+    /// # Panics
+    /// If a column is not below `n`.
+    #[must_use]
+    pub fn from_pairs_of<I: Iterator<Item = (usize, usize)>>(
+        n: usize,
+        pairs: impl Fn() -> I,
+    ) -> Self {
         let mut start = vec![0usize; n + 1];
-        for &(j, _) in pairs {
+        for (j, _) in pairs() {
             start[j + 1] += 1;
         }
         for j in 0..n {
             start[j + 1] += start[j];
         }
-        let mut rows = vec![0usize; pairs.len()];
+        let mut rows = vec![0usize; start[n]];
         let mut next = start.clone();
-        for &(j, i) in pairs {
+        for (j, i) in pairs() {
             rows[next[j]] = i;
             next[j] += 1;
         }

@@ -413,6 +413,12 @@ fn faer_error(e: faer::sparse::FaerError) -> KktError {
     }
 }
 
+/// Whether `a`'s pattern is structurally symmetric (what
+/// [`check_symmetric_structure`] checks, without its message).
+pub(crate) fn is_symmetric_structure(a: &Csc) -> bool {
+    check_symmetric_structure(a).is_ok()
+}
+
 /// Checks that entry `(i, j)` is stored whenever `(j, i)` is.
 fn check_symmetric_structure(a: &Csc) -> Result<(), KktError> {
     for j in 0..a.n {

@@ -5,19 +5,17 @@ use mstar_kkt::Csc;
 
 /// Builds the structure of the union of `terms` (each a list of `(row, col)`
 /// entries, duplicates allowed) and returns it with, for each term, the slot of
-/// each of its entries in the value array.
-pub(crate) fn from_terms(
+/// each of its entries in the value array, as a `T` (an error when a slot
+/// does not fit in a `T`).
+pub(crate) fn from_terms<T: TryFrom<usize>>(
     n: usize,
     terms: &[&[(usize, usize)]],
-) -> Result<(Csc, Vec<Vec<Slot>>), usize> {
-    // Sized at once (collected from a flat_map, it grew by copies).
-    let mut all: Vec<(usize, usize)> = Vec::with_capacity(terms.iter().map(|t| t.len()).sum());
-    all.extend(terms.iter().flat_map(|t| t.iter().map(|&(i, j)| (j, i))));
-    let c = Csc::from_pairs(n, &all);
-    drop(all);
-    if Slot::try_from(c.nnz()).is_err() {
-        return Err(c.nnz());
-    }
+) -> (Csc, Result<Vec<Vec<T>>, T::Error>) {
+    // Read from the terms twice (counted, then placed), not copied into
+    // one list of pairs first.
+    let c = Csc::from_pairs_of(n, || {
+        terms.iter().flat_map(|t| t.iter().map(|&(i, j)| (j, i)))
+    });
     let slots = terms
         .iter()
         .map(|t| {
@@ -25,13 +23,12 @@ pub(crate) fn from_terms(
                 .map(|&(i, j)| {
                     // The entry is in the union by construction.
                     let col = c.column(j);
-                    // Below nnz, which fits (checked above).
-                    (c.col_ptr[j] + col.partition_point(|&r| r < i)) as Slot
+                    T::try_from(c.col_ptr[j] + col.partition_point(|&r| r < i))
                 })
-                .collect()
+                .collect::<Result<Vec<T>, _>>()
         })
-        .collect();
-    Ok((c, slots))
+        .collect::<Result<Vec<_>, _>>();
+    (c, slots)
 }
 
 /// A position in a value array: 32 bits halve the memory the scatters read.
@@ -53,7 +50,8 @@ mod tests {
     fn union_of_terms_with_slots() {
         let t1 = [(0, 0), (1, 0), (1, 1)];
         let t2 = [(1, 0), (0, 1), (0, 0)];
-        let (mut a, slots) = from_terms(2, &[&t1, &t2]).expect("small");
+        let (mut a, slots) = from_terms::<Slot>(2, &[&t1, &t2]);
+        let slots = slots.expect("small");
         assert_eq!(a.col_ptr, vec![0, 2, 4]);
         assert_eq!(a.row_idx, vec![0, 1, 0, 1]);
         scatter(&mut a.values, &slots[0], &[1.0, 2.0, 3.0], 1.0);

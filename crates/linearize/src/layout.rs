@@ -50,31 +50,46 @@ impl Patterns {
 
     /// `BᵀB`: for every constraint row, all pairs `(p, q)` of its entries
     /// (positions in `B`'s values).
-    /// (The entries grouped by row with a counting sort, in their order
-    /// within a row, rather than a vector per row: 3·10⁵ of them at 10⁵
-    /// bodies.)
     pub(crate) fn bb_pairs(&self) -> Vec<(usize, usize)> {
-        let mut start = vec![0usize; self.m + 1];
-        for &(i, _) in &self.b.entries {
-            start[i + 1] += 1;
-        }
-        for i in 0..self.m {
-            start[i + 1] += start[i];
-        }
-        let mut by_row = vec![0usize; self.b.entries.len()];
-        let mut next = start.clone();
-        for (k, &(i, _)) in self.b.entries.iter().enumerate() {
-            by_row[next[i]] = k;
-            next[i] += 1;
-        }
-        let len = (0..self.m).map(|i| (start[i + 1] - start[i]).pow(2)).sum();
-        let mut pairs = Vec::with_capacity(len);
-        for i in 0..self.m {
-            let row = &by_row[start[i]..start[i + 1]];
-            pairs.extend(row.iter().flat_map(|&p| row.iter().map(move |&q| (p, q))));
-        }
-        pairs
+        bb_pairs(self.m, &self.b)
     }
+}
+
+/// `BᵀB` of the `m`-row pattern `b`: for every constraint row, all pairs
+/// `(p, q)` of its entries (positions in `b`'s entries), in their order
+/// within the row.
+/// (The entries grouped by row with a counting sort rather than a vector per
+/// row: 3·10⁵ of them at 10⁵ bodies.)
+pub(crate) fn bb_pairs(m: usize, b: &Pattern) -> Vec<(usize, usize)> {
+    let mut start = vec![0usize; m + 1];
+    for &(i, _) in &b.entries {
+        start[i + 1] += 1;
+    }
+    for i in 0..m {
+        start[i + 1] += start[i];
+    }
+    let mut by_row = vec![0usize; b.entries.len()];
+    let mut next = start.clone();
+    for (k, &(i, _)) in b.entries.iter().enumerate() {
+        by_row[next[i]] = k;
+        next[i] += 1;
+    }
+    let len = (0..m).map(|i| (start[i + 1] - start[i]).pow(2)).sum();
+    let mut pairs = Vec::with_capacity(len);
+    for i in 0..m {
+        let row = &by_row[start[i]..start[i + 1]];
+        pairs.extend(row.iter().flat_map(|&p| row.iter().map(move |&q| (p, q))));
+    }
+    pairs
+}
+
+/// The `(row, column)` entries of `BᵀB` for `pairs` of positions in `b`'s
+/// entries.
+fn bb_entries(b: &Pattern, pairs: &[(usize, usize)]) -> Vec<(usize, usize)> {
+    pairs
+        .iter()
+        .map(|&(p, q)| (b.entries[p].1, b.entries[q].1))
+        .collect()
 }
 
 fn checked(
@@ -112,7 +127,7 @@ pub(crate) struct KktSlots {
     pub(crate) bt: Vec<Slot>,
 }
 
-/// The KKT matrix's structure and slot maps, and those of `M* = M + BᵀB`.
+/// The KKT matrix's structure and slot maps.
 #[derive(Clone, Debug)]
 pub(crate) struct Layout {
     pub(crate) kkt: Csc,
@@ -121,29 +136,61 @@ pub(crate) struct Layout {
     pub(crate) s_slots: Vec<Slot>,
     /// Whether every slot of the `B` block has exactly one entry of `B`.
     pub(crate) b_slots_unique: bool,
-    /// `BᵀB` as pairs of positions in `B`'s values.
+    /// `BᵀB` as pairs of positions in `B`'s values: with the augmented
+    /// structure from the start, else empty until [`MStar`] needs them.
     pub(crate) bb_pairs: Vec<(usize, usize)>,
-    pub(crate) m_star: Csc,
-    pub(crate) m_star_mass: Vec<Slot>,
-    pub(crate) m_star_bb: Vec<Slot>,
+    /// `M* = M + BᵀB`, built on first use (only the paper's start solves
+    /// with it).
+    pub(crate) m_star: Option<MStar>,
+}
+
+/// The structure of `M* = M + BᵀB` (eq. 11) and the slots of its terms.
+#[derive(Clone, Debug)]
+pub(crate) struct MStar {
+    pub(crate) csc: Csc,
+    /// The slot of each entry of `M`'s pattern.
+    pub(crate) mass: Vec<usize>,
+    /// The slot of each pair of [`Layout::bb_pairs`].
+    pub(crate) bb: Vec<usize>,
+}
+
+impl MStar {
+    /// The structure of `M + BᵀB` for `M`'s pattern `mass` and `BᵀB`'s
+    /// `pairs` of positions in `b`'s entries. (Slots as `usize`: built
+    /// outside the KKT structure's checks, it needs no size limit.)
+    pub(crate) fn new(mass: &Pattern, b: &Pattern, pairs: &[(usize, usize)]) -> Self {
+        let bb = bb_entries(b, pairs);
+        let (csc, Ok(mut slots)) = from_terms::<usize>(mass.nrows, &[&mass.entries, &bb]);
+        let bb_slots = slots.pop().unwrap_or_default();
+        Self {
+            csc,
+            mass: slots.pop().unwrap_or_default(),
+            bb: bb_slots,
+        }
+    }
 }
 
 impl Layout {
     /// The union of the patterns of `M`, the constraint Hessian, `∂g/∂u`,
     /// `∂g/∂u̇`, `∂(Mü)/∂u`, the primal diagonal, `B`, and as `structure`
     /// says `BᵀB`, `Bᵀ` and the multiplier diagonal.
+    /// (`BᵀB`'s pairs only with the augmented structure, and `M*` not yet:
+    /// at 10⁵ spatial bodies `BᵀB` has 6·10⁷ pairs, and building them with
+    /// `M*` for every structure was half of a run's set-up and most of its
+    /// memory.)
     pub(crate) fn new(p: &Patterns, structure: Structure) -> Result<Self, LinearizeError> {
         let (n, m) = (p.n, p.m);
-        let bb_pairs = p.bb_pairs();
-        let bb_entries: Vec<(usize, usize)> = bb_pairs
-            .iter()
-            .map(|&(a, b)| (p.b.entries[a].1, p.b.entries[b].1))
-            .collect();
+        let bb_pairs = if structure.augmented {
+            p.bb_pairs()
+        } else {
+            Vec::new()
+        };
+        let bb_entries = bb_entries(&p.b, &bb_pairs);
         let identity: Vec<(usize, usize)> = (0..n + m).map(|i| (i, i)).collect();
         let b_entries: Vec<(usize, usize)> = p.b.entries.iter().map(|&(i, j)| (n + i, j)).collect();
         let bt_entries: Vec<(usize, usize)> =
             p.b.entries.iter().map(|&(i, j)| (j, n + i)).collect();
-        let (kkt, slots) = from_terms(
+        let (kkt, slots) = from_terms::<Slot>(
             n + m,
             &[
                 &p.mass.entries,
@@ -151,7 +198,7 @@ impl Layout {
                 &p.g_u.entries,
                 &p.g_v.entries,
                 &p.mass_du.entries,
-                when(structure.augmented, &bb_entries),
+                &bb_entries,
                 &identity[..n],
                 &b_entries,
                 when(structure.transpose, &bt_entries),
@@ -160,22 +207,18 @@ impl Layout {
                 // the diagonal of C itself and would only read these zeros.
                 when(structure.augmented, &identity[n..]),
             ],
-        )
-        .map_err(|nnz| LinearizeError::TooLarge { nnz })?;
-        let slots = KktSlots::from(slots);
+        );
+        drop((bb_entries, identity, b_entries, bt_entries));
         let nnz = kkt.nnz();
-        let (m_star, ms) = from_terms(n, &[&p.mass.entries, &bb_entries])
-            .map_err(|nnz| LinearizeError::TooLarge { nnz })?;
-        let mut ms = ms.into_iter();
+        let slots = slots.map_err(|_| LinearizeError::TooLarge { nnz })?;
+        let slots = KktSlots::from(slots);
         Ok(Self {
             kkt,
             s_slots: slots.s_terms(nnz),
             b_slots_unique: slots.b_unique(nnz),
             slots,
             bb_pairs,
-            m_star,
-            m_star_mass: ms.next().unwrap_or_default(),
-            m_star_bb: ms.next().unwrap_or_default(),
+            m_star: None,
         })
     }
 }

@@ -6,7 +6,7 @@ use mstar_model::{Pattern, StateRef, System};
 use mstar_kkt::{Csc, MaxAbs, Structure, max_abs};
 
 use crate::csc::scatter;
-use crate::layout::{Layout, Patterns};
+use crate::layout::{Layout, MStar, Patterns, bb_pairs};
 
 /// Errors in a system's declared structure.
 #[derive(Debug, thiserror::Error)]
@@ -708,15 +708,29 @@ impl Linearization {
     }
 
     /// Fills and returns the modified mass matrix `M* = M + BᵀB` (eq. 11) from
-    /// the last [`eval_residual`](Self::eval_residual).
+    /// the last [`eval_residual`](Self::eval_residual). Its structure is built
+    /// on the first call (and `BᵀB`'s pairs, unless the KKT structure is
+    /// augmented and has them).
     pub fn m_star(&mut self) -> &Csc {
+        if self.layout.m_star.is_none() && self.layout.bb_pairs.is_empty() {
+            self.layout.bb_pairs = bb_pairs(self.m, &self.b_pattern);
+            self.bb_values = vec![0.0; self.layout.bb_pairs.len()];
+        }
         self.eval_bb();
         let layout = &mut self.layout;
-        let vals = &mut layout.m_star.values;
+        let (mass_pattern, b_pattern) = (&self.mass_pattern, &self.b_pattern);
+        let ms = layout
+            .m_star
+            .get_or_insert_with(|| MStar::new(mass_pattern, b_pattern, &layout.bb_pairs));
+        let vals = &mut ms.csc.values;
         vals.fill(0.0);
-        scatter(vals, &layout.m_star_mass, &self.mass, 1.0);
-        scatter(vals, &layout.m_star_bb, &self.bb_values, 1.0);
-        &layout.m_star
+        for (&k, &v) in ms.mass.iter().zip(&self.mass) {
+            vals[k] += v;
+        }
+        for (&k, &v) in ms.bb.iter().zip(&self.bb_values) {
+            vals[k] += v;
+        }
+        &ms.csc
     }
 
     /// `‖r‖∞`, the residual norm of the last evaluation.

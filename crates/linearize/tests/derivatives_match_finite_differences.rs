@@ -4,7 +4,7 @@
 //! of the pendulum chains is compared with central finite differences at random
 //! states, and the assembled KKT matrix with the dense formula of eqs. (16)-(17).
 
-use mstar_linearize::{Coefficients, Linearization, check_derivatives};
+use mstar_linearize::{Coefficients, Linearization, Structure, check_derivatives};
 use mstar_model::{Link, PendulumChain, StateRef, System};
 use proptest::prelude::*;
 use proptest::test_runner::FileFailurePersistence;
@@ -157,6 +157,50 @@ fn kkt_matrix_is_eq_16_with_m_star() {
                 "({i},{j}): {} vs {expected}",
                 dense[i][j]
             );
+        }
+    }
+}
+
+#[test]
+fn m_star_is_eq_19_in_every_structure() {
+    // M* = M + BᵀB of the paper's pendulum at θ (eq. 19), whether the KKT
+    // structure carries BᵀB (augmented: its pairs built with the layout) or
+    // not (plain: M*'s structure and BᵀB's pairs built on first use).
+    let (m, l, th) = (1.0, 1.0, 0.6f64);
+    let sys = PendulumChain::paper(m, l, 10.0);
+    let u = sys.position(&[th]);
+    let (c, s) = (th.cos(), th.sin());
+    let want = [
+        [m + 1.0, 0.0, -l * c],
+        [0.0, m + 1.0, -l * s],
+        [-l * c, -l * s, l * l],
+    ];
+    let x = StateRef {
+        t: 0.0,
+        u: &u,
+        v: &[0.0; 3],
+        a: &[0.0; 3],
+        lambda: &[2.0, -3.0],
+    };
+    for structure in [Structure::AUGMENTED, Structure::PLAIN] {
+        let mut lin = Linearization::with_structure(&sys, structure).expect("valid");
+        lin.eval_residual(&sys, &x);
+        // Twice: the second call refills the structure built by the first.
+        for _ in 0..2 {
+            let dense = lin.m_star().to_dense();
+            for i in 0..3 {
+                for j in 0..3 {
+                    // Each entry is a sum of at most three rounded products
+                    // of numbers of size ≤ 1 (cos²θ + sin²θ at (2,2)):
+                    // within 4 ulps of 1.
+                    assert!(
+                        (dense[i][j] - want[i][j]).abs() <= 4.0 * f64::EPSILON,
+                        "{structure:?} ({i},{j}): {} vs {}",
+                        dense[i][j],
+                        want[i][j]
+                    );
+                }
+            }
         }
     }
 }

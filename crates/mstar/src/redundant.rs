@@ -13,7 +13,7 @@
 //! decomposition (rank-revealing; dense, for models of up to a few hundred
 //! rows).
 
-use mstar_model::{RowSubset, SampleRef, System};
+use mstar_model::{Pattern, RowSubset, SampleRef, System};
 use mstar_newmark::Observer;
 use nalgebra::{DMatrix, DVector};
 
@@ -73,8 +73,11 @@ pub struct NotComputed {
 /// [`fill_budget`] entries.
 pub fn rows<S: System + ?Sized>(sys: &S, t: f64, u: &[f64]) -> Result<Rows, NotComputed> {
     if sys.n_coords() * sys.n_constraints() > SPARSE_FROM {
-        let budget = fill_budget(sys.b_pattern().len());
-        sparse_rows(sys, t, u, budget)
+        // The pattern read once (a copy each time: 10⁶ entries at 10⁵
+        // bodies), for the budget and the elimination.
+        let p = sys.b_pattern();
+        let budget = fill_budget(p.len());
+        sparse_rows_of(sys, &p, t, u, budget)
     } else {
         Ok(dense_rows(sys, t, u))
     }
@@ -108,10 +111,20 @@ pub fn sparse_rows<S: System + ?Sized>(
     u: &[f64],
     budget: usize,
 ) -> Result<Rows, NotComputed> {
-    let p = sys.b_pattern();
+    sparse_rows_of(sys, &sys.b_pattern(), t, u, budget)
+}
+
+/// [`sparse_rows`] with `sys`'s `B` pattern `p` given.
+fn sparse_rows_of<S: System + ?Sized>(
+    sys: &S,
+    p: &Pattern,
+    t: f64,
+    u: &[f64],
+    budget: usize,
+) -> Result<Rows, NotComputed> {
     let mut values = vec![0.0; p.len()];
     sys.b_into(t, u, &mut values);
-    sparse::dependent_rows(&p, &values, budget)
+    sparse::dependent_rows(p, &values, budget)
         .map(Rows::of)
         .map_err(|e| NotComputed { budget: e.budget })
 }

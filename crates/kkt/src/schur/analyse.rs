@@ -6,7 +6,7 @@
 use super::{Block, CFactor, FILL_SLACK, MAX_BLOCK, Schur, Symmetry};
 use crate::envelope::EnvelopeLdlt;
 use crate::envelope_lu::EnvelopeLu;
-use crate::sparse_ldlt::{SparseLdlt, kkt_ordering};
+use crate::sparse_ldlt::{SparseLdlt, is_symmetric_structure, kkt_ordering};
 use crate::{Csc, KktError};
 
 /// The block structure of `S` and each block's rows of `B`.
@@ -29,6 +29,16 @@ pub(super) struct Parts {
     pub(super) inverse_len: usize,
     pub(super) max_k: usize,
     pub(super) max_rows: usize,
+}
+
+/// [`Parts::gather`]'s buffers, reused block after block (one allocation
+/// for all blocks, not one each).
+struct Scratch {
+    /// Each constraint row's local row in the block being gathered, or
+    /// `usize::MAX`.
+    row_local: Vec<usize>,
+    /// The rows local to the block being gathered.
+    own: Vec<usize>,
 }
 
 /// `B` by primal column (column `j`'s entries are `col_ptr[j]..col_ptr[j + 1]`):
@@ -273,7 +283,10 @@ impl Parts {
     ) -> Result<Self, KktError> {
         let m = a.n - n;
         let mut local = vec![0usize; n];
-        let mut row_local = vec![usize::MAX; m];
+        let mut scratch = Scratch {
+            row_local: vec![usize::MAX; m],
+            own: Vec::new(),
+        };
         let mut this = Self {
             blocks: Vec::new(),
             coords: Vec::with_capacity(n),
@@ -296,7 +309,7 @@ impl Parts {
             for (l, &i) in group.iter().enumerate() {
                 local[i] = l;
             }
-            this.push_block(a, n, group, &local, &mut row_local, candidates);
+            this.push_block(a, n, group, &local, candidates, &mut scratch);
         }
         if this.max_rows > usize::from(u16::MAX) {
             return Err(KktError::Structure(format!(
@@ -309,7 +322,8 @@ impl Parts {
     }
 
     /// Appends the block of the unknowns `group` (`local` their local
-    /// indices; `row_local` is `usize::MAX` everywhere on entry and exit):
+    /// indices; `scratch.row_local` is `usize::MAX` everywhere on entry and
+    /// exit):
     /// its rows of `C` get local rows `0..n_rows`, its own rows (`candidates`,
     /// while the block stays within [`MAX_BLOCK`]) the local rows after them
     /// and the block's unknowns `n + r` after its primal ones.
@@ -319,9 +333,11 @@ impl Parts {
         n: usize,
         group: &[usize],
         local: &[usize],
-        row_local: &mut [usize],
         candidates: &[bool],
+        scratch: &mut Scratch,
     ) {
+        let Scratch { row_local, own } = scratch;
+        own.clear();
         let (c0, s0, b0, r0) = (
             self.coords.len(),
             self.s_entries.len(),
@@ -329,7 +345,6 @@ impl Parts {
             self.rows.len(),
         );
         self.coords.extend_from_slice(group);
-        let mut own = Vec::new();
         for &j in group {
             for p in a.col_ptr[j]..a.col_ptr[j + 1] {
                 let i = a.row_idx[p];
@@ -358,10 +373,10 @@ impl Parts {
         own.truncate(keep);
         self.rows[r0..].sort_unstable();
         let n_rows = self.rows.len() - r0;
-        for (l, &r) in self.rows[r0..].iter().chain(&own).enumerate() {
+        for (l, &r) in self.rows[r0..].iter().chain(own.iter()).enumerate() {
             row_local[r] = l;
         }
-        for &r in &own {
+        for &r in own.iter() {
             self.local[r] = true;
             self.coords.push(n + r);
         }
@@ -373,7 +388,7 @@ impl Parts {
                 }
             }
         }
-        for &r in self.rows[r0..].iter().chain(&own) {
+        for &r in self.rows[r0..].iter().chain(own.iter()) {
             row_local[r] = usize::MAX;
         }
         let size = self.coords.len() - c0;
@@ -469,24 +484,35 @@ impl COrder {
         pattern.extend((0..m).map(|r| (r, r)));
         // csc_of sorts and deduplicates `pattern`: it is C's entry list.
         let c_orig = csc_of(m, &mut pattern);
+        // Every factor of C in any order stores at least C's lower triangle
+        // (fill only adds entries, and for a symmetric pattern the
+        // triangle's size does not depend on the order): an envelope within
+        // FILL_SLACK of it is within FILL_SLACK of AMD's factor, and the
+        // AMD analysis would only confirm the envelope. (On a chain of 10⁵
+        // bodies that analysis was two thirds of the Schur set-up.)
+        let mut envelopes = Envelopes::new(&c_orig);
+        let surely = if is_symmetric_structure(&c_orig) {
+            FILL_SLACK * lower_len(&c_orig) as f64
+        } else {
+            0.0
+        };
+        if let Some(this) = envelopes
+            .within(surely)
+            .and_then(|o| Self::envelope(o, symmetry))
+        {
+            return Ok(this);
+        }
         let (fwd, inv) = kkt_ordering(&c_orig, m, Default::default())?;
         let mut permuted: Vec<(usize, usize)> =
             pattern.iter().map(|&(s, r)| (inv[s], inv[r])).collect();
         let c_amd = csc_of(m, &mut permuted);
         let amd = SparseLdlt::preordered(&c_amd)?;
-        if let Some(order) = narrow_envelope(&c_orig, FILL_SLACK * amd.factor_len() as f64) {
-            let factor = match symmetry {
-                Symmetry::Symmetric => EnvelopeLdlt::new(&order.first).map(CFactor::Envelope),
-                Symmetry::General => EnvelopeLu::new(&order.first).map(CFactor::EnvelopeLu),
-            };
-            // (None: too large for its 32-bit row pointers.)
-            if let Some(factor) = factor {
-                return Ok(Self {
-                    fwd: order.fwd,
-                    inv: order.inv,
-                    factor,
-                });
-            }
+        let limit = FILL_SLACK * amd.factor_len() as f64;
+        if let Some(this) = envelopes
+            .within(limit)
+            .and_then(|o| Self::envelope(o, symmetry))
+        {
+            return Ok(this);
         }
         if symmetry == Symmetry::General {
             return Err(KktError::Structure(
@@ -501,54 +527,91 @@ impl COrder {
             factor: sparse_c_factor(c_amd, amd)?,
         })
     }
+
+    /// `C` factored on its envelope in `order`, by LDLᵀ or LU as `symmetry`
+    /// says; `None` beyond 32-bit row pointers.
+    fn envelope(order: EnvelopeOrder, symmetry: Symmetry) -> Option<Self> {
+        let factor = match symmetry {
+            Symmetry::Symmetric => CFactor::Envelope(EnvelopeLdlt::new(&order.first)?),
+            Symmetry::General => CFactor::EnvelopeLu(EnvelopeLu::new(&order.first)?),
+        };
+        Some(Self {
+            fwd: order.fwd,
+            inv: order.inv,
+            factor,
+        })
+    }
+}
+
+/// The number of entries of `c` on or below the diagonal.
+fn lower_len(c: &Csc) -> usize {
+    (0..c.n)
+        .map(|j| {
+            let col = c.column(j);
+            col.len() - col.partition_point(|&i| i < j)
+        })
+        .sum()
 }
 
 /// An order of `C` and the first stored column of each of its rows there.
+#[derive(Clone)]
 struct EnvelopeOrder {
     fwd: Vec<usize>,
     inv: Vec<usize>,
     first: Vec<usize>,
 }
 
-/// The order in which `C`'s envelope holds at most `limit` values: the
-/// constraints' own order (a chain's), else the reverse Cuthill–McKee order
-/// (a closed loop's rows brought together; `crate::rcm`); `None` when
-/// neither does.
-fn narrow_envelope(c: &Csc, limit: f64) -> Option<EnvelopeOrder> {
-    let m = c.n;
-    // The envelope's size: row k holds columns first[k] ..= k.
-    let size = |first: &[usize]| {
-        first
-            .iter()
-            .enumerate()
-            .map(|(k, &f)| k - f + 1)
-            .sum::<usize>()
-    };
-    let own: Vec<usize> = (0..m).map(|i| c.column(i)[0].min(i)).collect();
-    if size(&own) as f64 <= limit {
-        let identity: Vec<usize> = (0..m).collect();
-        return Some(EnvelopeOrder {
-            fwd: identity.clone(),
-            inv: identity,
-            first: own,
-        });
+impl EnvelopeOrder {
+    /// `c`'s rows in the order `fwd`.
+    fn of(c: &Csc, fwd: Vec<usize>) -> Self {
+        let mut inv = vec![0; fwd.len()];
+        for (k, &r) in fwd.iter().enumerate() {
+            inv[r] = k;
+        }
+        let first = (0..fwd.len())
+            .map(|k| {
+                let rows = c.column(fwd[k]).iter().map(|&r| inv[r]);
+                rows.min().unwrap_or(k).min(k)
+            })
+            .collect();
+        Self { fwd, inv, first }
     }
-    let fwd = crate::rcm::reverse_cuthill_mckee(c);
-    let mut inv = vec![0; m];
-    for (k, &r) in fwd.iter().enumerate() {
-        inv[r] = k;
+
+    /// The envelope's size: row `k` holds columns `first[k] ..= k`.
+    fn size(&self) -> usize {
+        self.first.iter().enumerate().map(|(k, &f)| k - f + 1).sum()
     }
-    let first: Vec<usize> = (0..m)
-        .map(|k| {
-            c.column(fwd[k])
-                .iter()
-                .map(|&r| inv[r])
-                .min()
-                .unwrap_or(k)
-                .min(k)
-        })
-        .collect();
-    (size(&first) as f64 <= limit).then_some(EnvelopeOrder { fwd, inv, first })
+}
+
+/// The orders tried for `C`'s envelope, in turn: the constraints' own (a
+/// chain's), then the reverse Cuthill–McKee order (a closed loop's rows
+/// brought together; `crate::rcm`), made when first asked for.
+struct Envelopes<'c> {
+    c: &'c Csc,
+    own: EnvelopeOrder,
+    rcm: Option<EnvelopeOrder>,
+}
+
+impl<'c> Envelopes<'c> {
+    fn new(c: &'c Csc) -> Self {
+        Self {
+            c,
+            own: EnvelopeOrder::of(c, (0..c.n).collect()),
+            rcm: None,
+        }
+    }
+
+    /// The first order whose envelope holds at most `limit` values.
+    fn within(&mut self, limit: f64) -> Option<EnvelopeOrder> {
+        if self.own.size() as f64 <= limit {
+            return Some(self.own.clone());
+        }
+        let c = self.c;
+        let rcm = self
+            .rcm
+            .get_or_insert_with(|| EnvelopeOrder::of(c, crate::rcm::reverse_cuthill_mckee(c)));
+        (rcm.size() as f64 <= limit).then(|| rcm.clone())
+    }
 }
 
 /// `C` (stored with both triangles, in AMD order) factored by faer, on the one
@@ -640,4 +703,42 @@ pub(super) fn csc_of(n: usize, pairs: &mut Vec<(usize, usize)>) -> Csc {
     pairs.clear();
     pairs.extend((0..n).flat_map(|j| c.column(j).iter().map(move |&i| (j, i))));
     c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{csc_of, is_symmetric_structure, kkt_ordering, lower_len};
+    use crate::Csc;
+    use crate::sparse_ldlt::SparseLdlt;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// What lets `COrder::choose` keep an envelope without AMD: the
+        /// factor AMD gives stores at least the lower triangle of `C`
+        /// (counted here by brute force over the pairs).
+        #[test]
+        fn amd_factor_holds_the_lower_triangle(
+            m in 1usize..40,
+            offdiag in proptest::collection::vec((0usize..40, 0usize..40), 0..120),
+        ) {
+            let mut pattern: Vec<(usize, usize)> = (0..m).map(|i| (i, i)).collect();
+            for &(i, j) in &offdiag {
+                let (i, j) = (i % m, j % m);
+                pattern.extend([(i, j), (j, i)]);
+            }
+            let mut distinct = pattern.clone();
+            distinct.sort_unstable();
+            distinct.dedup();
+            let want_lower = distinct.iter().filter(|&&(j, i)| i >= j).count();
+            let c = csc_of(m, &mut pattern);
+            prop_assert!(is_symmetric_structure(&c));
+            prop_assert_eq!(lower_len(&c), want_lower);
+            let (_, inv) = kkt_ordering(&c, m, Default::default()).expect("valid");
+            let mut permuted: Vec<(usize, usize)> =
+                pattern.iter().map(|&(s, r)| (inv[s], inv[r])).collect();
+            let c_amd: Csc = csc_of(m, &mut permuted);
+            let amd = SparseLdlt::preordered(&c_amd).expect("symmetric");
+            prop_assert!(amd.factor_len() >= want_lower, "{} < {want_lower}", amd.factor_len());
+        }
+    }
 }
