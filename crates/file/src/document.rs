@@ -94,7 +94,9 @@ impl ModelDocument {
     /// `overrides` applied: the element the key names, every element that
     /// refers to it by name (a body's joints, forces and drivers; a joint's
     /// drivers), and every element those refer to (their bodies), with the
-    /// document's gravity and `[simulation]`; no sensors, no `[output]`. A
+    /// document's gravity and `[simulation]`; no sensors, no `[output]`.
+    /// For a body's or a point mass's `mass` or `inertia`, which enter its
+    /// own terms only (its mass matrix and weight), the element alone. A
     /// residual row of the whole model changes with the key only where one
     /// of these elements acts, and there the small model has the same
     /// terms that depend on the key (its coordinates and constraint rows
@@ -155,19 +157,26 @@ struct Element<'n> {
 /// [`ModelDocument::element_model`]); `None` when `key` names no element.
 fn restrict(root: &Node, key: &str) -> Option<Node> {
     let mut parts = key.split('.').map(str::trim);
-    let (kind, name) = (parts.next()?, parts.next()?);
-    parts.next()?;
+    let (kind, name, field) = (parts.next()?, parts.next()?, parts.next()?);
     let Value::Table(entries) = &root.value else {
         return None;
     };
     let elements = elements(entries);
+    // A body's mass and inertia enter its own terms only (its mass matrix
+    // and its weight), not those of the elements that name it.
+    let inertial = matches!(kind, "body" | "point_mass") && matches!(field, "mass" | "inertia");
     let kind = ELEMENTS.iter().position(|k| *k == kind)?;
     let own = elements
         .iter()
         .position(|e| e.kind == kind && e.name == Some(name))?;
+    let kept = if inertial {
+        (0..elements.len()).map(|i| i == own).collect()
+    } else {
+        touched(&elements, own)
+    };
     // keep[kind][index]: whether the element stays.
     let mut keep: Vec<Vec<bool>> = vec![Vec::new(); ELEMENTS.len()];
-    for (e, kept) in elements.iter().zip(touched(&elements, own)) {
+    for (e, kept) in elements.iter().zip(kept) {
         let row = &mut keep[e.kind];
         if row.len() <= e.index {
             row.resize(e.index + 1, false);
@@ -386,14 +395,14 @@ columns = ["t", "sensor:*"]
     fn a_body_keeps_what_names_it_and_what_that_names() {
         // b's joints j2, j3 name it; they name a and c; nothing else.
         assert_eq!(
-            kept("body.b.mass").expect("an element's key"),
+            kept("body.b.pose").expect("an element's key"),
             [
                 "body.a", "body.b", "body.c", "format", "joint.j2", "joint.j3"
             ]
         );
         // a's joints and its driver; b through j2.
         assert_eq!(
-            kept("body.a.inertia").expect("an element's key"),
+            kept("body.a.velocity").expect("an element's key"),
             [
                 "body.a",
                 "body.b",
@@ -403,6 +412,20 @@ columns = ["t", "sensor:*"]
                 "joint.j2"
             ]
         );
+    }
+
+    #[test]
+    fn a_body_s_mass_or_inertia_keeps_the_body_alone() {
+        // The joints, the driver and the spring that name a, b or c do not
+        // read their masses or inertias.
+        for key in ["body.b.mass", "body.a.inertia", "body.c.mass"] {
+            let body = key.rsplit_once('.').map(|(b, _)| b).expect("a field");
+            assert_eq!(
+                kept(key).expect("an element's key"),
+                [body, "format"],
+                "{key}"
+            );
+        }
     }
 
     #[test]
@@ -443,16 +466,16 @@ columns = ["t", "sensor:*"]
         std::fs::write(&path, TEXT).expect("written");
         let doc = ModelDocument::load(&path, &[]).expect("the file reads");
         let small = doc
-            .element_model("body.b.mass", &["body.b.mass=2.5".into()])
+            .element_model("joint.j3.at", &["body.b.mass=2.5".into()])
             .expect("the override applies")
             .expect("a small model");
         let sys = small.mechanism.system();
         let names: Vec<String> = (0..sys.n_coords()).map(|i| sys.coord_name(i)).collect();
-        assert_eq!(names[3..6], ["b.x", "b.y", "b.theta"]);
+        assert_eq!(names[..3], ["b.x", "b.y", "b.theta"]);
         let rows: Vec<String> = (0..sys.n_constraints())
             .map(|j| sys.constraint_name(j))
             .collect();
-        assert_eq!(rows, ["j2.x", "j2.y", "j3.x", "j3.y"]);
+        assert_eq!(rows, ["j3.x", "j3.y"]);
         let whole = doc.read_with(&[]).expect("the whole model");
         assert_eq!(whole.mechanism.system().n_coords(), 9);
         let _ = std::fs::remove_dir_all(&dir);
