@@ -106,7 +106,8 @@ impl Chain {
     }
 }
 
-fn solve(chain: &Chain, backend: Backend, b: &[f64]) -> Result<Vec<f64>, KktError> {
+/// The chain's matrix (as `backend` reads it) analysed and factored.
+fn factored(chain: &Chain, backend: Backend) -> Result<KktSolver, KktError> {
     let a = chain.csc(backend != Backend::SCHUR_LU);
     let options = KktOptions {
         backend,
@@ -115,6 +116,11 @@ fn solve(chain: &Chain, backend: Backend, b: &[f64]) -> Result<Vec<f64>, KktErro
     };
     let mut s = KktSolver::new(&a, &options)?;
     s.factor(&a.values)?;
+    Ok(s)
+}
+
+fn solve(chain: &Chain, backend: Backend, b: &[f64]) -> Result<Vec<f64>, KktError> {
+    let mut s = factored(chain, backend)?;
     let mut x = b.to_vec();
     s.solve_in_place(&mut x)?;
     Ok(x)
@@ -255,14 +261,7 @@ fn a_correction_solves_without_the_refinement_step() {
     let whole = chain.csc(true);
     let b = vector(whole.n, 7);
     let dense = solve(&chain, Backend::DENSE, &b).expect("dense LU");
-    let a = chain.csc(false);
-    let options = KktOptions {
-        backend: Backend::SCHUR_LU,
-        n_primal: Some(chain.n_primal()),
-        ..KktOptions::default()
-    };
-    let mut s = KktSolver::new(&a, &options).expect("analysis");
-    s.factor(&a.values).expect("factorization");
+    let mut s = factored(&chain, Backend::SCHUR_LU).expect("analysis and factorization");
     let mut refined = b.clone();
     s.solve_in_place(&mut refined)
         .expect("the first solve checks it");
@@ -281,14 +280,7 @@ fn a_correction_solves_without_the_refinement_step() {
         symmetric: true,
         ..chain
     };
-    let a = sym.csc(true);
-    let options = KktOptions {
-        backend: Backend::SCHUR,
-        n_primal: Some(sym.n_primal()),
-        ..KktOptions::default()
-    };
-    let mut s = KktSolver::new(&a, &options).expect("analysis");
-    s.factor(&a.values).expect("factorization");
+    let mut s = factored(&sym, Backend::SCHUR).expect("analysis and factorization");
     let mut x = b.clone();
     s.solve_in_place(&mut x).expect("solve");
     let mut y = b.clone();
