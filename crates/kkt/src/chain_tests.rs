@@ -504,6 +504,30 @@ fn grid(k: usize, seed: u64) -> Csc {
 }
 
 #[test]
+fn schur_lu_refuses_a_grid_and_its_advice_works() {
+    // schur-lu has no AMD fallback: a grid's C is refused with advice to
+    // use lu, which solves it.
+    let k = 20;
+    let np = 3 * k * k;
+    let a = grid(k, 3);
+    // schur-lu reads the matrix without the Bᵀ block.
+    let entries = (0..a.n)
+        .flat_map(|j| (a.col_ptr[j]..a.col_ptr[j + 1]).map(move |p| (p, j)))
+        .filter(|&(p, j)| !(a.row_idx[p] < np && j >= np))
+        .map(|(p, j)| (a.row_idx[p], j, a.values[p]))
+        .collect();
+    let without_bt = crate::testing::csc_of_entries(a.n, entries);
+    match KktSolver::new(&without_bt, &options(Backend::SCHUR_LU, k * k)) {
+        Err(KktError::Structure(why)) => assert!(why.contains("(use lu)"), "{why}"),
+        other => panic!("schur-lu should refuse the grid: {other:?}"),
+    }
+    let mut b = vec![0.0; a.n];
+    a.mul(&vector(a.n, 4), &mut b);
+    let lu = solve(Backend::SPARSE_LU, k * k, &a, &b).expect("lu solves the grid");
+    assert!(relative_residual(&a, &lu, &b) <= 1e-12);
+}
+
+#[test]
 fn schur_factors_a_grid_after_amd() {
     // No order gives a grid's C a narrow envelope: faer's sparse LDLᵀ
     // after AMD, against sparse LU.
