@@ -532,7 +532,7 @@ impl Linearization {
         // (An empty pattern needs no call: the defaults of a constant M or
         // constant forces would evaluate nothing.)
         if !self.hessian.is_empty() {
-            sys.hessian_into(t, u, lambda, &mut self.hessian);
+            sys.hessian_with_work(t, u, lambda, &mut self.hessian, &mut self.work);
         }
         if !self.g_u.is_empty() {
             sys.forces_du_into(t, u, v, &mut self.g_u);

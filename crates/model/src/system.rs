@@ -201,6 +201,15 @@ pub trait System: Send + Sync {
         fd::hessian(self, t, u, mu, out);
     }
 
+    /// [`hessian_into`](System::hessian_into) with the caller-owned scratch
+    /// buffer of [`workspace_len`](System::workspace_len) values that
+    /// [`phi_b_into`](System::phi_b_into) uses (default: `hessian_into`);
+    /// override when the two share work (a planar model's table of each
+    /// body's `sin θ, cos θ`).
+    fn hessian_with_work(&self, t: f64, u: &[f64], mu: &[f64], out: &mut [f64], _work: &mut [f64]) {
+        self.hessian_into(t, u, mu, out);
+    }
+
     /// The acceleration-level right-hand side `c = −(B u̇)_u u̇ − 2 B_t u̇ − Φ_tt`,
     /// so that the second time derivative of `Φ = 0` reads `B ü = c`
     /// (`algorithm.md` §6, consistent initialization). Size `m` (default:

@@ -203,6 +203,29 @@ impl PlanarSystem {
         }
     }
 
+    /// Each body's `(sin θ, cos θ)` at `u`, written into the head of `work`
+    /// (the table the revolute kernels read); `None` when `work` is shorter
+    /// than [`System::workspace_len`].
+    fn trig_table<'w>(&self, u: &[f64], work: &'w mut [f64]) -> Option<&'w [f64]> {
+        let trig = work.get_mut(..2 * self.angles.len())?;
+        for (t, &x) in trig.chunks_exact_mut(2).zip(&self.angles) {
+            (t[0], t[1]) = u[x].sin_cos();
+        }
+        Some(trig)
+    }
+
+    /// The contracted Hessian's values of the elements without a kernel.
+    fn hessian_of_others(&self, t: f64, u: &[f64], mu: &[f64], out: &mut [f64]) {
+        for &i in &self.others {
+            let (c, off) = (&self.constraints[i], self.h_offsets[i]);
+            let vals = &mut out[off..off + c.hess.len()];
+            c.hess_values(t, u, vals);
+            for (v, &(r, _, _)) in vals.iter_mut().zip(&c.hess) {
+                *v *= mu[c.row0 + r];
+            }
+        }
+    }
+
     dims::initial_state!(
         position: "Initial coordinates `u₀` (the poses given to the builder).",
         velocity: "Initial velocities `u̇₀` (given to the builder, zero by default)."
@@ -306,15 +329,11 @@ impl System for PlanarSystem {
         // The workspace holds each body's (sin θ, cos θ), computed once, not
         // once per joint it takes part in, in a table of the angles alone (no
         // gaps: on a long chain it is written and read through memory).
-        let Some(trig) = work.get_mut(..2 * self.angles.len()) else {
+        let Some(trig) = self.trig_table(u, work) else {
             self.phi_into(t, u, phi);
             self.b_into(t, u, b);
             return;
         };
-        for (t, &x) in trig.chunks_exact_mut(2).zip(&self.angles) {
-            (t[0], t[1]) = u[x].sin_cos();
-        }
-        let trig: &[f64] = trig;
         crate::parallel::phi_b_in_parts(&self.revolutes, phi, b, |k, phi, b, base| {
             k.phi_b(u, trig, phi, b, base);
         });
@@ -344,14 +363,20 @@ impl System for PlanarSystem {
         crate::parallel::hessian_in_parts(&self.revolutes, out, |k, out, base| {
             k.hessian(u, mu, out, base);
         });
-        for &i in &self.others {
-            let (c, off) = (&self.constraints[i], self.h_offsets[i]);
-            let vals = &mut out[off..off + c.hess.len()];
-            c.hess_values(t, u, vals);
-            for (v, &(r, _, _)) in vals.iter_mut().zip(&c.hess) {
-                *v *= mu[c.row0 + r];
-            }
-        }
+        self.hessian_of_others(t, u, mu, out);
+    }
+
+    fn hessian_with_work(&self, t: f64, u: &[f64], mu: &[f64], out: &mut [f64], work: &mut [f64]) {
+        // The table of phi_b_into: one sin_cos a body instead of one per
+        // side of each revolute joint.
+        let Some(trig) = self.trig_table(u, work) else {
+            self.hessian_into(t, u, mu, out);
+            return;
+        };
+        crate::parallel::hessian_in_parts(&self.revolutes, out, |k, out, base| {
+            k.hessian_from(u, trig, mu, out, base);
+        });
+        self.hessian_of_others(t, u, mu, out);
     }
 
     fn accel_rhs_into(&self, t: f64, u: &[f64], v: &[f64], out: &mut [f64]) {

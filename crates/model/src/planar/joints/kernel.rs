@@ -57,17 +57,7 @@ impl RevoluteKernel {
         b: &mut [f64],
         base: (usize, usize),
     ) {
-        let point = |k: usize| {
-            let a = &self.anchors[k];
-            match a {
-                Anchor::Rigid { .. } => {
-                    let at = 2 * self.trig[k] as usize;
-                    a.point_at(u, (trig[at], trig[at + 1]))
-                }
-                _ => a.point(u),
-            }
-        };
-        let (pa, pb) = (point(0), point(1));
+        let (pa, pb) = (self.point_from(0, u, trig), self.point_from(1, u, trig));
         let row = self.row0 - base.0;
         phi[row] = pa.p[0] - pb.p[0];
         phi[row + 1] = pa.p[1] - pb.p[1];
@@ -91,11 +81,51 @@ impl RevoluteKernel {
         }
     }
 
+    /// Side `k`'s point, its rigid body's `(sin θ, cos θ)` read from `trig`.
+    #[inline]
+    fn point_from(&self, k: usize, u: &[f64], trig: &[f64]) -> crate::planar::geometry::Pt {
+        let a = &self.anchors[k];
+        match a {
+            Anchor::Rigid { .. } => {
+                let at = 2 * self.trig[k] as usize;
+                a.point_at(u, (trig[at], trig[at + 1]))
+            }
+            _ => a.point(u),
+        }
+    }
+
     /// `μ_k ∂²Φ_k/∂θ²` on each rigid side's angle (rows `k = 0, 1`); `out`
     /// starts at Hessian value `base`.
     #[inline]
     pub(crate) fn hessian(&self, u: &[f64], mu: &[f64], out: &mut [f64], base: usize) {
         let pts = [self.anchors[0].point(u), self.anchors[1].point(u)];
+        self.write_hessian(&pts, mu, out, base);
+    }
+
+    /// [`hessian`](Self::hessian) with each body's `(sin θ, cos θ)` read
+    /// from the table of [`phi_b`](Self::phi_b).
+    #[inline]
+    pub(crate) fn hessian_from(
+        &self,
+        u: &[f64],
+        trig: &[f64],
+        mu: &[f64],
+        out: &mut [f64],
+        base: usize,
+    ) {
+        let pts = [self.point_from(0, u, trig), self.point_from(1, u, trig)];
+        self.write_hessian(&pts, mu, out, base);
+    }
+
+    /// The Hessian's values from the two sides' points.
+    #[inline]
+    fn write_hessian(
+        &self,
+        pts: &[crate::planar::geometry::Pt; 2],
+        mu: &[f64],
+        out: &mut [f64],
+        base: usize,
+    ) {
         let mut o = self.h_off - base;
         for k in 0..2 {
             let m = mu[self.row0 + k];
