@@ -147,6 +147,27 @@ pub enum RunError {
         .0.join(", ")
     )]
     RedundantLarge(Vec<String>),
+    /// Dependent rows at an initial pose that violates a constraint by more
+    /// than [`FAR_POSE`]: the dependence may be the pose's (a crank and a
+    /// rod stretched in line towards a point they cannot reach), so the
+    /// violation comes first, then what to do if the pose is right.
+    #[error(
+        "the initial pose violates '{owner}' by {violation:.3e} (row {row}), and at that pose the constraints of {} are linearly dependent on the others: the joints cannot all hold in the pose given. Fix the initial pose of the bodies that '{owner}' joins ([[body]] pose, [[point_mass]] position) or the points of '{owner}' so that it holds at t = 0 (mstar check shows the violation); {}",
+        .joints.join(", "),
+        redundant_advice(*.large)
+    )]
+    RedundantAtViolatedPose {
+        /// The joints of the dependent rows.
+        joints: Vec<String>,
+        /// The element of the most violated row.
+        owner: String,
+        /// That row's name.
+        row: String,
+        /// `|Φ|` there, m or rad.
+        violation: f64,
+        /// Above the size minimum-norm multipliers take (their advice left out).
+        large: bool,
+    },
     /// Rows left out of a minimum-norm solve that the others do not imply:
     /// the joints contradict each other.
     #[error(
@@ -207,15 +228,51 @@ pub fn solve_rows<S: ModelLookup + ?Sized>(
             minimum_norm_fits(sys, &rows)?;
             Ok(Some(rows))
         }
-        (false, RedundantChoice::Refuse) => Err(RunError::redundant(
+        (false, RedundantChoice::Refuse) => Err(RunError::redundant_at(
             owners(sys, &rows.dependent),
-            sys.n_coords(),
-            sys.n_constraints(),
+            sys,
+            u0,
         )),
     }
 }
 
+/// An initial violation beyond which dependent rows at the pose may be the
+/// pose's, not the model's, m or rad (the command line's note on a start
+/// far from a joint uses the same).
+pub const FAR_POSE: f64 = 1e-6;
+
+/// What to do when the pose is right and the rows really depend on each
+/// other: the advice of [`RunError::Redundant`], without minimum-norm
+/// multipliers above their size (`large`).
+fn redundant_advice(large: bool) -> &'static str {
+    if large {
+        "if the pose is right and the joints repeat what the others impose in every position, remove or loosen one (a model this large, n·m above 4e6, cannot run with minimum-norm multipliers)"
+    } else {
+        "if the pose is right and the joints repeat what the others impose in every position (a third crank on a parallelogram), remove or loosen one, or set [simulation] redundant = \"minimum-norm\" (on the command line: --set simulation.redundant=minimum-norm)"
+    }
+}
+
 impl RunError {
+    /// [`RunError::redundant`] for the dependent rows of `joints` found at
+    /// `sys`'s initial pose `u0`, or [`RunError::RedundantAtViolatedPose`]
+    /// when that pose violates a constraint by more than [`FAR_POSE`].
+    #[must_use]
+    pub fn redundant_at<S: ModelLookup + ?Sized>(joints: Vec<String>, sys: &S, u0: &[f64]) -> Self {
+        let (n, m) = (sys.n_coords(), sys.n_constraints());
+        let mut phi = vec![0.0; m];
+        sys.phi_into(0.0, u0, &mut phi);
+        match violation(sys, &phi) {
+            Some((owner, row, value)) if value.abs() > FAR_POSE => Self::RedundantAtViolatedPose {
+                joints,
+                owner,
+                row,
+                violation: value.abs(),
+                large: n * m > crate::redundant::DENSE_LIMIT,
+            },
+            _ => Self::redundant(joints, n, m),
+        }
+    }
+
     /// The error of redundant constraints (`joints`) in a model of `n`
     /// coordinates and `m` constraints: [`RunError::Redundant`], or above
     /// the size minimum-norm multipliers take, [`RunError::RedundantLarge`]

@@ -479,3 +479,80 @@ fn json_and_toml_read_every_number_to_the_same_bits() {
     assert_eq!(a.system.initial_position(), [want, -want]);
     assert_eq!(b.system.initial_position(), [want, -want]);
 }
+
+/// A crank (0.2 m, hinged at the origin) and a rod (1 m) whose far end is
+/// hinged to the ground at `far`, the bodies in the poses given.
+fn crank_and_rod(far: [f64; 2], crank: [f64; 3], rod: [f64; 3]) -> String {
+    format!(
+        "format = \"mstar.planar/1\"\n\
+         [[body]]\nname = \"crank\"\nmass = 1.0\ninertia = 0.01\npose = {crank:?}\n\
+         [[body]]\nname = \"rod\"\nmass = 1.0\ninertia = 0.05\npose = {rod:?}\n\
+         [[joint]]\nname = \"O\"\ntype = \"revolute\"\nbodies = [\"ground\", \"crank\"]\npoints = [[0.0, 0.0], [-0.1, 0.0]]\n\
+         [[joint]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"crank\", \"rod\"]\npoints = [[0.1, 0.0], [-0.5, 0.0]]\n\
+         [[joint]]\nname = \"far\"\ntype = \"revolute\"\nbodies = [\"ground\", \"rod\"]\npoints = [{far:?}, [0.5, 0.0]]\n\
+         [simulation]\nt_end = 0.01\n"
+    )
+}
+
+#[test]
+fn dependent_rows_at_a_pose_that_violates_a_joint_name_the_violation_first_and_the_advice_runs() {
+    // Crank and rod stretched in line along x: a singular pose, and the far
+    // hinge at (1.0, 0.3) m is 0.3 m off it. The message names the violation
+    // before the dependence.
+    let (far, crank, rod) = ([1.0, 0.3], [0.1, 0.0, 0.0], [0.7, 0.0, 0.0]);
+    let given = ModelFile::parse(&crank_and_rod(far, crank, rod), "m.toml", Format::Toml)
+        .expect("valid file");
+    let e = mstar::run::simulate(&given.system, &given.simulation, &mut |_: &SampleRef<
+        '_,
+    >| {})
+    .expect_err("the pose violates far");
+    let message = e.to_string();
+    assert!(
+        message.starts_with("the initial pose violates 'far' by 3.000e-1 (row far.y)"),
+        "{message}"
+    );
+    assert!(message.contains("Fix the initial pose"), "{message}");
+    // The advice: a pose in which every joint holds. The crank's angle α
+    // puts its tip 1 m from the far hinge, by bisection on the distance
+    // (it grows with α on [0, π/2] here).
+    let tip = |a: f64| [0.2 * a.cos(), 0.2 * a.sin()];
+    let gap = |a: f64| {
+        let p = tip(a);
+        (far[0] - p[0]).hypot(far[1] - p[1]) - 1.0
+    };
+    let (mut lo, mut hi) = (0.0f64, std::f64::consts::FRAC_PI_2);
+    assert!(gap(lo) < 0.0 && gap(hi) > 0.0, "a root between");
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if gap(mid) < 0.0 { lo = mid } else { hi = mid }
+    }
+    let a = 0.5 * (lo + hi);
+    let p = tip(a);
+    let b = (far[1] - p[1]).atan2(far[0] - p[0]);
+    let crank = [0.1 * a.cos(), 0.1 * a.sin(), a];
+    let rod = [p[0] + 0.5 * b.cos(), p[1] + 0.5 * b.sin(), b];
+    let fixed = ModelFile::parse(&crank_and_rod(far, crank, rod), "m.toml", Format::Toml)
+        .expect("valid file");
+    let stats = mstar::run::simulate(&fixed.system, &fixed.simulation, &mut |_: &SampleRef<
+        '_,
+    >| {})
+    .unwrap_or_else(|e| panic!("the advised pose runs: {e}"));
+    assert_eq!(stats.t, 0.01);
+    // The same joints in the pose they hold but in line (far at 1.2 m):
+    // dependent at a pose that holds, the message of a singular start.
+    let in_line = ModelFile::parse(
+        &crank_and_rod([1.2, 0.0], [0.1, 0.0, 0.0], [0.7, 0.0, 0.0]),
+        "m.toml",
+        Format::Toml,
+    )
+    .expect("valid file");
+    let e = mstar::run::simulate(
+        &in_line.system,
+        &in_line.simulation,
+        &mut |_: &SampleRef<'_>| {},
+    )
+    .expect_err("a singular start");
+    let message = e.to_string();
+    assert!(message.starts_with("the constraints of "), "{message}");
+    assert!(message.contains("start it away from there"), "{message}");
+}
