@@ -73,11 +73,11 @@ enum Command {
     /// no equilibrium or the eigenproblem fails, 2 when the file cannot be
     /// read.
     Modes(commands::modes::ModesArgs),
-    /// Write a linear state-space model ẋ = A x + B p, y = C x + D p of a
-    /// model file about its equilibrium (or --about initial: its initial
-    /// pose at rest) in a minimal set of coordinates, as JSON: inputs are
-    /// force or torque values of the file, outputs columns of `mstar run`
-    /// (docs/analysis.md). Exit 0 when written, 1 when no model can be
+    /// Write a linear state-space model ẋ = A x + B p + xdot0,
+    /// y = y0 + C x + D p of a model file about its equilibrium (or --about
+    /// initial: its initial pose at rest) in a minimal set of coordinates,
+    /// as JSON: inputs (optional) are force or torque values of the file,
+    /// outputs (optional) columns of `mstar run` (docs/analysis.md). Exit 0 when written, 1 when no model can be
     /// formed or written, 2 when the file, a key or a column is wrong.
     Linearize(commands::linearize::LinearizeArgs),
     /// Write a URDF robot (`.urdf`) as the mstar.spatial/1 model file it

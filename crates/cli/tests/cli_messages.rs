@@ -252,3 +252,34 @@ fn absurd_values_are_named_where_they_are_written() {
     let run = mstar(&["run", &path.display().to_string(), "--t-end", "0.01"]);
     assert_eq!(run.status.code(), Some(0), "{}", text(&run.stderr));
 }
+
+/// The help texts say what the options take: `--inputs` and `--outputs`
+/// of `linearize` are optional (and it runs without them), its model has
+/// the `xdot0` and `y0` its file holds, and `run --out` writes `.npz` too.
+#[test]
+fn help_texts_say_what_the_options_take() {
+    let help = text(&mstar(&["linearize", "--help"]).stdout);
+    assert!(
+        help.contains("ẋ = A x + B p + xdot0, y = y0 + C x + D p"),
+        "{help}"
+    );
+    assert!(help.contains("Inputs (optional;"), "{help}");
+    assert!(help.contains("Outputs (optional;"), "{help}");
+    let usage = help.lines().find(|l| l.starts_with("Usage:")).unwrap_or("");
+    assert_eq!(
+        usage,
+        "Usage: mstar linearize [OPTIONS] --out <SS.json> <MODEL>"
+    );
+    let o = mstar(&["linearize", &model("pendulum.toml"), "--out", "-"]);
+    let json = text(&o.stdout);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        json.contains("\"y0\": []") && json.contains("\"xdot0\""),
+        "{json}"
+    );
+    let help = text(&mstar(&["run", "--help"]).stdout);
+    assert!(
+        help.contains("CSV, or NumPy's .npz when the name ends in .npz"),
+        "{help}"
+    );
+}

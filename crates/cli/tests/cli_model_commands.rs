@@ -391,3 +391,133 @@ fn every_shipped_model_runs_cleanly_as_shipped() {
         assert!(!err.contains("warning"), "{name}: {err}");
     }
 }
+
+/// A setting the integrator refuses after the reader accepted it (Newmark's
+/// β below γ/2, an h_min above the default h, a KKT solver no backend has)
+/// is placed at its key, for `check` and `run` alike, or names the `--set`
+/// that gave it; the advice in the message runs.
+#[test]
+fn refused_settings_are_placed_at_their_key_and_the_advice_runs() {
+    let dir = scratch("refused-settings");
+    let base = std::fs::read_to_string(model("four-bar.toml")).expect("model");
+    let base = base.split("[simulation]").next().expect("the mechanism");
+    let lines = base.lines().count();
+    let cases = [
+        (
+            "integrator = \"newmark\"\nbeta = 0.2\n",
+            (4, 8, "beta: Newmark with β = 0.2 < γ/2 = 0.25"),
+            "simulation.beta=0.25",
+        ),
+        (
+            "integrator = \"newmark\"\ngamma = 0.8\n",
+            (4, 9, "gamma: Newmark with β = 0.25 < γ/2 = 0.4"),
+            "simulation.beta=0.4225",
+        ),
+        (
+            "h_min = 0.01\n",
+            (3, 9, "h_min: h_min must be in (0, h]"),
+            "simulation.h_min=0.001",
+        ),
+        (
+            "kkt = \"cholesky\"\n",
+            (
+                3,
+                7,
+                "kkt: no KKT solver is called 'cholesky'; the solvers are: auto, dense, lu",
+            ),
+            "simulation.kkt=lu",
+        ),
+    ];
+    for (k, (settings, (line, column, says), advice)) in cases.into_iter().enumerate() {
+        let path = dir.join(format!("s{k}.toml"));
+        std::fs::write(
+            &path,
+            format!("{base}[simulation]\nt_end = 0.01\n{settings}"),
+        )
+        .expect("written");
+        let path = path.display().to_string();
+        let at = format!("{path}:{}:{column}: [simulation]: {says}", lines + line);
+        for command in ["check", "run"] {
+            let o = mstar(&[command, &path]);
+            let e = text(&o.stderr);
+            assert_eq!(o.status.code(), Some(2), "{command}: {e}");
+            assert!(
+                e.starts_with(&format!("error: {at}")),
+                "{command}: {at}\n{e}"
+            );
+        }
+        let o = mstar(&["run", &path, "--set", advice]);
+        assert!(o.status.success(), "{advice}: {}", text(&o.stderr));
+    }
+    // Given by --set: the override is named, with no line.
+    let o = mstar(&[
+        "check",
+        &model("four-bar.toml"),
+        "--set",
+        "simulation.integrator=newmark",
+        "--set",
+        "simulation.beta=0.2",
+    ]);
+    let e = text(&o.stderr);
+    assert!(
+        e.contains(
+            "four-bar.toml: --set simulation.beta=0.2: [simulation]: beta: Newmark with β = 0.2"
+        ),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// What a built-in model refuses to take says what it takes, and each of
+/// those works.
+#[test]
+fn a_built_in_model_lists_what_it_takes_and_each_works() {
+    let refused = mstar(&["run", "--builtin", "pendulum", "--set", "body.foo.mass=3"]);
+    assert_eq!(refused.status.code(), Some(1));
+    let e = text(&refused.stderr);
+    assert!(
+        e.contains(
+            "--set body.foo.mass=3: a built-in model has no model file: --set takes \
+             simulation.t_end, simulation.h, simulation.tol, simulation.rtol, simulation.atol \
+             and simulation.error_control only"
+        ) && e.contains("it takes --out, --columns and --output-every"),
+        "{e}"
+    );
+    let dir = scratch("builtin-takes");
+    let out = dir.join("p.csv").display().to_string();
+    for set in [
+        "simulation.t_end=0.05",
+        "simulation.h=5e-3",
+        "simulation.tol=1e-8",
+        "simulation.rtol=1e-2",
+        "simulation.atol=1e-5",
+        "simulation.error_control=adaptive",
+    ] {
+        let o = mstar(&[
+            "run",
+            "--builtin",
+            "pendulum",
+            "--t-end",
+            "0.05",
+            "--set",
+            set,
+            "--out",
+            &out,
+            "--columns",
+            "t,u:*",
+            "--output-every",
+            "0.01",
+        ]);
+        assert!(o.status.success(), "{set}: {}", text(&o.stderr));
+        let csv = std::fs::read_to_string(&out).expect("written");
+        assert!(csv.starts_with("t,u:x,u:y,u:theta\n"), "{set}: {csv}");
+        assert_eq!(csv.lines().count(), 7, "{set}: {csv}");
+    }
+    let bad = mstar(&["run", "--builtin", "pendulum", "--set", "simulation.h=abc"]);
+    let e = text(&bad.stderr);
+    assert!(
+        e.contains("--set simulation.h=abc: simulation.h: expected a number ≥ 0, got 'abc'"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -223,10 +223,11 @@ fn malformed_files_are_errors_at_the_key() {
         e,
         "m.toml:6:8: body 'top': mass: must be positive, in kg (got -2)"
     );
-    // A builder error, placed at the element: an inertia no rigid body has.
+    // A builder error about a key, placed at the key (not at the body's
+    // name): an inertia no rigid body has.
     let e = error(&TOP.replace("[0.05, 0.05, 0.08]", "[0.01, 0.01, 0.08]"));
     assert!(
-        e.starts_with("m.toml:5:8: body 'top': no rigid body has this inertia"),
+        e.starts_with("m.toml:7:11: body 'top': inertia: no rigid body has this inertia"),
         "{e}"
     );
     // A planar-only file does not take the spatial setting.

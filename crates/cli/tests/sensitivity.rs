@@ -289,3 +289,57 @@ fn options_sensitivities_do_not_handle_are_refused() {
         assert!(err.contains(says), "{args:?}: {err}");
     }
 }
+
+/// The refusal of rows at fixed times advises rows every n steps: on a
+/// file with `[output] every_time`, `--set output.every=1` (which replaces
+/// it) runs, for `--sensitivity` and `--gradient` alike.
+#[test]
+fn the_every_time_refusal_advises_what_runs() {
+    let dir = scratch("sens-every-time");
+    let text_of = std::fs::read_to_string(model("slider-crank.toml")).expect("model");
+    let path = dir.join("s.toml");
+    std::fs::write(&path, format!("{text_of}\n[output]\nevery_time = 0.005\n")).expect("written");
+    let m = path.display().to_string();
+    let out = dir.join("s.csv").display().to_string();
+    let sens = ["--sensitivity", "body.rod.mass", "--out", &out];
+    let grad = [
+        "--objective",
+        "final:u:rod.x",
+        "--gradient",
+        "body.rod.mass",
+    ];
+    for extra in [&sens[..], &grad[..]] {
+        let mut args = vec!["run", &m, "--t-end", "0.01"];
+        args.extend_from_slice(extra);
+        let o = mstar(&args);
+        let e = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{e}");
+        assert!(
+            e.contains("--set output.every=1, which replaces every_time"),
+            "{e}"
+        );
+        args.extend_from_slice(&["--set", "output.every=1"]);
+        let o = mstar(&args);
+        assert!(o.status.success(), "{args:?}: {}", text(&o.stderr));
+    }
+    // --output-every overrides both keys of the file too.
+    let o = mstar(&[
+        "run",
+        &m,
+        "--t-end",
+        "0.01",
+        "--set",
+        "output.every=2",
+        "--output-every",
+        "0.005",
+        "--out",
+        &out,
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let rows = std::fs::read_to_string(&out)
+        .expect("written")
+        .lines()
+        .count();
+    assert_eq!(rows, 1 + 3, "a header and t = 0, 0.005, 0.01");
+    let _ = std::fs::remove_dir_all(&dir);
+}

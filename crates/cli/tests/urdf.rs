@@ -269,7 +269,8 @@ fn malformed_urdfs_are_errors_with_a_place() {
 
 /// `--set` reaches the URDF's bodies, in a `.urdf` and in a file that
 /// starts from one; a value out of range is the model's error, named by
-/// its body (and not placed in the URDF, which does not hold it).
+/// its body and the override that gave it (and not placed in the URDF,
+/// which does not hold it).
 #[test]
 fn overrides_reach_the_urdf_bodies() {
     for file in ["urdf/two-link-arm.urdf", "urdf/two-link-arm-start.toml"] {
@@ -280,7 +281,7 @@ fn overrides_reach_the_urdf_bodies() {
         assert_eq!(o.status.code(), Some(2), "{file}: {err}");
         assert!(
             err.contains(&format!(
-                "{}: body 'forearm': mass: must be positive",
+                "{}: --set body.forearm.mass=-1: body 'forearm': mass: must be positive",
                 model(file)
             )),
             "{file}: {err}"

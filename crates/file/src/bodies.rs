@@ -107,6 +107,10 @@ pub(crate) struct Names {
     /// as `<kind> '<name>'` when a message needs it, not stored: 10⁵-body
     /// files have 2.5·10⁵ names).
     by_name: HashMap<String, (Option<Range<usize>>, &'static str)>,
+    /// The key of an element whose value only the builder checks in full
+    /// (a spatial body's `inertia`), and where it is: a builder error about
+    /// the element is placed there.
+    checked: HashMap<String, (&'static str, Option<Range<usize>>)>,
 }
 
 impl Names {
@@ -114,12 +118,14 @@ impl Names {
     pub(crate) fn with_capacity(names: usize) -> Self {
         Self {
             by_name: HashMap::with_capacity(names),
+            checked: HashMap::new(),
         }
     }
 
     /// The fields of the element table `node` (described as `what` until its
     /// name is known, then as `<kind> '<name>'`) and its name: non-empty,
-    /// without control characters, new, and not `ground` for a body.
+    /// without control characters, new, and not `ground` (the fixed frame's,
+    /// for every kind of element).
     pub(crate) fn named<'a>(
         &mut self,
         doc: Doc<'a>,
@@ -143,16 +149,18 @@ impl Names {
         }
         if let Some((at, other_kind)) = self.by_name.get(&name) {
             let other = described(other_kind, &name);
-            let line = at
-                .as_ref()
-                .map(|s| format!(" (line {})", super::node::line_column(doc.text, s.start).0))
+            let line = doc
+                .line(at.as_ref())
+                .map(|l| format!(" (line {l})"))
                 .unwrap_or_default();
             return Err(doc.error(
                 span.as_ref(),
                 format!("the name '{name}' is used twice: by {other}{line} and by this {kind}"),
             ));
         }
-        if name == GROUND && matches!(kind, "body" | "point mass") {
+        // One name space: a joint or a force called `ground` would be
+        // confused with the fixed frame in `bodies` and in column names.
+        if name == GROUND {
             return Err(doc.error(
                 span.as_ref(),
                 format!("a {kind} may not be called 'ground': that is the fixed frame"),
@@ -160,6 +168,18 @@ impl Names {
         }
         self.by_name.insert(name.clone(), (span, kind));
         Ok((f, name))
+    }
+
+    /// Notes that the builder checks the value of `key` of the element
+    /// `name` (at `span`) beyond what the reader does: its errors about the
+    /// element are placed there ([`located`](Self::located)).
+    pub(crate) fn checked_by_builder(
+        &mut self,
+        name: &str,
+        key: &'static str,
+        span: Option<Range<usize>>,
+    ) {
+        self.checked.insert(name.to_string(), (key, span));
     }
 
     /// The kind of element (`body`, `joint`, `driver`, …) called `name`.
@@ -188,12 +208,16 @@ impl Names {
             // reported without a place.)
             _ => (String::new(), e.to_string()),
         };
-        match self.by_name.get(&element) {
-            Some((span, kind)) => doc.error(
+        match (self.by_name.get(&element), self.checked.get(&element)) {
+            (Some((_, kind)), Some((key, span))) => doc.error(
+                span.as_ref(),
+                format!("{}: {key}: {message}", described(kind, &element)),
+            ),
+            (Some((span, kind)), None) => doc.error(
                 span.as_ref(),
                 format!("{}: {message}", described(kind, &element)),
             ),
-            None => doc.error(None, format!("{element}: {message}")),
+            (None, _) => doc.error(None, format!("{element}: {message}")),
         }
     }
 }
@@ -302,6 +326,16 @@ impl<'a, P: Copy> Reader<'a, P> {
         kind: &'static str,
     ) -> Result<(Fields<'a>, String), FileError> {
         self.names.named(self.doc, node, what, kind)
+    }
+
+    /// Notes the key the builder checks ([`Names::checked_by_builder`]).
+    pub(crate) fn checked_by_builder(
+        &mut self,
+        name: &str,
+        key: &'static str,
+        span: Option<Range<usize>>,
+    ) {
+        self.names.checked_by_builder(name, key, span);
     }
 
     /// The kind of element called `name` ([`Names::kind_of`]).
@@ -514,6 +548,70 @@ mod tests {
                 described("joint", name),
                 format!("joint '{}'", name.escape_debug()),
                 "{name}"
+            );
+        }
+    }
+
+    /// `ground` is the fixed frame in the one name space: no element of
+    /// any kind may carry it (a joint called so wrote `lambda:ground`).
+    #[test]
+    fn no_element_may_be_called_ground() {
+        use crate::{Format, MechanismFile};
+        let body = "format = \"mstar.planar/1\"\n[[body]]\nname = \"bar\"\nmass = 1.0\n\
+                    inertia = 0.1\npose = [0.5, 0.0, 0.0]\n";
+        for (kind, element) in [
+            (
+                "joint",
+                "[[joint]]\nname = \"ground\"\ntype = \"revolute\"\nbodies = [\"ground\", \"bar\"]\nat = [0.0, 0.0]\n",
+            ),
+            (
+                "force",
+                "[[force]]\nname = \"ground\"\ntype = \"torque\"\nbody = \"bar\"\nfunction = { constant = 1.0 }\n",
+            ),
+            (
+                "driver",
+                "[[driver]]\nname = \"ground\"\nbody = \"bar\"\ncoordinate = \"x\"\nfunction = { constant = 0.5 }\n",
+            ),
+            (
+                "sensor",
+                "[[sensor]]\nname = \"ground\"\ntype = \"position\"\nbody = \"bar\"\n",
+            ),
+        ] {
+            let text = format!("{body}{element}");
+            let e = MechanismFile::parse(&text, "m.toml", Format::Toml).expect_err(kind);
+            assert_eq!(
+                e.to_string(),
+                format!("m.toml:8:8: a {kind} may not be called 'ground': that is the fixed frame"),
+                "{kind}"
+            );
+        }
+    }
+
+    /// An error about a key is placed at the key, not at the element's
+    /// header: a force's `point` on a point mass, a joint's `points`.
+    #[test]
+    fn a_point_on_a_point_mass_is_placed_at_its_key() {
+        use crate::{Format, MechanismFile};
+        let mass = "format = \"mstar.planar/1\"\n[[point_mass]]\nname = \"m\"\nmass = 3.0\n\
+                    position = [0.0, -1.0]\n";
+        for (element, at, key) in [
+            (
+                "[[force]]\nname = \"f2\"\ntype = \"force\"\nbody = \"m\"\npoint = [0.1, 0.0]\n",
+                "m.toml:10:9: force 'f2': point",
+                "[0.1, 0.0]",
+            ),
+            (
+                "[[joint]]\nname = \"pin\"\ntype = \"revolute\"\nbodies = [\"ground\", \"m\"]\n\
+                 points = [[0.0, -1.0], [0.2, 0.0]]\n",
+                "m.toml:10:10: joint 'pin': points",
+                "[0.2, 0.0]",
+            ),
+        ] {
+            let text = format!("{mass}{element}");
+            let e = MechanismFile::parse(&text, "m.toml", Format::Toml).expect_err(at);
+            assert_eq!(
+                e.to_string(),
+                format!("{at}: a point mass has no extent: its point must be [0, 0], not {key}"),
             );
         }
     }

@@ -19,6 +19,8 @@ pub struct ModelDocument {
     origin: String,
     text: String,
     root: Node,
+    /// The overrides applied to `root` (errors name them).
+    overrides: Vec<String>,
 }
 
 impl std::fmt::Debug for ModelDocument {
@@ -45,7 +47,12 @@ impl ModelDocument {
             FileError::unplaced(&origin, format!("cannot read the model file: {e}"))
         })?;
         let (root, _, _) = document(&text, &origin, Format::of(path), overrides)?;
-        Ok(Self { origin, text, root })
+        Ok(Self {
+            origin,
+            text,
+            root,
+            overrides: overrides.to_vec(),
+        })
     }
 
     /// The file's name, as errors give it.
@@ -128,14 +135,18 @@ impl ModelDocument {
         root: &mut Node,
         overrides: &[String],
     ) -> Result<MechanismFile, FileError> {
-        for o in overrides {
-            settings::apply_override(root, o).map_err(|why| {
+        // Numbered after the document's own, as their values' spans are.
+        let all: Vec<String> = self.overrides.iter().chain(overrides).cloned().collect();
+        let first = self.overrides.len();
+        for (k, o) in overrides.iter().enumerate() {
+            settings::apply_override(root, o, first + k).map_err(|why| {
                 FileError::unplaced(&self.origin, format!("--set {o}: {why}")).of_override()
             })?;
         }
         let doc = Doc {
             origin: &self.origin,
             text: &self.text,
+            overrides: &all,
         };
         read(doc, root)
     }

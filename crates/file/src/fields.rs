@@ -4,19 +4,45 @@
 use std::ops::Range;
 
 use super::FileError;
-use super::node::{Entry, Node, Value};
+use super::node::{self, Entry, Node, Value};
 
 /// The document being read: its name and text, for the places of errors.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Doc<'a> {
     pub(crate) origin: &'a str,
     pub(crate) text: &'a str,
+    /// The `--set` overrides applied to the document, in order: the values
+    /// they gave have spans that number them ([`node::override_span`]).
+    pub(crate) overrides: &'a [String],
 }
 
 impl Doc<'_> {
-    /// An error at `span` (when known).
+    /// An error at `span` (when known); about a value an override gave,
+    /// the error names the override (`--set KEY=VALUE: …`) and no line.
     pub(crate) fn error(&self, span: Option<&Range<usize>>, message: String) -> FileError {
-        FileError::at(self.origin, self.text, span.map(|s| s.start), message)
+        match span.and_then(|s| self.override_of(s)) {
+            Some(assignment) => FileError::at(
+                self.origin,
+                "",
+                None,
+                format!("--set {assignment}: {message}"),
+            ),
+            None => FileError::at(self.origin, self.text, span.map(|s| s.start), message),
+        }
+    }
+
+    /// The line of `span` in the file, when it is a place of the file.
+    pub(crate) fn line(&self, span: Option<&Range<usize>>) -> Option<usize> {
+        span.filter(|s| s.start < node::OVERRIDES_FROM)
+            .map(|s| node::line_column(self.text, s.start).0)
+    }
+
+    /// The override (`KEY=VALUE`) whose value has the span `span`, if it
+    /// is one.
+    fn override_of(&self, span: &Range<usize>) -> Option<&str> {
+        let k = span.start.checked_sub(node::OVERRIDES_FROM)?;
+        // (An override's number out of the list: named by its flag alone.)
+        Some(self.overrides.get(k).map_or("", String::as_str))
     }
 }
 
@@ -84,6 +110,30 @@ impl<'a> Fields<'a> {
             .error(span, format!("{}: {}: {why}", self.what, entry.key))
     }
 
+    /// An error about the value of `key`, read already (at the table if
+    /// the key is not there).
+    pub(crate) fn bad_key(&self, key: &str, why: impl std::fmt::Display) -> FileError {
+        match self.entries.iter().find(|e| e.key == key) {
+            Some(e) => self.bad(e, why),
+            None => self
+                .doc
+                .error(self.span.as_ref(), format!("{}: {key}: {why}", self.what)),
+        }
+    }
+
+    /// Every key of the table with an error placed at its value whose
+    /// message is what precedes the key's own ([`Doc::error`]'s `--set …: `
+    /// for a value an override gave, else nothing).
+    pub(crate) fn places(&self) -> Vec<(String, FileError)> {
+        self.entries
+            .iter()
+            .map(|e| {
+                let span = e.node.span.as_ref().or(e.key_span.as_ref());
+                (e.key.clone(), self.doc.error(span, String::new()))
+            })
+            .collect()
+    }
+
     /// The value of `key` read by `parse`, if present.
     pub(crate) fn optional<T>(
         &mut self,
@@ -141,8 +191,12 @@ impl<'a> Fields<'a> {
             .map(|c| format!(" (did you mean '{c}'?)"))
             .unwrap_or_default();
         let given = if e.created { " (given by --set)" } else { "" };
+        // A key an override added has no place (its message says so); one
+        // inside a value an override gave names the override.
+        let span = e.key_span.as_ref().or(e.node.span.as_ref());
+        let by_override = e.created || span.is_some_and(|s| s.start >= node::OVERRIDES_FROM);
         let error = self.doc.error(
-            e.key_span.as_ref().or(e.node.span.as_ref()),
+            span.filter(|_| !e.created),
             format!(
                 "{}: unknown key '{}'{given}{hint}; the keys here are: {}",
                 self.what,
@@ -150,7 +204,7 @@ impl<'a> Fields<'a> {
                 known.join(", ")
             ),
         );
-        Err(if e.created {
+        Err(if by_override {
             error.of_override()
         } else {
             error
@@ -219,13 +273,13 @@ pub(crate) fn number_in(
     }
 }
 
-/// A whole number of at least `min`.
+/// A whole number of at least `min`, written as an integer or not (`2.0`:
+/// in JSON, 2.0 and 2 are the same number).
 pub(crate) fn count(min: usize) -> impl Fn(&Node) -> Result<usize, String> {
     move |node| match node.value {
-        Value::Num {
-            value,
-            integer: true,
-        } if value >= min as f64 && value < 1e15 => Ok(value as usize),
+        Value::Num { value, .. } if value >= min as f64 && value < 1e15 && value.fract() == 0.0 => {
+            Ok(value as usize)
+        }
         Value::Num { value, .. } => Err(format!(
             "must be a whole number of at least {min} (got {})",
             short(value)

@@ -57,7 +57,8 @@ pub use document::ModelDocument;
 pub use fields::MAX_MAGNITUDE;
 pub use planar::FORMAT;
 pub use settings::{
-    ErrorControlChoice, IntegratorChoice, NewtonChoice, Output, RedundantChoice, Simulation,
+    ErrorControlChoice, IntegratorChoice, NewtonChoice, Output, RedundantChoice, SettingPlaces,
+    Simulation,
 };
 pub use spatial::FORMAT as SPATIAL_FORMAT;
 
@@ -183,8 +184,9 @@ impl ModelFile {
     /// of keys — table keys, and in an array of named elements the element's
     /// `name` (`simulation.h`, `output.every`, `body.upper.mass`,
     /// `force.drive.function.constant`) — and a TOML value (`1e-4`, `"hht"`,
-    /// or a bare word, taken as a string). Overridden values have no line in
-    /// errors.
+    /// or a bare word, taken as a string). An error about a value an
+    /// override gave names the override (`--set body.upper.mass=-1: …`)
+    /// instead of a line of the file.
     ///
     /// # Errors
     /// As [`load`](Self::load), and for an override without `=`, with a path
@@ -323,7 +325,11 @@ impl MechanismFile {
         overrides: &[String],
     ) -> Result<Self, FileError> {
         let (root, notes, places) = document(text, origin, format, overrides)?;
-        let doc = Doc { origin, text };
+        let doc = Doc {
+            origin,
+            text,
+            overrides,
+        };
         // An error in a URDF's body or joint: at the URDF's element (unless
         // an override may have given the value).
         let mut file = read(doc, &root).map_err(|e| match &places {
@@ -361,7 +367,11 @@ fn document(
     format: Format,
     overrides: &[String],
 ) -> Result<(node::Node, Vec<String>, Option<urdf::Places>), FileError> {
-    let doc = Doc { origin, text };
+    let doc = Doc {
+        origin,
+        text,
+        overrides,
+    };
     let (mut root, mut notes, mut places) = match format {
         Format::Toml => (node::parse_toml(text, origin)?, Vec::new(), None),
         Format::Json => (node::parse_json(text, origin)?, Vec::new(), None),
@@ -377,8 +387,8 @@ fn document(
     {
         (root, notes, places) = (read.root, read.notes, Some(read.places));
     }
-    for o in overrides {
-        settings::apply_override(&mut root, o).map_err(|why| {
+    for (k, o) in overrides.iter().enumerate() {
+        settings::apply_override(&mut root, o, k).map_err(|why| {
             FileError::unplaced(origin, format!("--set {o}: {why}")).of_override()
         })?;
     }
@@ -404,10 +414,13 @@ pub fn number_at(path: &Path, overrides: &[String], key: &str) -> Result<f64, Fi
         .map_err(|why| FileError::unplaced(&origin, format!("{key}: {why}")))?;
     match node.value {
         node::Value::Num { value, .. } => Ok(value),
-        ref other => Err(FileError::at(
-            &origin,
-            &text,
-            node.span.as_ref().map(|s| s.start),
+        ref other => Err(Doc {
+            origin: &origin,
+            text: &text,
+            overrides,
+        }
+        .error(
+            node.span.as_ref(),
             format!(
                 "{key}: is {}, not a number (name the number itself, e.g. force.push.fx.constant or force.push.fx.harmonic.offset)",
                 other.kind()
@@ -427,12 +440,16 @@ impl Simulation {
     /// of range.
     pub fn with_overrides(origin: &str, overrides: &[String]) -> Result<Self, FileError> {
         let mut root = node::parse_toml("", origin)?;
-        for o in overrides {
-            settings::apply_override(&mut root, o).map_err(|why| {
+        for (k, o) in overrides.iter().enumerate() {
+            settings::apply_override(&mut root, o, k).map_err(|why| {
                 FileError::unplaced(origin, format!("--set {o}: {why}")).of_override()
             })?;
         }
-        let doc = Doc { origin, text: "" };
+        let doc = Doc {
+            origin,
+            text: "",
+            overrides,
+        };
         Ok(settings::read(doc, &root, false)?.0)
     }
 }

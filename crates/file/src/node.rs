@@ -288,6 +288,36 @@ fn json_node(value: serde_json::Value) -> Node {
     Node { value, span: None }
 }
 
+/// Where the spans of values given on the command line start: a span from
+/// here on is no place in the file but the value of the `--set` override
+/// number `start - OVERRIDES_FROM` (counted over every override applied to
+/// the document), so that an error about it names the override instead of
+/// a line of the file ([`crate::fields::Doc::error`]). No file is that long.
+pub(crate) const OVERRIDES_FROM: usize = usize::MAX / 2;
+
+/// The span that stands for the value of override number `k`.
+pub(crate) fn override_span(k: usize) -> Range<usize> {
+    let at = OVERRIDES_FROM.saturating_add(k);
+    at..at
+}
+
+/// Gives `node` and everything in it (keys included) the span `span`: the
+/// spans of a value parsed from the command line are places in that text,
+/// not in the file.
+pub(crate) fn respan(node: &mut Node, span: &Range<usize>) {
+    node.span = Some(span.clone());
+    match &mut node.value {
+        Value::List(items) => items.iter_mut().for_each(|n| respan(n, span)),
+        Value::Table(entries) => {
+            for e in entries {
+                e.key_span = Some(span.clone());
+                respan(&mut e.node, span);
+            }
+        }
+        _ => {}
+    }
+}
+
 /// Line and column (both from 1, the column in characters) of byte `offset`.
 pub(crate) fn line_column(text: &str, offset: usize) -> (usize, usize) {
     let offset = offset.min(text.len());

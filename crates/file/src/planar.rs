@@ -209,7 +209,7 @@ impl<'a> bodies::Elements<'a> for Model<'a> {
                     .function(&mut f, "fy")?
                     .unwrap_or(TimeFunction::Constant(0.0));
                 f.finish(&["name", "type", "body", "point", "fx", "fy"])?;
-                self.check_point(&f, Side::Body(body), point)?;
+                self.check_point(&f, "point", Side::Body(body), point)?;
                 self.builder.force(&name, At::Body(body.id, point), fx, fy);
             }
         }
@@ -291,22 +291,25 @@ impl<'a> Model<'a> {
 
     /// The point `local` of a side (global for the ground).
     fn side_at(&self, f: &Fields<'a>, side: Side, local: [f64; 2]) -> Result<At, FileError> {
-        self.check_point(f, side, local)?;
+        self.check_point(f, "points", side, local)?;
         Ok(match side {
             Side::Ground => At::Ground(local),
             Side::Body(b) => At::Body(b.id, local),
         })
     }
 
-    /// A point mass has no extent: its point is `[0, 0]`.
-    fn check_point(&self, f: &Fields<'a>, side: Side, local: [f64; 2]) -> Result<(), FileError> {
+    /// A point mass has no extent: its point, given by `key`, is `[0, 0]`.
+    fn check_point(
+        &self,
+        f: &Fields<'a>,
+        key: &str,
+        side: Side,
+        local: [f64; 2],
+    ) -> Result<(), FileError> {
         match side {
-            Side::Body(b) if !b.rigid && local != [0.0, 0.0] => Err(self.r.doc.error(
-                f.span(),
-                format!(
-                    "{}: a point mass has no extent: its point must be [0, 0], not {local:?}",
-                    f.what
-                ),
+            Side::Body(b) if !b.rigid && local != [0.0, 0.0] => Err(f.bad_key(
+                key,
+                format!("a point mass has no extent: its point must be [0, 0], not {local:?}"),
             )),
             _ => Ok(()),
         }

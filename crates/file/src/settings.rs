@@ -101,6 +101,36 @@ pub struct Simulation {
     /// rotational mass block (`"singular"`, the default, or
     /// `"regularized"`); spatial models only.
     pub rotational_mass: Option<mstar_model::spatial::RotationalMass>,
+    /// Where each key given is written (a line of the file or a `--set`),
+    /// for the errors found after reading: [`Simulation::error_at`].
+    pub places: SettingPlaces,
+}
+
+/// Where the keys of a `[simulation]` are given: each key with an error
+/// placed there whose message is what precedes the key's own (empty, or
+/// `--set KEY=VALUE: ` for an override).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct SettingPlaces(Vec<(String, FileError)>);
+
+impl Simulation {
+    /// An error about the value of `[simulation] key` found after reading
+    /// (the integrator refuses it, a KKT solver of that name does not
+    /// exist): `FILE:LINE:COLUMN: [simulation]: KEY: why`, or with the
+    /// override that gave it; `None` when the key is not given.
+    #[must_use]
+    pub fn error_at(&self, key: &str, why: impl std::fmt::Display) -> Option<FileError> {
+        let (_, at) = self.places.0.iter().find(|(k, _)| k == key)?;
+        Some(FileError {
+            message: format!("{}[simulation]: {key}: {why}", at.message),
+            ..at.clone()
+        })
+    }
+
+    /// Whether `[simulation] key` is given.
+    #[must_use]
+    pub fn is_given(&self, key: &str) -> bool {
+        self.places.0.iter().any(|(k, _)| k == key)
+    }
 }
 
 /// `[output]`, and the `[[sensor]]`s whose columns it writes.
@@ -268,6 +298,7 @@ fn simulation(mut f: Fields<'_>, spatial: bool) -> Result<Simulation, FileError>
                 "regularized" => mstar_model::spatial::RotationalMass::Regularized,
                 _ => mstar_model::spatial::RotationalMass::Singular,
             }),
+        places: SettingPlaces(f.places()),
     };
     if !spatial && let Some(e) = f.entry("rotational_mass") {
         return Err(f.bad(
@@ -346,8 +377,10 @@ const OPTIONAL_TABLES: [&str; 2] = ["simulation", "output"];
 ///
 /// Every step but the last must exist (but `[simulation]` and `[output]`,
 /// which it adds); the last key may be new, marked as added, and the reader
-/// then refuses it if the table has no such key.
-pub(crate) fn apply_override(root: &mut Node, assignment: &str) -> Result<(), String> {
+/// then refuses it if the table has no such key. The value's spans number
+/// the override as `k` ([`crate::node::override_span`]), so that an error
+/// about it names the override.
+pub(crate) fn apply_override(root: &mut Node, assignment: &str, k: usize) -> Result<(), String> {
     let (path, text) = assignment
         .split_once('=')
         .ok_or("expected key=value, e.g. simulation.h=1e-4")?;
@@ -355,7 +388,8 @@ pub(crate) fn apply_override(root: &mut Node, assignment: &str) -> Result<(), St
     if keys.iter().any(|k| k.is_empty()) {
         return Err(format!("'{path}' is not a dotted path of keys"));
     }
-    let value = override_value(text.trim());
+    let mut value = override_value(text.trim());
+    super::node::respan(&mut value, &super::node::override_span(k));
     let Some((last, through)) = keys.split_last() else {
         return Err(format!("'{path}' is not a dotted path of keys"));
     };
@@ -370,6 +404,16 @@ pub(crate) fn apply_override(root: &mut Node, assignment: &str) -> Result<(), St
         && let Value::Str(scheme) = &value.value
     {
         drop_other_schemes(entries, scheme);
+    }
+    // The command line wins over the file: rows every n steps replace rows
+    // every Δt, and the other way round (the file may hold one only).
+    if let ["output", key @ ("every" | "every_time")] = keys[..] {
+        let other = if key == "every" {
+            "every_time"
+        } else {
+            "every"
+        };
+        entries.retain(|e| e.key != other);
     }
     match entries.iter().position(|e| e.key == *last) {
         Some(at) => entries[at].node = value,
@@ -547,19 +591,20 @@ mod tests {
     fn overrides_set_and_create_keys() {
         let mut root =
             super::super::node::parse_toml("[simulation]\nh = 0.01\n", "m").expect("valid");
-        apply_override(&mut root, "simulation.h=1e-4").expect("set");
-        apply_override(&mut root, "simulation.integrator=hht").expect("a bare word");
-        apply_override(&mut root, "output.every=5").expect("a new table");
+        apply_override(&mut root, "simulation.h=1e-4", 0).expect("set");
+        apply_override(&mut root, "simulation.integrator=hht", 0).expect("a bare word");
+        apply_override(&mut root, "output.every=5", 0).expect("a new table");
         let doc = Doc {
             origin: "m",
             text: "",
+            overrides: &[],
         };
         let (s, o) = read(doc, &root, false).expect("valid");
         assert_eq!(s.h, Some(1e-4));
         assert_eq!(s.integrator, Some(IntegratorChoice::Hht));
         assert_eq!(o.every, 5);
-        assert!(apply_override(&mut root, "simulation.h").is_err());
-        assert!(apply_override(&mut root, "simulation.h.x=1").is_err());
+        assert!(apply_override(&mut root, "simulation.h", 0).is_err());
+        assert!(apply_override(&mut root, "simulation.h.x=1", 0).is_err());
     }
 
     /// Issue 21 (24): `--set simulation.integrator=hht` on a file that sets
@@ -569,21 +614,22 @@ mod tests {
         let doc = Doc {
             origin: "m",
             text: "",
+            overrides: &[],
         };
         let file = "[simulation]\nintegrator = \"generalized-alpha\"\nrho = 0.9\n";
         let mut root = super::super::node::parse_toml(file, "m").expect("valid");
-        apply_override(&mut root, "simulation.integrator=hht").expect("set");
+        apply_override(&mut root, "simulation.integrator=hht", 0).expect("set");
         let (s, _) = read(doc, &root, false).expect("rho is taken out");
         assert_eq!((s.integrator, s.rho), (Some(IntegratorChoice::Hht), None));
         // A parameter of another scheme set after it contradicts it, as before.
         let mut root = super::super::node::parse_toml(file, "m").expect("valid");
-        apply_override(&mut root, "simulation.integrator=hht").expect("set");
-        apply_override(&mut root, "simulation.rho=0.5").expect("set");
+        apply_override(&mut root, "simulation.integrator=hht", 0).expect("set");
+        apply_override(&mut root, "simulation.rho=0.5", 0).expect("set");
         assert!(read(doc, &root, false).is_err());
         // The new scheme's own parameter, set after it, is kept.
         let mut root = super::super::node::parse_toml(file, "m").expect("valid");
-        apply_override(&mut root, "simulation.integrator=hht").expect("set");
-        apply_override(&mut root, "simulation.alpha=-0.2").expect("set");
+        apply_override(&mut root, "simulation.integrator=hht", 0).expect("set");
+        apply_override(&mut root, "simulation.alpha=-0.2", 0).expect("set");
         let (s, _) = read(doc, &root, false).expect("valid");
         assert_eq!(s.alpha, Some(-0.2));
     }
@@ -593,8 +639,8 @@ mod tests {
         let text = "[[body]]\nname = \"upper\"\nmass = 1.0\n[[body]]\nname = \"lower\"\nmass = 2.0\n\
                     [[force]]\nname = \"drive\"\nfunction = { constant = 0.2 }\n";
         let mut root = super::super::node::parse_toml(text, "m").expect("valid");
-        apply_override(&mut root, "body.lower.mass=3").expect("by name");
-        apply_override(&mut root, "force.drive.function.constant=0.5").expect("nested");
+        apply_override(&mut root, "body.lower.mass=3", 0).expect("by name");
+        apply_override(&mut root, "force.drive.function.constant=0.5", 0).expect("nested");
         let Value::Table(top) = &root.value else {
             panic!("a table")
         };
@@ -611,16 +657,16 @@ mod tests {
         let num = |value: f64, integer: bool| Some(Value::Num { value, integer });
         assert_eq!(mass(&bodies[1]), num(3.0, true));
         assert_eq!(mass(&bodies[0]), num(1.0, false));
-        let e = apply_override(&mut root, "body.uper.mass=3").expect_err("no such body");
+        let e = apply_override(&mut root, "body.uper.mass=3", 0).expect_err("no such body");
         assert_eq!(
             e,
             "no element of 'body' is named 'uper'; the names are: upper, lower"
         );
-        let e = apply_override(&mut root, "joint.hinge.at=1").expect_err("no joints");
+        let e = apply_override(&mut root, "joint.hinge.at=1", 0).expect_err("no joints");
         assert!(e.starts_with("the file has no key 'joint'"), "{e}");
-        let e = apply_override(&mut root, "force.drive.functon.constant=1").expect_err("typo");
+        let e = apply_override(&mut root, "force.drive.functon.constant=1", 0).expect_err("typo");
         assert!(e.starts_with("'force.drive' has no key 'functon'"), "{e}");
-        let e = apply_override(&mut root, "body.mass=1").expect_err("an array");
+        let e = apply_override(&mut root, "body.mass=1", 0).expect_err("an array");
         assert!(e.contains("'body' is an array"), "{e}");
     }
 
@@ -651,5 +697,113 @@ mod tests {
         let e = parse("body.upper.mass=-2").expect_err("negative");
         assert!(!e.in_override, "{e}");
         assert!(e.message.contains("mass: must be positive"), "{e}");
+    }
+
+    /// A whole number written with a fraction (`2.0`; in JSON 2.0 and 2
+    /// are the same number) counts; 2.5 and 0 do not, with the same message.
+    #[test]
+    fn whole_numbers_written_as_floats_count() {
+        use super::super::node::{parse_json, parse_toml};
+        let doc = Doc {
+            origin: "m",
+            text: "",
+            overrides: &[],
+        };
+        let root = parse_toml(
+            "[simulation]\nmax_iterations = 5.0\n[output]\nevery = 2.0\n",
+            "m",
+        )
+        .expect("valid");
+        let (s, o) = read(doc, &root, false).expect("whole numbers");
+        assert_eq!((s.max_iterations, o.every), (Some(5), 2));
+        let root = parse_json(r#"{"output": {"every": 2.0}}"#, "m").expect("valid");
+        assert_eq!(read(doc, &root, false).expect("JSON's 2.0").1.every, 2);
+        for (text, got) in [
+            ("every = 2.5", "2.5"),
+            ("every = 0.0", "0"),
+            ("every = 0", "0"),
+        ] {
+            let root = parse_toml(&format!("[output]\n{text}\n"), "m").expect("valid");
+            let e = read(doc, &root, false).expect_err(text);
+            assert_eq!(
+                e.message,
+                format!("[output]: every: must be a whole number of at least 1 (got {got})"),
+                "{text}"
+            );
+        }
+        let root = parse_toml("[simulation]\nmax_iterations = 5.5\n", "m").expect("valid");
+        let e = read(doc, &root, false).expect_err("5.5");
+        assert!(
+            e.message
+                .ends_with("max_iterations: must be a whole number of at least 1 (got 5.5)"),
+            "{e}"
+        );
+    }
+
+    /// An override of `every` replaces the file's `every_time`, and the
+    /// other way round: the command line wins (the file may hold one only).
+    #[test]
+    fn an_override_of_every_or_every_time_replaces_the_other() {
+        let doc = Doc {
+            origin: "m",
+            text: "",
+            overrides: &[],
+        };
+        let file = |key: &str| {
+            super::super::node::parse_toml(&format!("[output]\n{key}\n"), "m").expect("valid")
+        };
+        let mut root = file("every_time = 0.25");
+        apply_override(&mut root, "output.every=3", 0).expect("set");
+        let (_, o) = read(doc, &root, false).expect("every replaces every_time");
+        assert_eq!((o.every, o.every_time), (3, None));
+        let mut root = file("every = 5");
+        apply_override(&mut root, "output.every_time=0.1", 0).expect("set");
+        let (_, o) = read(doc, &root, false).expect("every_time replaces every");
+        assert_eq!((o.every, o.every_time), (1, Some(0.1)));
+        // Both in the file, as before: refused.
+        let root = file("every = 5\nevery_time = 0.1");
+        let e = read(doc, &root, false).expect_err("both");
+        assert!(
+            e.message
+                .contains("give either every (steps) or every_time"),
+            "{e}"
+        );
+    }
+
+    /// A value an override gave that is out of range is blamed on the
+    /// override, not on the line of the file's key (issue C), also inside
+    /// a table the override gave; it stays the model's error.
+    #[test]
+    fn values_given_by_overrides_are_blamed_on_the_override() {
+        use super::super::{Format, MechanismFile};
+        let text = "format = \"mstar.planar/1\"\n[[point_mass]]\nname = \"m\"\nmass = 3.0\n\
+                    position = [0.0, -1.0]\n[[force]]\nname = \"push\"\ntype = \"force\"\n\
+                    body = \"m\"\nfy = { constant = 1.0 }\n";
+        let parse = |set: &[&str]| {
+            let set: Vec<String> = set.iter().map(|s| (*s).to_string()).collect();
+            MechanismFile::parse_with(text, "m.toml", Format::Toml, &set)
+        };
+        for (set, says) in [
+            (
+                &["point_mass.m.mass=1e101"][..],
+                "--set point_mass.m.mass=1e101: point mass 'm': mass: 1e101 is out of range",
+            ),
+            (
+                &["simulation.h=1e-3", "simulation.alpha=-0.5"][..],
+                "--set simulation.alpha=-0.5: [simulation]: alpha: must be in [−1/3, 0] (got -0.5)",
+            ),
+            (
+                &["force.push.fy={ constant = 1e101 }"][..],
+                "--set force.push.fy={ constant = 1e101 }: force 'push': fy",
+            ),
+        ] {
+            let e = parse(set).expect_err(says);
+            assert_eq!(e.place, None, "{e}");
+            assert!(e.to_string().starts_with(&format!("m.toml: {says}")), "{e}");
+            assert!(!e.in_override, "{e}");
+        }
+        // The file's own values keep their places.
+        let e = parse(&["simulation.h=1e-3"]).map(|_| ());
+        assert!(e.is_ok(), "{e:?}");
     }
 }

@@ -132,6 +132,10 @@ impl<'a> bodies::Elements<'a> for Model<'a> {
         let (mut f, name) = self.r.named(node, what, "body")?;
         let mass = bodies::mass(&mut f)?;
         let inertia = f.required("inertia", inertia)?;
+        // Whether a rigid body can have the inertia, the builder checks.
+        let at = f.read_entry("inertia")?;
+        let span = at.node.span.clone().or_else(|| at.key_span.clone());
+        self.r.checked_by_builder(&name, "inertia", span);
         let position = f.required("position", numbers::<3>)?;
         let given = f.required("orientation", numbers::<4>)?;
         let velocity = f.optional("velocity", numbers::<3>)?.unwrap_or([0.0; 3]);

@@ -25,9 +25,14 @@ pub fn check(args: &CheckArgs) -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    let config = match mstar::run::config(&file.simulation) {
+    let config = match super::config(&file.simulation) {
         Ok((config, _)) => config,
-        // A setting out of range, as a value the file cannot hold: 2.
+        // A setting out of range, as a value the file cannot hold: 2 (at
+        // its key, or naming the file when no key is to blame).
+        Err(e) if e.downcast_ref::<mstar::file::FileError>().is_some() => {
+            note!("error: {e}");
+            return ExitCode::from(2);
+        }
         Err(e) => {
             note!("error: {}: {e}", args.model.display());
             return ExitCode::from(2);

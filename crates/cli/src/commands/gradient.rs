@@ -161,7 +161,9 @@ fn refuse(request: &Request<'_>, config: &mstar::Config) -> Result<()> {
         "needs fixed steps: with adaptive steps the step sizes depend on the parameters; drop \
          --adaptive (or error_control = \"adaptive\") and choose h"
     } else if request.every_time.is_some() {
-        "sums over the steps' own samples: drop --output-every (or [output] every_time)"
+        "sums over the steps' own samples: drop --output-every, and in place of [output] \
+         every_time write rows every n steps ([output] every; on the command line \
+         --set output.every=1, which replaces every_time)"
     } else if request.redundant {
         "does not handle redundant constraints solved on a subset of rows yet; remove the \
          redundant joints"

@@ -14,14 +14,15 @@ use super::modes::About;
 pub struct LinearizeArgs {
     /// The model file (TOML, JSON or URDF).
     model: PathBuf,
-    /// Inputs: keys of the model file in the `--set` syntax that hold a
-    /// force or torque value (`force.push.fx`,
-    /// `force.motor.function.constant`); the input is the change of that
-    /// value.
+    /// Inputs (optional; none: B and D have no columns): keys of the model
+    /// file in the `--set` syntax that hold a force or torque value
+    /// (`force.push.fx`, `force.motor.function.constant`); the input is the
+    /// change of that value.
     #[arg(long, num_args = 1.., value_name = "KEY")]
     inputs: Vec<String>,
-    /// Outputs: columns of `mstar run` (`u:…`, `v:…`, `a:…`, `lambda:…`,
-    /// `energy`, `reaction:…`, `effort:…`, `sensor:…`; `*` matches any text).
+    /// Outputs (optional; none: C, D and y0 are empty): columns of `mstar
+    /// run` (`u:…`, `v:…`, `a:…`, `lambda:…`, `energy`, `reaction:…`,
+    /// `effort:…`, `sensor:…`; `*` matches any text).
     #[arg(long, num_args = 1.., value_name = "COLUMN")]
     outputs: Vec<String>,
     /// The JSON file to write (`-`: standard output).

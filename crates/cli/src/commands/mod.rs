@@ -117,3 +117,85 @@ pub fn load_model(
         }
     }
 }
+
+/// The integrator configuration and end time of a model file's
+/// `[simulation]` (`mstar::run::config`). A setting refused there (a
+/// Newmark β below γ/2, an `h_min` above the default `h`, a KKT solver
+/// that does not exist) is blamed on the key that gives it, as the
+/// reader's errors are: `FILE:LINE:COLUMN: [simulation]: beta: …`, or the
+/// `--set` that gave it.
+///
+/// # Errors
+/// [`mstar::file::FileError`] at the key; [`mstar::run::RunError::Settings`]
+/// when no key given is to blame (a built-in model's defaults).
+pub fn config(sim: &mstar::file::Simulation) -> Result<(Config, f64)> {
+    use mstar::run::SettingsError;
+    let e = match mstar::run::config(sim) {
+        Ok(c) => return Ok(c),
+        Err(e) => e,
+    };
+    let placed = match &e {
+        SettingsError::UnknownKkt { name, known } => sim.error_at(
+            "kkt",
+            format!(
+                "no KKT solver is called '{name}'; the solvers are: auto, {}",
+                known.join(", ")
+            ),
+        ),
+        SettingsError::Refused(refused) => refused_key(sim).and_then(|key| {
+            let why = match refused {
+                mstar::IntegrationError::Config(why) => why.clone(),
+                other => other.to_string(),
+            };
+            sim.error_at(key, why)
+        }),
+        _ => None,
+    };
+    Err(match placed {
+        Some(placed) => placed.into(),
+        None => mstar::run::RunError::Settings(e).into(),
+    })
+}
+
+/// The keys of `[simulation]` the integrator may refuse after the reader
+/// accepted each alone, the scheme's first (`beta` before `gamma`: the
+/// condition β ≥ γ/2 is about β).
+const REFUSABLE: [&str; 11] = [
+    "beta",
+    "gamma",
+    "alpha",
+    "rho",
+    "h_min",
+    "h_max",
+    "h",
+    "tol",
+    "rtol",
+    "atol",
+    "max_iterations",
+];
+
+/// The key given in `sim` that the integrator refuses: the first whose
+/// default makes the settings pass, else the first given.
+fn refused_key(sim: &mstar::file::Simulation) -> Option<&'static str> {
+    let given = || REFUSABLE.into_iter().filter(|k| sim.is_given(k));
+    let passes_without = |key: &str| {
+        let mut s = sim.clone();
+        match key {
+            "beta" => s.beta = None,
+            "gamma" => s.gamma = None,
+            "alpha" => s.alpha = None,
+            "rho" => s.rho = None,
+            "h_min" => s.h_min = None,
+            "h_max" => s.h_max = None,
+            "h" => s.h = None,
+            "tol" => s.tol = None,
+            "rtol" => s.rtol = None,
+            "atol" => s.atol = None,
+            _ => s.max_iterations = None,
+        }
+        mstar::run::config(&s).is_ok()
+    };
+    given()
+        .find(|k| passes_without(k))
+        .or_else(|| given().next())
+}

@@ -32,8 +32,9 @@ pub struct RunArgs {
     /// t_end = 1 s).
     #[arg(long, value_enum)]
     builtin: Option<Builtin>,
-    /// Write the samples to this CSV file (streamed; complete, or on a failure
-    /// the samples so far in <name>.partial.csv).
+    /// Write the samples to this file: CSV, or NumPy's .npz when the name
+    /// ends in .npz; `-` for standard output (CSV). Streamed: complete, or
+    /// on a failure the samples so far in <name>.partial.csv (.partial.npz).
     #[arg(long)]
     pub(crate) out: Option<PathBuf>,
     /// End time, s (overrides [simulation] t_end).
@@ -234,8 +235,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
         Some(dt) => (1, Some(dt)),
         None => (model.every, model.every_time),
     };
-    let (config, t_end) =
-        mstar::run::config(&model.simulation).map_err(mstar::run::RunError::from)?;
+    let (config, t_end) = super::config(&model.simulation)?;
     check_tolerances(&config.error, &model.u0)?;
     let sys = model.system.system();
     say!(
@@ -550,8 +550,9 @@ fn sensitivity_parameters(
     }
     if every_time.is_some() {
         return refuse(
-            "writes the steps' own sensitivities: drop --output-every (or [output] every_time) \
-             and use [output] every",
+            "writes the steps' own sensitivities: drop --output-every, and in place of \
+             [output] every_time write rows every n steps ([output] every; on the command \
+             line --set output.every=1, which replaces every_time)",
         );
     }
     if redundant {
@@ -680,9 +681,27 @@ fn check_tolerances(error: &mstar::ErrorControl, u0: &[f64]) -> Result<()> {
 
 /// One override of a built-in model: the command line's `--t-end`, `--h`,
 /// `--tol`, `--rtol`, `--atol`, `--adaptive`, `--strict` (as
-/// `simulation.<key>=…`); other keys are refused.
+/// `simulation.<key>=…`), or `--set` of those keys; other keys are refused
+/// with [`BUILTIN_TAKES`].
 fn builtin_setting(simulation: &mut Simulation, assignment: &str) -> Result<()> {
+    builtin_value(simulation, assignment).with_context(|| format!("--set {assignment}"))
+}
+
+/// What a built-in model takes: the keys [`builtin_value`] sets, and the
+/// options that do not change the model (`run_model` reads them alike for
+/// a file and a built-in).
+const BUILTIN_TAKES: &str = "a built-in model has no model file: --set takes simulation.t_end, \
+     simulation.h, simulation.tol, simulation.rtol, simulation.atol and \
+     simulation.error_control only (as --t-end, --h, --tol, --rtol, --atol, --adaptive and \
+     --strict set them); beside those, it takes --out, --columns and --output-every";
+
+/// [`builtin_setting`]'s work: the value of `assignment` in `simulation`.
+fn builtin_value(simulation: &mut Simulation, assignment: &str) -> Result<()> {
     let (key, value) = assignment.split_once('=').unwrap_or((assignment, ""));
+    let (key, value) = (key.trim(), value.trim());
+    if !BUILTIN_KEYS.contains(&key) {
+        bail!("{BUILTIN_TAKES}");
+    }
     if key == "simulation.error_control" {
         simulation.error_control = Some(match value {
             "adaptive" => mstar::file::ErrorControlChoice::Adaptive,
@@ -709,13 +728,20 @@ fn builtin_setting(simulation: &mut Simulation, assignment: &str) -> Result<()> 
         "simulation.h" => simulation.h = Some(positive()?),
         "simulation.tol" => simulation.tol = Some(positive()?),
         "simulation.rtol" => simulation.rtol = Some(number),
-        "simulation.atol" => simulation.atol = Some(number),
-        _ => bail!(
-            "--set {assignment}: a built-in model takes --t-end, --h, --tol, --rtol, --atol, --adaptive and --strict only"
-        ),
+        _ => simulation.atol = Some(number),
     }
     Ok(())
 }
+
+/// The keys of `[simulation]` a built-in model takes ([`builtin_value`]).
+const BUILTIN_KEYS: [&str; 6] = [
+    "simulation.t_end",
+    "simulation.h",
+    "simulation.tol",
+    "simulation.rtol",
+    "simulation.atol",
+    "simulation.error_control",
+];
 
 /// A built-in model with its defaults and the command line's overrides
 /// ([`builtin_setting`]).
