@@ -42,7 +42,13 @@ pub fn check(args: &CheckArgs) -> ExitCode {
     for w in &file.warnings {
         note!("warning: {w}");
     }
-    let report = mstar::run::check(mstar::run::lookup(&file.mechanism), &config, redundant);
+    let sys = mstar::run::lookup(&file.mechanism);
+    let report = mstar::run::check(sys, &config, redundant);
+    // As `run`'s refusal: the violation first when the pose is far from a
+    // joint (the dependence may be the pose's).
+    let refusal = (!report.redundant.is_empty() && !report.minimum_norm).then(|| {
+        mstar::run::RunError::redundant_at(report.redundant.clone(), sys, &sys.initial_position())
+    });
     // As `run`: the process ends next.
     std::mem::forget(file);
     print!("{report}");
@@ -52,12 +58,7 @@ pub fn check(args: &CheckArgs) -> ExitCode {
         if let Some(why) = &report.not_computed {
             note!("error: the redundant constraints were not computed: {why}");
         }
-        if !report.redundant.is_empty() && !report.minimum_norm {
-            let e = mstar::run::RunError::redundant(
-                report.redundant.clone(),
-                report.coordinates,
-                report.constraints,
-            );
+        if let Some(e) = refusal {
             note!("error: {e}");
         }
         ExitCode::from(1)
