@@ -555,13 +555,16 @@ impl Linearization {
     /// If `x`, `w` or `y` is not of length `n`.
     pub fn tangent_mul_add(&self, x: &[f64], w: &[f64], y: &mut [f64]) {
         let [hessian, g_u, g_v, mass_du] = &self.tangent_patterns;
-        let mut minus = vec![0.0; self.n];
         if !self.hessian.is_empty() {
             hessian.mul_add(&self.hessian, x, y);
         }
         if !self.mass_du.is_empty() {
             mass_du.mul_add(&self.mass_du, x, y);
         }
+        if self.g_u.is_empty() && self.g_v.is_empty() {
+            return;
+        }
+        let mut minus = vec![0.0; self.n];
         if !self.g_u.is_empty() {
             g_u.mul_add(&self.g_u, x, &mut minus);
         }

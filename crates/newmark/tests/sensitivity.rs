@@ -196,3 +196,51 @@ fn mass_sensitivity_scales_the_multipliers() {
         );
     }
 }
+
+/// With a factorization of each step's own iterate (full Newton), one
+/// parameter's solve refines with it instead of factoring at the converged
+/// state; two parameters share a factorization there. Both give the
+/// sensitivity that the extrapolated differences check above (the same
+/// to round-off: `[J_c]⁻¹` either way).
+#[test]
+fn one_parameter_refines_with_the_step_s_factorization_and_two_factor() {
+    let (m, l) = (1.0, 1.0);
+    let run = |params: &[&dyn Parameterized]| {
+        let p = Pendulum::new(m, l);
+        let mut integ = Integrator::new(&p.sys, config(Newton::Full, 0.9), 0.0, &p.u0, &p.v0)
+            .expect("the pendulum starts");
+        let mut sens = integ
+            .sensitivities(params)
+            .expect("the sensitivities start");
+        for _ in 0..50 {
+            integ.step_with(1.0, &mut sens).expect("the step converges");
+        }
+        let length: Vec<f64> = sens.u(0).iter().chain(sens.lambda(0)).copied().collect();
+        (sens.factorizations(), sens.solves(), length)
+    };
+    let length = Param { length: true, m, l };
+    let mass = Param {
+        length: false,
+        m,
+        l,
+    };
+    let (factored_one, solves_one, refined) = run(&[&length]);
+    let (factored_two, solves_two, factored) = run(&[&length, &mass]);
+    assert_eq!(factored_one, 0, "one parameter refines");
+    assert!(
+        (100..=150).contains(&solves_one),
+        "two or three solves a step: {solves_one}"
+    );
+    assert_eq!(
+        (factored_two, solves_two),
+        (50, 100),
+        "two parameters factor"
+    );
+    let scale = factored.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    for (r, f) in refined.iter().zip(&factored) {
+        assert!(
+            r.is_finite() && (r - f).abs() <= 1e-10 * scale,
+            "{r} against {f}"
+        );
+    }
+}

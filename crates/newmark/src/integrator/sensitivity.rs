@@ -15,14 +15,18 @@
 //! acceleration (linear in the previous step's sensitivities; the converged
 //! step does not depend on the predictor) and `r_p, Φ_p` the residual's and
 //! the constraints' partial derivatives at the converged state, by central
-//! differences between the model at `p ± h_p`. The initial sensitivities are
+//! differences between the model at `p ± h_p`.
+//! `J` at the converged state is solved by refinement with the step's own
+//! factorization when there is one (once per step, full Newton: an iterate
+//! of the same step: a pass contracts by about 5e-11 on the N-four-bar; two solves and
+//! a product `J x`), else factored there. The initial sensitivities are
 //! central differences of the whole start (projection, consistent
 //! accelerations, the start on the discrete solution) at `p ± h_p`.
 
 use std::collections::HashMap;
 
 use mstar_kkt::{KktOptions, KktSolver, SharedAnalyses};
-use mstar_linearize::Linearization;
+use mstar_linearize::{Linearization, max_abs};
 use mstar_model::{StateRef, System};
 
 use super::{Integrator, State};
@@ -175,6 +179,8 @@ impl Partials {
 /// parameters of its model, advanced by [`Integrator::step_with`].
 pub struct Sensitivities {
     pub(super) params: Vec<Parameter>,
+    /// The buffers of a step's solves, kept from step to step.
+    scratch: Scratch,
     /// Solves, one per parameter and step.
     solves: usize,
     /// Factorizations at the converged state, one per step.
@@ -306,6 +312,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         }
         Ok(Sensitivities {
             params: out,
+            scratch: Scratch::default(),
             solves: 0,
             factorizations: 0,
         })
@@ -439,20 +446,31 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         sens: &mut Sensitivities,
     ) -> Result<(), IntegrationError> {
         let h_before = self.h_last;
+        let factored_before = self.stats.factorizations;
         self.step(t_end)?;
         if sens.params.is_empty() {
             return Ok(());
         }
         let h = self.h_last;
         // `M`, `B`, `g`, `Φ` are those of Newton's last residual, at the
-        // converged state; the Jacobians are evaluated there too, and the
-        // matrix factored once for every parameter.
+        // converged state; the Jacobians are evaluated there too.
         let s = &self.state;
         self.lin.eval_jacobians(self.sys, &s.at(self.t));
-        self.factor_converged(h)?;
-        sens.factorizations += 1;
+        // A factorization of this step's own iterate (once per step, full
+        // Newton) is that of a matrix close to the converged one: refined
+        // with it, a parameter costs two solves and a product. Otherwise
+        // (an earlier step's Jacobian, modified Newton), or for many
+        // parameters, the matrix is factored at the converged state once
+        // for all of them.
+        let mut refine = self.stats.factorizations > factored_before
+            && self.factored_h == Some(h)
+            && sens.params.len() <= REFINED_PARAMETERS;
+        if !refine {
+            self.factor_converged(h)?;
+            sens.factorizations += 1;
+        }
         for k in 0..sens.params.len() {
-            self.advance_sensitivity(sens, k, h, h / h_before)?;
+            self.advance_sensitivity(sens, k, h, h / h_before, &mut refine)?;
         }
         Ok(())
     }
@@ -466,35 +484,38 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         k: usize,
         h: f64,
         rescale: f64,
+        refine: &mut bool,
     ) -> Result<(), IntegrationError> {
         let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
-        let predicted = self.predicted_sensitivity(&sens.params[k].s, h, rescale);
-        let mut rhs = self.partial_derivatives(&mut sens.params[k]);
+        let Sensitivities {
+            params,
+            scratch,
+            solves,
+            factorizations,
+        } = sens;
+        scratch.size(n, m);
+        let param = &mut params[k];
+        self.predict_sensitivity(&param.s, h, rescale, &mut scratch.predicted);
         // rhs = [r_p − K_T δu^p − C_T δu̇^p; −Φ_p − B δu^p]
-        let mut tangent = vec![0.0; n];
-        self.lin
-            .tangent_mul_add(&predicted.u, &predicted.v, &mut tangent);
-        for (r, t) in rhs[..n].iter_mut().zip(&tangent) {
+        self.partials_into(param, &mut scratch.rhs);
+        let (pred, tmp) = (&scratch.predicted, &mut scratch.j_x);
+        tmp.fill(0.0);
+        let (top, bottom) = tmp.split_at_mut(n);
+        self.lin.tangent_mul_add(&pred.u, &pred.v, top);
+        self.lin.b_pattern().mul_add(self.lin.b(), &pred.u, bottom);
+        for (r, t) in scratch.rhs.iter_mut().zip(tmp.iter()) {
             *r -= t;
         }
-        let mut b_u = vec![0.0; m];
-        self.lin
-            .b_pattern()
-            .mul_add(self.lin.b(), &predicted.u, &mut b_u);
-        for (r, b) in rhs[n..].iter_mut().zip(&b_u) {
-            *r -= b;
-        }
-        let x = self.solve_scaled(&rhs, h)?;
-        sens.solves += 1;
+        self.solve_sensitivity(scratch, (solves, factorizations), h, refine)?;
         let c = self.p.coefficients(h, self.config.scaling);
         let a_p = 1.0 / (self.p.beta * h * h);
-        let s = &mut sens.params[k].s;
+        let (x, pred, s) = (&scratch.x, &scratch.predicted, &mut param.s);
         for i in 0..n {
             let du = x[i];
-            s.u[i] = predicted.u[i] + du;
-            s.v[i] = predicted.v[i] + c.c_v * du;
+            s.u[i] = pred.u[i] + du;
+            s.v[i] = pred.v[i] + c.c_v * du;
             s.a[i] = c.c_a * du;
-            s.a_alpha[i] = predicted.a_alpha[i] + a_p * du;
+            s.a_alpha[i] = pred.a_alpha[i] + a_p * du;
         }
         s.lambda.copy_from_slice(&x[n..]);
         if let Some(i) = s.u.iter().chain(&s.lambda).position(|x| !x.is_finite()) {
@@ -502,7 +523,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 t: self.t,
                 what: format!(
                     "the sensitivity to '{}' ({})",
-                    sens.params[k].name,
+                    param.name,
                     if i < n {
                         format!("coordinate '{}'", self.sys.coord_name(i))
                     } else {
@@ -516,19 +537,17 @@ impl<S: System + ?Sized> Integrator<'_, S> {
 
     /// The predictor (14) with zero acceleration applied to the
     /// sensitivities `s` of the previous state (as `predict` with
-    /// [`crate::Predictor::ZeroAcceleration`]); its `a` is zero.
-    fn predicted_sensitivity(&self, s: &State, h: f64, rescale: f64) -> State {
+    /// [`crate::Predictor::ZeroAcceleration`]), into `out`'s `u`, `v` and
+    /// `a_alpha`.
+    fn predict_sensitivity(&self, s: &State, h: f64, rescale: f64, out: &mut State) {
         let p = self.p;
-        let n = s.u.len();
-        let mut out = State::zeros(n, 0);
-        for i in 0..n {
+        for i in 0..s.u.len() {
             let a_n = s.a[i] + rescale * (s.a_alpha[i] - s.a[i]);
             let aa1 = (p.alpha_f * s.a[i] - p.alpha_m * a_n) / (1.0 - p.alpha_m);
             out.a_alpha[i] = aa1;
             out.v[i] = s.v[i] + h * ((1.0 - p.gamma) * a_n + p.gamma * aa1);
             out.u[i] = s.u[i] + h * s.v[i] + h * h * ((0.5 - p.beta) * a_n + p.beta * aa1);
         }
-        out
     }
 
     /// The partials `[∂r/∂p_k; −∂Φ/∂p_k]` of parameter `k` of `sens` at the
@@ -541,45 +560,134 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     /// # Panics
     /// If `k` is not below `sens.len()`.
     pub fn partials(&self, sens: &mut Sensitivities, k: usize) -> Vec<f64> {
-        self.partial_derivatives(&mut sens.params[k])
-    }
-
-    /// `[r_p; −Φ_p]` at the converged state: central differences of the
-    /// residual and the constraints of the models at `p ± h_p` (the whole
-    /// model's or the parameter's small one, scattered into the whole
-    /// model's rows).
-    fn partial_derivatives(&self, param: &mut Parameter) -> Vec<f64> {
-        let n = self.sys.n_coords();
-        let mut rhs = vec![0.0; n + self.sys.n_constraints()];
-        let x = self.state.at(self.t);
-        param.partials.each(&x, n, param.step, |k, c| rhs[k] = c);
+        let mut rhs = Vec::new();
+        self.partials_into(&mut sens.params[k], &mut rhs);
         rhs
     }
 
-    /// `J⁻¹ f` with the factored (scaled, possibly augmented) KKT matrix:
-    /// its right-hand side is `[scale f_u; f_λ]`, and its multiplier part
-    /// is `scale (δλ − c_bb f_λ)` when `S` carries `c_bb BᵀB`.
-    fn solve_scaled(&mut self, f: &[f64], h: f64) -> Result<Vec<f64>, IntegrationError> {
+    /// `[r_p; −Φ_p]` at the converged state into `rhs` (sized `n + m`):
+    /// central differences of the residual and the constraints of the
+    /// models at `p ± h_p` (the whole model's or the parameter's small one,
+    /// scattered into the whole model's rows).
+    fn partials_into(&self, param: &mut Parameter, rhs: &mut Vec<f64>) {
+        let n = self.sys.n_coords();
+        rhs.clear();
+        rhs.resize(n + self.sys.n_constraints(), 0.0);
+        let x = self.state.at(self.t);
+        param.partials.each(&x, n, param.step, |k, c| rhs[k] = c);
+    }
+
+    /// `J x = rhs` (`scratch`'s) with `J = [S Bᵀ; B 0]`, `S = K_T + γ' C_T +
+    /// β' M`, at the converged state, into `scratch.x`. With `refine`, by
+    /// refinement with the step's own factorization (of an iterate of this
+    /// step) until the next pass would change `x` by at most [`REFINED`]
+    /// relative (two solves: the matrices differ by about `5e-11` relative
+    /// on the N-four-bar); when that does not converge within
+    /// [`MAX_REFINEMENTS`] passes or stops contracting, the matrix is
+    /// factored at the converged state and `refine` cleared (for the step's
+    /// other parameters). Without, one solve with the factorization at the
+    /// converged state. `counts`: the solves and factorizations made.
+    fn solve_sensitivity(
+        &mut self,
+        scratch: &mut Scratch,
+        (solves, factorizations): (&mut usize, &mut usize),
+        h: f64,
+        refine: &mut bool,
+    ) -> Result<(), IntegrationError> {
+        let n = self.sys.n_coords();
+        if *refine {
+            scratch.x.fill(0.0);
+            scratch.residual.copy_from_slice(&scratch.rhs);
+            let mut previous: Option<f64> = None;
+            for _ in 0..MAX_REFINEMENTS {
+                self.solve_scaled(&scratch.residual, h, &mut scratch.y)?;
+                *solves += 1;
+                for (x, y) in scratch.x.iter_mut().zip(&scratch.y) {
+                    *x += y;
+                }
+                let change = relative_change(&scratch.y, &scratch.x, n);
+                if let Some(previous) = previous {
+                    // Contracting by `change / previous` a pass, the next
+                    // pass would change `x` by `change² / previous`.
+                    if change * change <= REFINED * previous || change <= REFINED {
+                        return Ok(());
+                    }
+                    if change > 0.5 * previous {
+                        break;
+                    }
+                }
+                previous = Some(change);
+                self.kkt_residual(scratch, h);
+            }
+            self.factor_converged(h)?;
+            *factorizations += 1;
+            *refine = false;
+        }
+        *solves += 1;
+        self.solve_scaled(&scratch.rhs, h, &mut scratch.x)
+    }
+
+    /// `scratch.residual = rhs − J x` with the Jacobians at the converged
+    /// state (see [`solve_sensitivity`](Self::solve_sensitivity)).
+    fn kkt_residual(&self, scratch: &mut Scratch, h: f64) {
+        let n = self.sys.n_coords();
+        let c = self.p.coefficients(h, self.config.scaling);
+        let Scratch {
+            rhs,
+            x,
+            residual,
+            j_x,
+            x_v,
+            x_a,
+            ..
+        } = scratch;
+        let (x_u, x_l) = x.split_at(n);
+        j_x.fill(0.0);
+        let (top, bottom) = j_x.split_at_mut(n);
+        for ((v, a), x) in x_v.iter_mut().zip(x_a.iter_mut()).zip(x_u) {
+            (*v, *a) = (c.c_v * x, c.c_a * x);
+        }
+        self.lin.tangent_mul_add(x_u, x_v, top);
+        self.lin.mass_pattern().mul_add(self.lin.mass(), x_a, top);
+        let (b, b_pattern) = (self.lin.b(), self.lin.b_pattern());
+        b_pattern.mul_transpose_add(b, x_l, top);
+        b_pattern.mul_add(b, x_u, bottom);
+        for ((o, r), j) in residual.iter_mut().zip(rhs.iter()).zip(j_x.iter()) {
+            *o = r - j;
+        }
+    }
+
+    /// `y = J⁻¹ f` with the factored (scaled, possibly augmented) KKT
+    /// matrix: its right-hand side is `[scale f_u; f_λ]`, and its
+    /// multiplier part is `scale (δλ − c_bb f_λ)` when `S` carries `c_bb
+    /// BᵀB`.
+    fn solve_scaled(
+        &mut self,
+        f: &[f64],
+        h: f64,
+        y: &mut Vec<f64>,
+    ) -> Result<(), IntegrationError> {
         let n = self.sys.n_coords();
         let c = self.p.coefficients(h, self.config.scaling);
         let in_matrix = if self.lin.augmented() { c.c_bb } else { 0.0 };
-        let mut y: Vec<f64> = f[..n].iter().map(|r| c.scale * r).collect();
+        y.clear();
+        y.extend(f[..n].iter().map(|r| c.scale * r));
         y.extend_from_slice(&f[n..]);
         self.solver
-            .solve_in_place(&mut y)
+            .solve_in_place(y)
             .map_err(|source| self.kkt_error("solving for a sensitivity", self.t, h, source))?;
         for (y, f) in y[n..].iter_mut().zip(&f[n..]) {
             *y = *y / c.scale + in_matrix * f;
         }
-        Ok(y)
+        Ok(())
     }
 
     /// Factors the iteration matrix at the converged state (the Jacobians
-    /// of [`step_with`](Self::step_with)): the step's own factorization is
-    /// of an earlier iterate (an earlier step with modified Newton), and
-    /// refining with it took 3–7 solves and products a step where this takes
-    /// one solve (docs/performance.md, "Forward sensitivities"). The next
-    /// step's modified Newton starts from it.
+    /// of [`step_with`](Self::step_with)), when the Newton factorization is
+    /// an earlier step's (modified Newton: refining with it took 3–7 solves
+    /// and products a step, docs/performance.md, "Forward sensitivities"),
+    /// or for several parameters. The next step's modified Newton starts
+    /// from it.
     fn factor_converged(&mut self, h: f64) -> Result<(), IntegrationError> {
         let c = self.p.coefficients(h, self.config.scaling);
         self.lin.assemble(&c);
@@ -590,6 +698,83 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         self.factored_h = Some(h);
         Ok(())
     }
+}
+
+/// The buffers of one step's sensitivity solves (`n + m` values, the
+/// predictor's and the products' `n`), sized at the first step.
+struct Scratch {
+    /// The predictor applied to a parameter's sensitivities (`u`, `v`,
+    /// `a_alpha`).
+    predicted: State,
+    rhs: Vec<f64>,
+    x: Vec<f64>,
+    residual: Vec<f64>,
+    y: Vec<f64>,
+    j_x: Vec<f64>,
+    x_v: Vec<f64>,
+    x_a: Vec<f64>,
+}
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Self {
+            predicted: State::zeros(0, 0),
+            rhs: Vec::new(),
+            x: Vec::new(),
+            residual: Vec::new(),
+            y: Vec::new(),
+            j_x: Vec::new(),
+            x_v: Vec::new(),
+            x_a: Vec::new(),
+        }
+    }
+}
+
+impl Scratch {
+    /// Sizes the buffers for `n` coordinates and `m` constraints.
+    fn size(&mut self, n: usize, m: usize) {
+        if self.predicted.u.len() != n {
+            self.predicted = State::zeros(n, 0);
+        }
+        for v in [
+            &mut self.rhs,
+            &mut self.x,
+            &mut self.residual,
+            &mut self.y,
+            &mut self.j_x,
+        ] {
+            v.resize(n + m, 0.0);
+        }
+        self.x_v.resize(n, 0.0);
+        self.x_a.resize(n, 0.0);
+    }
+}
+
+/// A refined sensitivity is accepted when the next pass would change it by
+/// at most this, relative.
+const REFINED: f64 = 1e-12;
+
+/// The most refinement passes of a sensitivity's solve before the matrix is
+/// factored at the converged state (two suffice with a factorization of
+/// the same step: its matrix differs from the converged one by the step's
+/// Newton corrections).
+const MAX_REFINEMENTS: usize = 3;
+
+/// Up to this many parameters refine with the step's factorization; more
+/// share one factorization at the converged state. A refinement costs a
+/// parameter a solve and a product more; on the N-four-bar (81 bars) two
+/// parameters took 6 314 instructions a body-step refined against 5 998
+/// with the factorization (docs/performance.md, "Forward sensitivities").
+const REFINED_PARAMETERS: usize = 1;
+
+/// The larger of `‖y_u‖∞ / ‖x_u‖∞` and `‖y_λ‖∞ / ‖x_λ‖∞` (each 0 when `y`'s
+/// part is 0): coordinates and multipliers have units of their own.
+fn relative_change(y: &[f64], x: &[f64], n: usize) -> f64 {
+    let part = |y: &[f64], x: &[f64]| {
+        let (dy, sx) = (max_abs(y), max_abs(x));
+        if dy == 0.0 { 0.0 } else { dy / sx }
+    };
+    part(&y[..n], &x[..n]).max(part(&y[n..], &x[n..]))
 }
 
 /// The whole model's coordinates and constraint rows by name.
