@@ -556,3 +556,75 @@ fn dependent_rows_at_a_pose_that_violates_a_joint_name_the_violation_first_and_t
     assert!(message.starts_with("the constraints of "), "{message}");
     assert!(message.contains("start it away from there"), "{message}");
 }
+
+#[test]
+fn a_redundant_crank_in_a_pose_off_its_joints_names_the_violation_and_minimum_norm_runs_it() {
+    // The parallelogram with a third crank (models/parallelogram-third-crank.toml)
+    // with explicit points, its coupler placed 1 mm off its pins: the third
+    // crank's rows are dependent at that pose (they are in every pose), and
+    // the pose violates the pins. The message names the violation first;
+    // its second piece of advice, minimum-norm multipliers, runs it (the
+    // start projects the coupler onto its pins).
+    let (s, c) = (
+        std::f64::consts::FRAC_PI_3.sin(),
+        std::f64::consts::FRAC_PI_3.cos(),
+    );
+    let crank = |name: &str, x0: f64| {
+        format!(
+            "[[body]]\nname = \"{name}\"\nmass = 1.0\ninertia = 0.02\npose = [{}, {}, {}]\n\
+             [[joint]]\nname = \"{name}-ground\"\ntype = \"revolute\"\nbodies = [\"ground\", \"{name}\"]\npoints = [[{x0}, 0.0], [-0.25, 0.0]]\n",
+            x0 + 0.25 * c,
+            0.25 * s,
+            std::f64::consts::FRAC_PI_3
+        )
+    };
+    let pin = |name: &str, at: f64| {
+        format!(
+            "[[joint]]\nname = \"{name}-top\"\ntype = \"revolute\"\nbodies = [\"{name}\", \"coupler\"]\npoints = [[0.25, 0.0], [{at}, 0.0]]\n"
+        )
+    };
+    let text = |redundant: &str| {
+        [
+            "format = \"mstar.planar/1\"\n".to_string(),
+            crank("left", 0.0),
+            crank("middle", 0.5),
+            crank("right", 1.0),
+            format!(
+                "[[body]]\nname = \"coupler\"\nmass = 2.0\ninertia = 0.17\npose = [{}, {}, 0.0]\n",
+                0.75 + 1e-3,
+                0.5 * s
+            ),
+            pin("left", -0.5),
+            pin("middle", 0.0),
+            pin("right", 0.5),
+            format!("[simulation]\nt_end = 0.01\n{redundant}"),
+        ]
+        .concat()
+    };
+    let off = ModelFile::parse(&text(""), "m.toml", Format::Toml).expect("valid file");
+    let e = mstar::run::simulate(&off.system, &off.simulation, &mut |_: &SampleRef<'_>| {})
+        .expect_err("redundant");
+    let message = e.to_string();
+    assert!(
+        message.starts_with("the initial pose violates '"),
+        "{message}"
+    );
+    assert!(message.contains("by 1.000e-3"), "{message}");
+    assert!(
+        message.contains("redundant = \"minimum-norm\""),
+        "{message}"
+    );
+    let advised = ModelFile::parse(
+        &text("redundant = \"minimum-norm\"\n"),
+        "m.toml",
+        Format::Toml,
+    )
+    .expect("valid file");
+    let stats = mstar::run::simulate(
+        &advised.system,
+        &advised.simulation,
+        &mut |_: &SampleRef<'_>| {},
+    )
+    .unwrap_or_else(|e| panic!("minimum-norm multipliers run it: {e}"));
+    assert_eq!(stats.t, 0.01);
+}
