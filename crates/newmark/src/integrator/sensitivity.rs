@@ -600,7 +600,11 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             scratch.residual.copy_from_slice(&scratch.rhs);
             let mut previous: Option<f64> = None;
             for _ in 0..MAX_REFINEMENTS {
-                self.solve_scaled(&scratch.residual, h, &mut scratch.y)?;
+                // Without the backend's own refinement step (`schur-lu`'s,
+                // against the factored matrix): this loop refines against
+                // `J` at the converged state, and corrects that solve's
+                // error as well.
+                self.solve_scaled(&scratch.residual, h, &mut scratch.y, true)?;
                 *solves += 1;
                 for (x, y) in scratch.x.iter_mut().zip(&scratch.y) {
                     *x += y;
@@ -624,7 +628,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             *refine = false;
         }
         *solves += 1;
-        self.solve_scaled(&scratch.rhs, h, &mut scratch.x)
+        self.solve_scaled(&scratch.rhs, h, &mut scratch.x, false)
     }
 
     /// `scratch.residual = rhs − J x` with the Jacobians at the converged
@@ -660,12 +664,14 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     /// `y = J⁻¹ f` with the factored (scaled, possibly augmented) KKT
     /// matrix: its right-hand side is `[scale f_u; f_λ]`, and its
     /// multiplier part is `scale (δλ − c_bb f_λ)` when `S` carries `c_bb
-    /// BᵀB`.
+    /// BᵀB`. `unrefined`: without the backend's refinement step
+    /// ([`mstar_kkt::KktSolver::solve_correction`]).
     fn solve_scaled(
         &mut self,
         f: &[f64],
         h: f64,
         y: &mut Vec<f64>,
+        unrefined: bool,
     ) -> Result<(), IntegrationError> {
         let n = self.sys.n_coords();
         let c = self.p.coefficients(h, self.config.scaling);
@@ -673,9 +679,13 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         y.clear();
         y.extend(f[..n].iter().map(|r| c.scale * r));
         y.extend_from_slice(&f[n..]);
-        self.solver
-            .solve_in_place(y)
-            .map_err(|source| self.kkt_error("solving for a sensitivity", self.t, h, source))?;
+        let solved = if unrefined {
+            let norm = max_abs(y);
+            self.solver.solve_correction(y, norm)
+        } else {
+            self.solver.solve_in_place(y)
+        };
+        solved.map_err(|source| self.kkt_error("solving for a sensitivity", self.t, h, source))?;
         for (y, f) in y[n..].iter_mut().zip(&f[n..]) {
             *y = *y / c.scale + in_matrix * f;
         }
