@@ -598,8 +598,10 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         if *refine {
             scratch.x.fill(0.0);
             scratch.residual.copy_from_slice(&scratch.rhs);
-            let mut previous: Option<f64> = None;
-            for _ in 0..MAX_REFINEMENTS {
+            // The last pass's change of `x`, relative; after the first pass
+            // `x = y`, a change of 1.
+            let mut previous = 1.0;
+            for pass in 0..MAX_REFINEMENTS {
                 // Without the backend's own refinement step (`schur-lu`'s,
                 // against the factored matrix): this loop refines against
                 // `J` at the converged state, and corrects that solve's
@@ -609,8 +611,8 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 for (x, y) in scratch.x.iter_mut().zip(&scratch.y) {
                     *x += y;
                 }
-                let change = relative_change(&scratch.y, &scratch.x, n);
-                if let Some(previous) = previous {
+                if pass > 0 {
+                    let change = relative_change(&scratch.y, &scratch.x, n);
                     // Contracting by `change / previous` a pass, the next
                     // pass would change `x` by `change² / previous`.
                     if change * change <= REFINED * previous || change <= REFINED {
@@ -619,8 +621,8 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                     if change > 0.5 * previous {
                         break;
                     }
+                    previous = change;
                 }
-                previous = Some(change);
                 self.kkt_residual(scratch, h);
             }
             self.factor_converged(h)?;
