@@ -71,7 +71,11 @@ pub struct RunStats {
 /// `max |E − E₀| ≤ 2 rtol · T_max`, `T_max` the largest kinetic energy of the
 /// run (the energy that the motion exchanges), with a round-off floor: an
 /// oscillation's energy goes with its amplitude squared, so amplitudes
-/// within `rtol` keep it within `2 rtol`.
+/// within `rtol` keep it within `2 rtol`. The floor is `1e-12` of the
+/// energies' size, which includes the work `W = Σ|gᵢ| max(1, ‖u‖∞)` the
+/// forces would do over the coordinates' own size: a structure at rest at
+/// `y = 0` has `E₀ = T = 0`, and the round-off of its positions still moves
+/// its potential energy by about `ε W`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct EnergyReport {
     /// Whether the energy was tracked (the system conserves it).
@@ -84,11 +88,14 @@ pub struct EnergyReport {
     pub t_drift: f64,
     /// The largest kinetic energy, J.
     pub kinetic_max: f64,
+    /// The largest `W = Σ|gᵢ| max(1, ‖u‖∞)`, J: the scale of the potential
+    /// energy's round-off.
+    pub work_max: f64,
 }
 
 impl EnergyReport {
-    /// Records the energy of a state at `t`.
-    pub(crate) fn record(&mut self, t: f64, kinetic: f64, potential: f64) {
+    /// Records the energy of a state at `t`, with `work`, the state's `W`.
+    pub(crate) fn record(&mut self, t: f64, kinetic: f64, potential: f64, work: f64) {
         let e = kinetic + potential;
         if !self.tracked {
             (self.tracked, self.e0, self.drift, self.t_drift) = (true, e, 0.0, t);
@@ -98,13 +105,15 @@ impl EnergyReport {
             (self.drift, self.t_drift) = (d, t);
         }
         self.kinetic_max = self.kinetic_max.max(kinetic);
+        self.work_max = self.work_max.max(work);
     }
 
     /// The drift allowed with relative tolerance `rtol`: `2 rtol · T_max`,
-    /// and never below the round-off of summing the energies.
+    /// and never below the round-off of the energies (`1e-12` of `|E₀| +
+    /// T_max + W_max`).
     #[must_use]
     pub fn limit(&self, rtol: f64) -> f64 {
-        let round_off = 1e-12 * (self.e0.abs() + self.kinetic_max);
+        let round_off = 1e-12 * (self.e0.abs() + self.kinetic_max + self.work_max);
         (2.0 * rtol * self.kinetic_max).max(round_off)
     }
 
@@ -188,25 +197,38 @@ mod tests {
     fn the_drift_is_judged_against_twice_rtol_times_the_largest_kinetic_energy() {
         let mut e = EnergyReport::default();
         assert!(!e.exceeded(1e-3), "nothing tracked, nothing exceeded");
-        e.record(0.0, 0.0, -10.0);
-        e.record(1.0, 10.0, -19.99);
+        e.record(0.0, 0.0, -10.0, 0.0);
+        e.record(1.0, 10.0, -19.99, 0.0);
         // |E − E₀| = 0.01 J against 2 · 1e-3 · 10 J = 0.02 J.
         assert!((e.drift - 0.01).abs() < 1e-12 && e.t_drift == 1.0);
         assert!(!e.exceeded(1e-3));
         assert!(e.exceeded(1e-4));
-        e.record(2.0, 5.0, f64::NAN);
+        e.record(2.0, 5.0, f64::NAN, 0.0);
         assert!(e.drift.is_nan() && e.exceeded(1.0), "NaN never passes");
-        e.record(3.0, 5.0, -15.0);
+        e.record(3.0, 5.0, -15.0, 0.0);
         assert!(e.drift.is_nan(), "a NaN drift stays NaN");
     }
 
     #[test]
     fn a_body_at_rest_is_judged_at_round_off() {
         let mut e = EnergyReport::default();
-        e.record(0.0, 0.0, 5.0);
-        e.record(1.0, 0.0, 5.0 + 1e-13);
+        e.record(0.0, 0.0, 5.0, 0.0);
+        e.record(1.0, 0.0, 5.0 + 1e-13, 0.0);
         assert!(!e.exceeded(1e-3), "round-off of E₀");
-        e.record(2.0, 0.0, 5.0 + 1e-9);
+        e.record(2.0, 0.0, 5.0 + 1e-9, 0.0);
         assert!(e.exceeded(1e-3));
+    }
+
+    #[test]
+    fn a_structure_at_rest_at_zero_potential_is_judged_at_the_forces_round_off() {
+        // Two welded bars along y = 0 (3 kg, 1.4 m): E₀ = 0, a kinetic
+        // energy of round-off (1e-40 J), and W = 3 · 9.81 N · 1.4 m.
+        let work = 3.0 * 9.81 * 1.4;
+        let mut e = EnergyReport::default();
+        e.record(0.0, 0.0, 0.0, work);
+        e.record(1.0, 7.6e-40, 2.8e-35, work);
+        assert!(!e.exceeded(1e-3), "round-off of the positions");
+        e.record(2.0, 7.6e-40, 1e-9, work);
+        assert!(e.exceeded(1e-3), "1e-9 J is no round-off of 41 J");
     }
 }

@@ -12,7 +12,7 @@ pub use adjoint::{Column, Gradient, Memory, Objective};
 pub use sensitivity::{DIFFERENCE_STEP, Parameterized, Sensitivities, Variant};
 
 use mstar_kkt::{Backend, KktError, KktSolver};
-use mstar_linearize::Linearization;
+use mstar_linearize::{Linearization, max_abs};
 use mstar_model::{Sample, SampleRef, StateRef, System, kinetic_energy};
 
 use crate::{
@@ -307,7 +307,10 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             return;
         }
         let (kinetic, potential) = self.energies_now();
-        self.stats.energy.record(self.t, kinetic, potential);
+        // The forces are those of the state's last residual evaluation.
+        let force: f64 = self.lin.g().iter().map(|g| g.abs()).sum();
+        let work = force * max_abs(&self.state.u).max(1.0);
+        self.stats.energy.record(self.t, kinetic, potential, work);
         self.energies = Some((kinetic, potential));
     }
 
