@@ -119,6 +119,19 @@ fn local_warning(
                 damped_scheme(config, files)
             ),
         ),
+        Some(i) if zero_allowance(stats, config) => (
+            format!(
+                "the estimated local error exceeded the tolerance ({tolerance}) {steps}, in '{}'",
+                coord_name(i)
+            ),
+            format!(
+                "with atol = 0 a coordinate is allowed rtol times its own value, nothing where it \
+                 is 0, and '{}' is or passes through 0: no step size gets there; give an \
+                 absolute tolerance (--atol {:e}, the default, in m or rad)",
+                coord_name(i),
+                mstar_newmark::ErrorControl::default().atol
+            ),
+        ),
         Some(i) => (
             format!(
                 "the estimated local error exceeded the tolerance ({tolerance}) {steps}, in '{}'",
@@ -141,6 +154,15 @@ fn local_warning(
     Some(format!(
         "warning: {what}: the results are not accurate to that tolerance; {advice} (--strict stops at the first such step)"
     ))
+}
+
+/// Whether the estimate exceeded a tolerance without an absolute part
+/// (`atol = 0`) by more than a step size can mend: a coordinate at 0 is
+/// allowed no error at all, and its round-off alone exceeds that (the
+/// slider of `models/slider-crank.toml`, held at `y = 0`: an infinite ratio).
+fn zero_allowance(stats: &RunStats, config: &Config) -> bool {
+    let ratio = stats.error.max_ratio;
+    config.error.atol == 0.0 && (ratio.is_nan() || ratio > FAR)
 }
 
 /// The advice of a step size beyond the tolerance: the `h` that brings every

@@ -628,3 +628,30 @@ fn a_redundant_crank_in_a_pose_off_its_joints_names_the_violation_and_minimum_no
     .unwrap_or_else(|e| panic!("minimum-norm multipliers run it: {e}"));
     assert_eq!(stats.t, 0.01);
 }
+
+/// The run of `models/slider-crank.toml` with the overrides `set`, and its
+/// accuracy warning (`mstar::accuracy::warning`, what `mstar run` prints).
+fn slider_crank_warning(set: &[&str]) -> Option<String> {
+    let set: Vec<String> = set.iter().map(|s| (*s).to_string()).collect();
+    let path = models().join("slider-crank.toml");
+    let model = ModelFile::load_with(&path, &set).unwrap_or_else(|e| panic!("{e}"));
+    let (config, _) = mstar::run::config(&model.simulation).expect("valid settings");
+    let sys = &model.system;
+    let stats = mstar::run::simulate(sys, &model.simulation, &mut |_: &SampleRef<'_>| {})
+        .unwrap_or_else(|e| panic!("{e}"));
+    mstar::accuracy::warning(&stats, &config, &|i| sys.coord_name(i), true)
+}
+
+#[test]
+fn atol_zero_on_a_coordinate_held_at_zero_advises_an_absolute_tolerance_that_works() {
+    // The slider runs along y = 0: with atol = 0 it is allowed no error,
+    // and its round-off exceeds that at every step. No step size helps;
+    // the warning says so and advises the default atol, which passes.
+    let warned = slider_crank_warning(&["simulation.atol=0", "simulation.t_end=0.2"])
+        .expect("atol = 0 warns");
+    assert!(warned.contains("in 'slider.y'"), "{warned}");
+    assert!(warned.contains("--atol 1e-6"), "{warned}");
+    assert!(!warned.contains("--h "), "no step size: {warned}");
+    let advised = slider_crank_warning(&["simulation.atol=1e-6", "simulation.t_end=0.2"]);
+    assert_eq!(advised, None, "the advised atol passes");
+}
