@@ -56,6 +56,12 @@ fn energy_warning(stats: &RunStats, config: &Config, files: bool) -> Option<Stri
     let h = advised_h(stats, config);
     let adaptive = config.error.mode == StepMode::Adaptive;
     let advice = match (adaptive, files) {
+        // An undamped scheme's growing period-2h mode is what drifts, and a
+        // smaller h makes it grow sooner (as the local warning says).
+        _ if undamped(config) => format!(
+            "the scheme is undamped (γ = 1/2): on an index-3 system its period-2h oscillation              of ü and λ grows and carries the energy away, and a smaller h makes it grow sooner;              rerun with {}",
+            damped_scheme(config, files)
+        ),
         (false, _) => format!("rerun with --h {}", short(h)),
         (true, false) => format!("rerun with --h {0} --h-max {0}", short(h)),
         (true, true) => format!("rerun with --h {0} --set simulation.h_max={0}", short(h)),
@@ -102,10 +108,7 @@ fn local_warning(
         short(e.t_max)
     );
     let newton_first = e.newton_exceeded > 0;
-    let undamped = config
-        .scheme
-        .params()
-        .is_ok_and(|p| (p.gamma - 0.5).abs() < 1e-12);
+    let undamped = undamped(config);
     let (what, advice) = match e.coordinate.filter(|_| !newton_first) {
         Some(i) if undamped => (
             format!(
@@ -154,6 +157,15 @@ fn local_warning(
     Some(format!(
         "warning: {what}: the results are not accurate to that tolerance; {advice} (--strict stops at the first such step)"
     ))
+}
+
+/// Whether the scheme is undamped (`γ = 1/2`: the trapezoidal rule, HHT
+/// `α = 0`, generalized-α `ρ∞ = 1`).
+fn undamped(config: &Config) -> bool {
+    config
+        .scheme
+        .params()
+        .is_ok_and(|p| (p.gamma - 0.5).abs() < 1e-12)
 }
 
 /// Whether the estimate exceeded a tolerance without an absolute part

@@ -1,7 +1,7 @@
 //! The local error estimate and step control (`docs/theory.md`, "Local error
 //! estimate and step control") against the RK4 oracle.
 
-use mstar::{Config, ErrorControl, Integrator, Observer, PendulumChain, Scheme, StepMode};
+use mstar::{Config, ErrorControl, Integrator, Observer, PendulumChain, Scheme, StepMode, System};
 use mstar_rk4::ChainOracle;
 
 const SCHEMES: [Scheme; 4] = [
@@ -327,4 +327,38 @@ fn adaptive_steps_respect_h_min_and_h_max() {
         panic!("h_min = 0.04 is too large for rtol = 1e-3 here");
     };
     assert!(e.to_string().contains("below h_min"), "{e}");
+}
+
+/// The energy warning of the paper's preset (Newmark β = 1/4, γ = 1/2) and
+/// whether the rerun it advises warns again: the warning over 5 s (before
+/// the undamped mode stops Newton at 5.9 s).
+fn paper_energy_warning(scheme: Option<Scheme>) -> Option<String> {
+    let mut run = mstar::pendulum::PendulumRun::paper();
+    run.t_end = 5.0;
+    if let Some(scheme) = scheme {
+        run.config.scheme = scheme;
+    }
+    let (_, stats) = run.run();
+    let stats = stats.expect("the run reaches 5 s");
+    let sys = run.system();
+    mstar::accuracy::warning(&stats, &run.config, &|i| sys.coord_name(i), false)
+}
+
+#[test]
+fn an_undamped_scheme_s_energy_drift_advises_a_damped_scheme_that_passes() {
+    // The trapezoidal rule's period-2h mode carries the energy away; a
+    // smaller h makes it grow sooner, so the advice is the damped scheme
+    // (`mstar pendulum --preset paper --integrator generalized-alpha`).
+    let warned = paper_energy_warning(None).expect("the undamped run drifts");
+    let energy = warned
+        .lines()
+        .find(|l| l.contains("the energy of this model"))
+        .expect("an energy warning");
+    assert!(
+        energy.contains("--integrator generalized-alpha"),
+        "{energy}"
+    );
+    assert!(!energy.contains("--h "), "no smaller h: {energy}");
+    let advised = paper_energy_warning(Some(Scheme::GeneralizedAlpha { rho_inf: 0.9 }));
+    assert_eq!(advised, None, "the damped scheme passes");
 }
