@@ -90,9 +90,11 @@ enum Command {
     /// KEY=START:STOP:COUNT; every combination, or --zip), on all cores or
     /// --jobs N, one shard of a cluster job with --shard I/N; resumable.
     /// Writes DIR/runs/<index>.csv and DIR/summary.csv (docs/sweeps.md).
-    /// Exit 0 when every run reached its end, 10 + n when n runs failed
+    /// Exit 0 when every run reached its end within the error tolerance, 3
+    /// when none failed and some ended beyond it, 10 + n when n runs failed
     /// (110: 100 or more), 2 for a bad model file or command line (nothing
-    /// ran), 1 when a file cannot be written.
+    /// ran), 1 when a file cannot be read or written or the runs would not
+    /// fit, 130/143 after SIGINT/SIGTERM (the summary so far written).
     Sweep(commands::sweep::SweepArgs),
     /// Draw a model moving through the results of `mstar run`, or one of its
     /// vibration modes (--mode K): an animated

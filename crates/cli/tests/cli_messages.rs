@@ -283,3 +283,104 @@ fn help_texts_say_what_the_options_take() {
         "{help}"
     );
 }
+
+/// `--set output.every_time=… --set output.every=…` is refused as a file
+/// holding both is (exit 2), naming both overrides; either one alone runs.
+#[test]
+fn every_and_every_time_both_set_are_refused() {
+    let pendulum = model("pendulum.toml");
+    let both = [
+        ("output.every_time=0.1", "output.every=2"),
+        ("output.every=2", "output.every_time=0.1"),
+    ];
+    for (first, second) in both {
+        let r = mstar(&[
+            "run", &pendulum, "--t-end", "0.01", "--set", first, "--set", second,
+        ]);
+        let err = text(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{err}");
+        let other = first.split('=').next().unwrap_or("");
+        let want = format!(
+            "--set {second}: give either every (steps) or every_time (seconds): --set {other} is given too"
+        );
+        assert!(err.contains(&want), "{err}");
+        // The advice: one of them.
+        for one in [first, second] {
+            let r = mstar(&["run", &pendulum, "--t-end", "0.01", "--set", one]);
+            assert!(r.status.success(), "{one}: {}", text(&r.stderr));
+        }
+    }
+}
+
+/// `mstar sweep --help` gives every exit code docs/sweeps.md gives and
+/// says MODEL may be a URDF, which sweeps.
+#[test]
+fn sweep_help_lists_its_exit_codes_and_urdf_models() {
+    let help = text(&mstar(&["sweep", "--help"]).stdout);
+    for want in [
+        "Exit 0 when every run reached its end",
+        "3 when none failed and some ended beyond it",
+        "10 + n when n runs failed",
+        "2 for a bad model file",
+        "1 when a file cannot be read or written",
+        "130/143 after SIGINT/SIGTERM",
+        "The model file (TOML, JSON or URDF",
+    ] {
+        assert!(help.contains(want), "{want}: {help}");
+    }
+    let dir = scratch("sweep-urdf-help");
+    let out = dir.join("s").display().to_string();
+    let urdf = model("urdf/two-link-arm.urdf");
+    let r = mstar(&[
+        "sweep",
+        &urdf,
+        "--set",
+        "simulation.t_end=0.01,0.02",
+        "--out",
+        &out,
+    ]);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    assert!(text(&r.stdout).contains("2 run now"), "{}", text(&r.stdout));
+}
+
+/// A `fit:` objective's time that is not the run's prints short (6
+/// significant digits), in full only where the short forms would read the
+/// same; the advice (the run's own sample times) works.
+#[test]
+fn times_of_a_fit_that_miss_the_run_print_short() {
+    let dir = scratch("fit-times-short");
+    let fit = dir.join("fit.csv");
+    let dp = model("double-pendulum.toml");
+    let spec = format!("fit:u:lower.x={}", fit.display());
+    let run = || {
+        mstar(&[
+            "run",
+            &dp,
+            "--t-end",
+            "0.002",
+            "--objective",
+            &spec,
+            "--gradient",
+            "body.lower.mass",
+        ])
+    };
+    for (t, want) in [
+        (
+            "0.0010636346565741537",
+            "t = 0.00106363 where the run has a sample at t = 0.001;",
+        ),
+        (
+            "0.0010000001",
+            "t = 0.0010000001 where the run has a sample at t = 0.001;",
+        ),
+    ] {
+        std::fs::write(&fit, format!("t,u:lower.x\n0,0\n{t},0\n0.002,0\n")).expect("written");
+        let r = run();
+        let err = text(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{err}");
+        assert!(err.contains(want), "{err}");
+    }
+    std::fs::write(&fit, "t,u:lower.x\n0,0\n0.001,0\n0.002,0\n").expect("written");
+    let r = run();
+    assert!(r.status.success(), "{}", text(&r.stderr));
+}

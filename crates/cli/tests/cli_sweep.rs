@@ -694,3 +694,77 @@ fn sweeps_larger_than_the_disk_or_the_memory_are_refused_up_front() {
     assert!(!dir.join("memory").exists(), "the sweep started");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A rerun after the URDF a spatial model file reads has changed is
+/// refused (exit 2) rather than reusing the other model's runs, naming the
+/// URDF; the advice (another --out, or removing the directory) works.
+#[test]
+fn a_rerun_after_the_model_s_urdf_changed_is_refused() {
+    let dir = scratch("sweep-urdf");
+    for name in ["two-link-arm-start.toml", "two-link-arm.urdf"] {
+        std::fs::copy(model(&format!("urdf/{name}")), dir.join(name)).expect("copied");
+    }
+    let cmd = |out: &str| {
+        format!("$M sweep two-link-arm-start.toml --set simulation.t_end=0.01,0.02 --out {out}")
+    };
+    let first = sh(&cmd("D"), &dir);
+    assert!(first.status.success(), "{}", text(&first.stderr));
+    let same = sh(&cmd("D"), &dir);
+    assert!(
+        text(&same.stdout).contains("0 run now, 2 complete before"),
+        "{}",
+        text(&same.stdout)
+    );
+    let urdf = dir.join("two-link-arm.urdf");
+    let mut text_now = std::fs::read_to_string(&urdf).expect("read");
+    text_now.push_str("<!-- edited -->\n");
+    std::fs::write(&urdf, text_now).expect("edited");
+    let rerun = sh(&cmd("D"), &dir);
+    let err = text(&rerun.stderr);
+    assert_eq!(rerun.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("D holds another sweep (its sweep.toml records another model file")
+            && err.contains("give another --out, or remove the directory"),
+        "{err}"
+    );
+    for advice in [cmd("E"), format!("rm -r D && {}", cmd("D"))] {
+        let r = sh(&advice, &dir);
+        assert!(
+            r.status.success() && text(&r.stdout).contains("2 run now, 0 complete before"),
+            "{advice}: {}",
+            text(&r.stderr)
+        );
+    }
+}
+
+/// An `--out` that names an existing file is refused before anything runs,
+/// saying that it is a directory; the file is untouched and a directory
+/// works.
+#[test]
+fn an_out_naming_an_existing_file_is_refused() {
+    let dir = scratch("sweep-out-file");
+    std::fs::write(dir.join("fb.csv"), "kept\n").expect("written");
+    let cmd = |out: &str| {
+        format!(
+            "$M sweep {} --set simulation.t_end=0.01,0.02 --out {out}",
+            model("pendulum.toml")
+        )
+    };
+    let r = sh(&cmd("fb.csv"), &dir);
+    let err = text(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(
+            "--out fb.csv names an existing file: the --out of mstar sweep is a directory"
+        ) && err.contains("name a new directory"),
+        "{err}"
+    );
+    assert!(!err.contains("Not a directory"), "{err}");
+    assert_eq!(
+        std::fs::read_to_string(dir.join("fb.csv")).expect("kept"),
+        "kept\n"
+    );
+    let r = sh(&cmd("fb"), &dir);
+    assert!(r.status.success(), "{}", text(&r.stderr));
+    assert!(dir.join("fb/summary.csv").is_file());
+}

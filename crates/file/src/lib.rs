@@ -470,6 +470,39 @@ pub fn convert_urdf(text: &str, origin: &str) -> Result<(String, Vec<String>), F
     urdf::convert(text, origin)
 }
 
+/// The files the model file at `path` reads besides itself: the URDF a
+/// spatial file starts from (`urdf = "arm.urdf"`, relative to the file),
+/// whether or not it exists. Empty when the file cannot be read or parsed
+/// (loading it reports why): the CLI uses this to keep outputs off inputs
+/// and to fingerprint a model with everything it reads.
+pub fn included_files(path: &Path) -> Vec<std::path::PathBuf> {
+    let Ok(text) = std::fs::read_to_string(path) else {
+        return Vec::new();
+    };
+    let origin = path.display().to_string();
+    let root = match Format::of(path) {
+        Format::Toml => node::parse_toml(&text, &origin),
+        Format::Json => node::parse_json(&text, &origin),
+        Format::Urdf => return Vec::new(),
+    };
+    let Ok(root) = root else {
+        return Vec::new();
+    };
+    let node::Value::Table(entries) = &root.value else {
+        return Vec::new();
+    };
+    let urdf = entries.iter().find_map(|e| match &e.node.value {
+        node::Value::Str(file) if e.key == "urdf" => Some(file),
+        _ => None,
+    });
+    match urdf {
+        Some(file) if is_spatial(&root) => {
+            vec![path.parent().unwrap_or(Path::new("")).join(file)]
+        }
+        _ => Vec::new(),
+    }
+}
+
 /// Whether the document says `format = "mstar.spatial/1"`.
 fn is_spatial(root: &Node) -> bool {
     let node::Value::Table(entries) = &root.value else {
@@ -506,6 +539,29 @@ fn read(doc: Doc<'_>, root: &Node) -> Result<MechanismFile, FileError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `included_files` names the URDF a spatial file starts from, beside
+    /// the file, and nothing for a file that reads none or cannot be read.
+    #[test]
+    fn included_files_names_a_spatial_file_s_urdf() {
+        let dir = std::env::temp_dir().join(format!("mstar-file-included-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("a scratch directory");
+        let spatial = dir.join("arm.toml");
+        std::fs::write(
+            &spatial,
+            "format = \"mstar.spatial/1\"\nurdf = \"arm.urdf\"\n",
+        )
+        .expect("written");
+        assert_eq!(included_files(&spatial), vec![dir.join("arm.urdf")]);
+        let planar = dir.join("bar.toml");
+        std::fs::write(
+            &planar,
+            "format = \"mstar.planar/1\"\nurdf = \"arm.urdf\"\n",
+        )
+        .expect("written");
+        assert!(included_files(&planar).is_empty());
+        assert!(included_files(&dir.join("missing.toml")).is_empty());
+    }
 
     /// `number_at` reads a key's number as the file (after the overrides)
     /// has it, and says where a key holds no number or is not there.

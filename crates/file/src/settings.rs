@@ -406,13 +406,26 @@ pub(crate) fn apply_override(root: &mut Node, assignment: &str, k: usize) -> Res
         drop_other_schemes(entries, scheme);
     }
     // The command line wins over the file: rows every n steps replace rows
-    // every Δt, and the other way round (the file may hold one only).
+    // every Δt, and the other way round (the file may hold one only). Both
+    // on the command line are refused, as both in the file are.
     if let ["output", key @ ("every" | "every_time")] = keys[..] {
         let other = if key == "every" {
             "every_time"
         } else {
             "every"
         };
+        let by_override = |e: &Entry| {
+            e.created
+                || e.node
+                    .span
+                    .as_ref()
+                    .is_some_and(|s| s.start >= super::node::OVERRIDES_FROM)
+        };
+        if entries.iter().any(|e| e.key == other && by_override(e)) {
+            return Err(format!(
+                "give either every (steps) or every_time (seconds): --set output.{other} is given too"
+            ));
+        }
         entries.retain(|e| e.key != other);
     }
     match entries.iter().position(|e| e.key == *last) {
@@ -760,6 +773,14 @@ mod tests {
         apply_override(&mut root, "output.every_time=0.1", 0).expect("set");
         let (_, o) = read(doc, &root, false).expect("every_time replaces every");
         assert_eq!((o.every, o.every_time), (1, Some(0.1)));
+        // Both on the command line: refused, naming the other.
+        let mut root = file("every = 5");
+        apply_override(&mut root, "output.every_time=0.1", 0).expect("set");
+        let e = apply_override(&mut root, "output.every=2", 1).expect_err("both");
+        assert_eq!(
+            e,
+            "give either every (steps) or every_time (seconds): --set output.every_time is given too"
+        );
         // Both in the file, as before: refused.
         let root = file("every = 5\nevery_time = 0.1");
         let e = read(doc, &root, false).expect_err("both");

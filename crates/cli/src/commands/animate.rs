@@ -137,6 +137,12 @@ pub fn animate(args: &AnimateArgs) -> ExitCode {
         note!("error: {e}");
         return ExitCode::from(2);
     }
+    // A read-only output is a failure to write (exit 1), found before the
+    // drawing rather than after it.
+    if let Err(e) = crate::output::refuse_read_only(&outputs(args)) {
+        note!("error: {e}");
+        return ExitCode::from(1);
+    }
     let file = match MechanismFile::load_with(&args.model, &args.set) {
         Ok(file) => file,
         Err(e) => {
@@ -170,23 +176,28 @@ pub fn animate(args: &AnimateArgs) -> ExitCode {
     }
 }
 
-/// Refuses an output that names the model, the results or another output
-/// ([`crate::output::refuse_overwrites`]), a `--png` whose extension is no
-/// picture format, and a non-finite `--at`.
-fn check_outputs(args: &AnimateArgs) -> Result<()> {
-    let outputs: Vec<(&str, &Path)> = [
+/// The outputs asked for, each with its option.
+fn outputs(args: &AnimateArgs) -> Vec<(&'static str, &Path)> {
+    [
         ("--gif", &args.gif),
         ("--html", &args.html),
         ("--png", &args.png),
     ]
     .into_iter()
     .filter_map(|(option, path)| path.as_deref().map(|p| (option, p)))
-    .collect();
-    let mut inputs = vec![("the model file", args.model.as_path())];
-    if let Some(results) = &args.results {
-        inputs.push(("the results file", results));
-    }
-    crate::output::refuse_overwrites(&inputs, &outputs)?;
+    .collect()
+}
+
+/// Refuses an output that names the model, the URDF it reads, the results
+/// or another output ([`crate::output::refuse_overwriting_model`]), a
+/// `--png` whose extension is no picture format, and a non-finite `--at`.
+fn check_outputs(args: &AnimateArgs) -> Result<()> {
+    let results: Vec<(&str, &Path)> = args
+        .results
+        .iter()
+        .map(|r| ("the results file", r.as_path()))
+        .collect();
+    crate::output::refuse_overwriting_model(&args.model, &results, &outputs(args))?;
     if let Some(png) = &args.png {
         picture::check_picture_name(png)?;
     }

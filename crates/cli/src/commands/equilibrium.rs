@@ -45,9 +45,14 @@ pub fn equilibrium(args: &EquilibriumArgs) -> ExitCode {
         .filter_map(|(option, path)| Some((option, path.as_deref()?)))
         .filter(|(_, path)| path.as_os_str() != "-")
         .collect();
-    if let Err(e) = crate::output::refuse_overwrites(&[("the model file", &args.model)], &outputs) {
+    if let Err(e) = crate::output::refuse_overwriting_model(&args.model, &[], &outputs) {
         note!("error: {e}");
         return ExitCode::from(2);
+    }
+    // (`--out` is checked as its stream opens; exit 1, a failure to write.)
+    if let Err(e) = crate::output::refuse_read_only(&outputs) {
+        note!("error: {e}");
+        return ExitCode::from(1);
     }
     let file = match super::load_model(&args.model, &args.set) {
         Ok(file) => file,
@@ -162,7 +167,9 @@ fn write_model(args: &EquilibriumArgs, sys: &dyn ModelLookup, eq: &Equilibrium) 
     let origin = path.display().to_string();
     let written = mstar::equilibrium::model_text(&text, &origin, sys, &eq.u)
         .with_context(|| format!("{origin} not written"))?;
-    std::fs::write(path, written).with_context(|| format!("cannot write {origin}"))?;
+    // (Replaced whole, and never a read-only file: as every output.)
+    mstar::csv::write_atomically(path, written.as_bytes())
+        .with_context(|| format!("cannot write {origin}"))?;
     say!("wrote {origin} (its initial pose is the equilibrium)");
     Ok(())
 }

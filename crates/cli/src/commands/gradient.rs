@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use mstar::newmark::{Column, Memory, Objective, Parameterized};
+use mstar::newmark::{Column, Memory, Objective, Parameterized, Short};
 use mstar::sensitivity::{FileParameter, FileParameters};
 use mstar::{Integrator, System, csv};
 
@@ -65,6 +65,15 @@ fn parse_spec(spec: &str) -> Result<Spec> {
             ))
         }
         _ => Err(bad()),
+    }
+}
+
+/// The CSV a `fit:COLUMN=FILE.csv` objective reads (an input no output
+/// may name); `None` for any other objective or a malformed one.
+pub fn fit_file(spec: &str) -> Option<PathBuf> {
+    match parse_spec(spec) {
+        Ok(Spec::Fit(_, file)) => Some(file),
+        _ => None,
     }
 }
 
@@ -138,11 +147,23 @@ fn measured(path: &Path, name: &str) -> Result<(Vec<f64>, Vec<f64>)> {
     Ok((times, values))
 }
 
+/// Two different times as messages print numbers (6 significant digits,
+/// [`Short`]), or in full when those would read the same.
+fn distinct(a: f64, b: f64) -> (String, String) {
+    let (short_a, short_b) = (Short(a).to_string(), Short(b).to_string());
+    if short_a == short_b {
+        (a.to_string(), b.to_string())
+    } else {
+        (short_a, short_b)
+    }
+}
+
 /// Refuses measured times that are not the run's sample times (within
 /// `1e-9` of the step).
 fn check_times(path: &Path, given: &[f64], run: &[f64], h: f64) -> Result<()> {
     for (k, (g, r)) in given.iter().zip(run).enumerate() {
         if (g - r).abs() > 1e-9 * h.max(r.abs()) {
+            let (g, r) = distinct(*g, *r);
             return Err(usage(format!(
                 "{}:{}: t = {g} where the run has a sample at t = {r}; give the measured values \
                  at the run's own sample times (the start and every step)",
@@ -261,6 +282,7 @@ fn write_json(out: &Path, spec: &str, g: &mstar::newmark::Gradient) -> Result<()
         "gradient": gradient,
     });
     let text = serde_json::to_string_pretty(&json).context("formatting the gradient as JSON")?;
-    std::fs::write(out, text + "\n")
+    // (Replaced whole, and never a read-only file: as every output.)
+    mstar::csv::write_atomically(out, (text + "\n").as_bytes())
         .with_context(|| format!("{}: cannot write the gradient", out.display()))
 }

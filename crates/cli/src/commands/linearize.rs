@@ -64,7 +64,7 @@ pub fn linearize(args: &LinearizeArgs) -> ExitCode {
 fn build(args: &LinearizeArgs) -> Result<StateSpace, Failure> {
     if args.out.as_os_str() != "-" {
         let outputs = [("--out", args.out.as_path())];
-        crate::output::refuse_overwrites(&[("the model file", &args.model)], &outputs)
+        crate::output::refuse_overwriting_model(&args.model, &[], &outputs)
             .map_err(|e| (e.to_string(), 2))?;
     }
     let request = Request {

@@ -79,8 +79,7 @@ impl ModesArgs {
 /// wrong.
 pub fn modes(args: &ModesArgs) -> ExitCode {
     if let Some(out) = args.out.as_deref().filter(|p| p.as_os_str() != "-")
-        && let Err(e) =
-            crate::output::refuse_overwrites(&[("the model file", &args.model)], &[("--out", out)])
+        && let Err(e) = crate::output::refuse_overwriting_model(&args.model, &[], &[("--out", out)])
     {
         note!("error: {e}");
         return ExitCode::from(2);

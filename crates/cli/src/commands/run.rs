@@ -1,6 +1,6 @@
 //! `mstar run`: a model file (or a built-in model) on the command line.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -148,15 +148,39 @@ impl Model {
     }
 }
 
+/// Refuses an output (`--out`, `--gradient-out`) that names an input (the
+/// model file, the URDF it reads, a `fit:` objective's CSV) or the other
+/// output (exit 2), and a `--gradient-out` that is read-only (exit 1; `--out`
+/// is checked as its stream opens).
+fn refuse_overwrites(args: &RunArgs) -> Result<()> {
+    let outputs: Vec<(&str, &Path)> =
+        [("--out", &args.out), ("--gradient-out", &args.gradient_out)]
+            .into_iter()
+            .filter_map(|(option, path)| Some((option, path.as_deref()?)))
+            .filter(|(_, path)| !crate::output::is_stdout(Some(path)))
+            .collect();
+    let fit = args
+        .objective
+        .as_deref()
+        .and_then(super::gradient::fit_file);
+    let others: Vec<(&str, &Path)> = fit.iter().map(|f| ("the fit file", f.as_path())).collect();
+    match &args.model {
+        Some(model) => crate::output::refuse_overwriting_model(model, &others, &outputs)?,
+        None => crate::output::refuse_overwrites(&others, &outputs)?,
+    }
+    let gradient_out: Vec<(&str, &Path)> = outputs
+        .into_iter()
+        .filter(|(o, _)| *o == "--gradient-out")
+        .collect();
+    crate::output::refuse_read_only(&gradient_out)
+}
+
 /// `mstar run`: exit 0 when the run reaches its end within the error
 /// tolerance, 3 when it reaches its end beyond it (`mstar::accuracy`), 2 when
 /// the model file cannot be read (as `mstar check`), 130/143 after SIGINT /
 /// SIGTERM, 1 on any other failure.
 pub fn run(args: &RunArgs) -> ExitCode {
-    if let (Some(out), Some(file)) = (&args.out, &args.model)
-        && let Err(e) =
-            crate::output::refuse_overwrites(&[("the model file", file)], &[("--out", out)])
-    {
+    if let Err(e) = refuse_overwrites(args) {
         return failed(e, None);
     }
     let model = match load(args) {

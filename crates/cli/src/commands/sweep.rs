@@ -13,7 +13,7 @@ use mstar::sweep::{Combine, Options, Param, Plan, Progress, RunOutcome, Shard, S
 /// Arguments of `mstar sweep`.
 #[derive(clap::Args, Debug)]
 pub struct SweepArgs {
-    /// The model file (TOML or JSON, as for `mstar run`).
+    /// The model file (TOML, JSON or URDF, as for `mstar run`).
     #[arg(required_unless_present = "merge")]
     model: Option<PathBuf>,
     /// A key to sweep and its values: KEY=V1,V2,… (TOML values, as
@@ -86,6 +86,13 @@ fn run(args: &SweepArgs) -> Result<Ended, SweepError> {
     let (Some(model), Some(out)) = (&args.model, &args.out) else {
         return Err(SweepError::Plan("give a model file and --out DIR".into()));
     };
+    // (Else `DIR/runs: Not a directory` after the plan.)
+    if out.exists() && !out.is_dir() {
+        return Err(SweepError::Plan(format!(
+            "--out {} names an existing file: the --out of mstar sweep is a directory (it will hold runs/, summary.csv and sweep.toml); name a new directory or one of an earlier sweep",
+            out.display()
+        )));
+    }
     let shard = match &args.shard {
         Some(s) => Shard::parse(s)?,
         None => Shard::ALL,

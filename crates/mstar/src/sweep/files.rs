@@ -35,7 +35,8 @@ struct Record {
     format: String,
     /// The model file as given (for people; not compared).
     model: String,
-    /// FNV-1a of the model file's text, in hex.
+    /// FNV-1a of the model file's text and of the files it reads, in hex
+    /// ([`fingerprint`]).
     model_fnv1a: String,
     combine: Combine,
     runs: usize,
@@ -49,7 +50,7 @@ impl Record {
         Self {
             format: FORMAT.to_string(),
             model: plan.model().display().to_string(),
-            model_fnv1a: format!("{:016x}", fnv1a(plan.text.as_bytes())),
+            model_fnv1a: format!("{:016x}", fingerprint(plan)),
             combine: plan.combine(),
             runs: plan.len(),
             columns: summary_header(plan),
@@ -84,11 +85,29 @@ impl Record {
     }
 }
 
-/// 64-bit FNV-1a: a stable fingerprint of the model file.
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
+/// The model's fingerprint: FNV-1a of the model file's text, continued
+/// over the text of each file it reads (a spatial file's URDF,
+/// [`mstar_file::included_files`]): a rerun after either changed would mix
+/// another model's runs in. A model that reads no other file keeps the
+/// fingerprint of its text alone.
+fn fingerprint(plan: &Plan) -> u64 {
+    let mut h = fnv1a(FNV_OFFSET, plan.text.as_bytes());
+    for path in mstar_file::included_files(plan.model()) {
+        // (A file that cannot be read fingerprints as empty; the run then
+        // reports it.)
+        h = fnv1a(h, &std::fs::read(&path).unwrap_or_default());
+    }
+    h
+}
+
+/// FNV-1a's offset basis.
+const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+
+/// 64-bit FNV-1a of `bytes`, from the state `h`: a stable fingerprint.
+fn fnv1a(h: u64, bytes: &[u8]) -> u64 {
+    bytes
+        .iter()
+        .fold(h, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
 }
 
 fn io(path: &Path, source: std::io::Error) -> SweepError {
