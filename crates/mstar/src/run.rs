@@ -183,8 +183,9 @@ pub enum RunError {
     /// A row left out of a minimum-norm solve stopped holding during the run:
     /// the redundancy found at the start changed along the motion.
     #[error(
-        "the constraints of {} stopped holding at t = {t} s (violated by {violation:.3e}): they were redundant at the start but are not along the motion (a mechanism passing a singular position), so minimum-norm multipliers cannot run it; remove the redundancy from the model",
-        .joints.join(", ")
+        "the constraints of {} stopped holding at t = {} s (violated by {violation:.3e}): they were redundant at the start but are not along the motion (a mechanism passing a singular position), so minimum-norm multipliers cannot run it; remove the redundancy from the model",
+        .joints.join(", "),
+        mstar_newmark::Short(*.t)
     )]
     RedundancyChanged {
         /// The joints.
@@ -199,7 +200,7 @@ pub enum RunError {
     Integration(#[from] IntegrationError),
     /// The caller asked the run to stop ([`simulate_until`]) before it
     /// reached its end.
-    #[error("stopped at t = {t} s")]
+    #[error("stopped at t = {} s", mstar_newmark::Short(*.t))]
     Stopped {
         /// How far it got, s.
         t: f64,

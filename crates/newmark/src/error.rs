@@ -25,9 +25,8 @@ pub enum IntegrationError {
     },
     /// The initial state violates a constraint and projection is disabled.
     #[error(
-        "inconsistent initial state at t = {t}: {level} constraint '{constraint}' is violated by {value:.3e}; \
-         enable projection (the default) or give a state that satisfies Φ = 0 and B u̇ + Φ_t = 0"
-    )]
+        "inconsistent initial state at t = {}: {level} constraint '{constraint}' is violated by {value:.3e}; \
+         enable projection (the default) or give a state that satisfies Φ = 0 and B u̇ + Φ_t = 0", Short(*.t))]
     InconsistentInitialState {
         /// Time.
         t: f64,
@@ -78,7 +77,7 @@ pub enum IntegrationError {
         cause: KktError,
     },
     /// The KKT matrix could not be factored or solved.
-    #[error("{context} at t = {t} s (h = {h:e}): {source}{}", describe_unknown(.unknown))]
+    #[error("{context} at t = {} s (h = {h:e}): {source}{}", Short(*.t), describe_unknown(.unknown))]
     Kkt {
         /// Which solve.
         context: &'static str,
@@ -93,10 +92,9 @@ pub enum IntegrationError {
     },
     /// The Newton iteration did not converge (and step control could not help).
     #[error(
-        "Newton iteration did not converge at t = {t} s (h = {h:e}): after {iterations} iterations \
+        "Newton iteration did not converge at t = {} s (h = {h:e}): after {iterations} iterations \
          ‖r‖∞ = {residual:.3e} (tolerance {residual_tol:.3e}) and ‖Φ‖∞ = {constraint:.3e} (tolerance {constraint_tol:.3e}). \
-         {advice}"
-    )]
+         {advice}", Short(*.t))]
     NewtonFailed {
         /// Time of the failed step's end.
         t: f64,
@@ -118,9 +116,8 @@ pub enum IntegrationError {
     },
     /// Step control reached the smallest allowed step.
     #[error(
-        "step size too small at t = {t} s: the step with h = {h:e} failed and h/2 would be below h_min = {h_min:e} \
-         (‖r‖∞ = {residual:.3e}, ‖Φ‖∞ = {constraint:.3e}). {advice}"
-    )]
+        "step size too small at t = {} s: the step with h = {h:e} failed and h/2 would be below h_min = {h_min:e} \
+         (‖r‖∞ = {residual:.3e}, ‖Φ‖∞ = {constraint:.3e}). {advice}", Short(*.t))]
     StepSizeTooSmall {
         /// Time at the start of the failed step.
         t: f64,
@@ -138,9 +135,8 @@ pub enum IntegrationError {
     /// The local error estimate exceeded the tolerance: a step in strict
     /// mode, or adaptive stepping at its smallest step size.
     #[error(
-        "the estimated local error exceeds the tolerance at t = {t} s (h = {h:e}): {ratio:.3} times \
-         atol + rtol·|u| (rtol = {rtol:e}, atol = {atol:e}) at coordinate '{coordinate}'. {advice}"
-    )]
+        "the estimated local error exceeds the tolerance at t = {} s (h = {h:e}): {ratio:.3} times \
+         atol + rtol·|u| (rtol = {rtol:e}, atol = {atol:e}) at coordinate '{coordinate}'. {advice}", Short(*.t))]
     ErrorTooLarge {
         /// The end of the step.
         t: f64,
@@ -172,8 +168,7 @@ pub enum IntegrationError {
     },
     /// NaN or infinity appeared in the state.
     #[error(
-        "NaN or infinity in {what} at t = {t} s; the step size may be too large for the model's stiffness"
-    )]
+        "NaN or infinity in {what} at t = {} s; the step size may be too large for the model's stiffness", Short(*.t))]
     NonFinite {
         /// Time.
         t: f64,
