@@ -64,12 +64,11 @@ def test_the_four_bar_built_in_python_is_the_file():
 
 
 def test_a_builder_model_checks_settings_as_a_file_does(run_cli):
-    cli = run_cli(MODELS / "pendulum.toml", "--set", "simulation.h=-1")
+    path = MODELS / "pendulum.toml"
+    cli = run_cli(path, "--set", "simulation.h=-1.0")
     with pytest.raises(mstar.ModelError) as e:
         pendulum().run(h=-1.0)
-    # The file's message names the file and the place of [simulation].
-    prefix = f"{MODELS / 'pendulum.toml'}:"
-    assert cli.error().startswith(prefix)
-    where, _, what = cli.error()[len(prefix):].partition(": ")
-    assert where.replace(":", "").isdigit()
-    assert str(e.value) == f"<builder>: {what}"
+    # The file's message names the file and the --set that gave the value;
+    # the builder's, the builder and the setting.
+    assert cli.error().startswith(f"{path}: --set simulation.h=-1.0: "), cli.error()
+    assert str(e.value) == cli.python_error().replace(str(path), "<builder>")

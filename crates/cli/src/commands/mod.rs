@@ -151,6 +151,10 @@ pub fn config(sim: &mstar::file::Simulation) -> Result<(Config, f64)> {
         }),
         _ => None,
     };
+    // A value a `--set` gave is reported as the library reports it (what
+    // Python's `run(**settings)` says too, `python/tests`): the place is
+    // for a key written in the file.
+    let placed = placed.filter(|p| p.place.is_some());
     Err(match placed {
         Some(placed) => placed.into(),
         None => mstar::run::RunError::Settings(e).into(),
