@@ -110,8 +110,9 @@ impl Summary {
             .then(|| (self.early, self.recent.iter().copied().fold(0.0, f64::max)))
     }
 
-    /// Prints it.
-    pub fn print(&self) {
+    /// Prints it; `damped`: whether the run's scheme damps the period-2h
+    /// mode (γ > 1/2), which decides the advice of a growing one.
+    pub fn print(&self, damped: bool) {
         let Some((t, theta, theta_dot, lambda)) = &self.last else {
             return;
         };
@@ -133,10 +134,16 @@ impl Summary {
             && late > 10.0 * early
             && late > 1e-3 * self.scale.value()
         {
+            let advice = if damped {
+                "the scheme damps it, so the step is too large for the motion: see the accuracy \
+                 warning for a smaller --h"
+            } else {
+                "an undamped scheme on an index-3 system lets it grow: use generalized-α with ρ∞ < 1 \
+                 (--integrator generalized-alpha --rho 0.9)"
+            };
             say!(
                 "warning: the period-2h oscillation of λ grew from {early:.3e} in the first second to {late:.3e} in the last: \
-                 the multipliers are not trustworthy (an undamped scheme on an index-3 system, or a step \
-                 too large for it: see the accuracy warning, if any); use generalized-α with ρ∞ < 1"
+                 the multipliers are not trustworthy; {advice}"
             );
         }
     }

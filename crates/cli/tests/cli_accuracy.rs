@@ -385,3 +385,56 @@ fn advice_names_the_option_of_the_command_that_ran() {
     let (code, stderr) = run(&["run", &double, "--tol", "1e-8"]);
     assert_eq!(code, Some(0), "{stderr}");
 }
+
+/// The warning of a growing period-2h mode of λ advises by the scheme: the
+/// undamped one a damped scheme, a damped one (generalized-α ρ∞ = 0.9 at a
+/// step too large, h = 0.05 s) the accuracy warning's smaller h; each
+/// advised rerun is clean.
+#[test]
+fn a_growing_multiplier_mode_s_advice_follows_the_scheme_and_works() {
+    // (The summary and its warnings are on standard output, the accuracy
+    // warnings on standard error: both, as a user reads them.)
+    let run = |args: &[&str]| {
+        let out = mstar(args);
+        (out.status.code(), text(&out.stdout) + &text(&out.stderr))
+    };
+    let lambda_warning = |stderr: &str| {
+        stderr
+            .lines()
+            .find(|l| l.contains("period-2h oscillation of λ grew"))
+            .map(str::to_string)
+    };
+    let (_, stderr) = run(&["pendulum", "--preset", "paper"]);
+    let undamped = lambda_warning(&stderr).expect("the trapezoidal rule's mode grows");
+    assert!(
+        undamped.contains("--integrator generalized-alpha --rho 0.9"),
+        "{undamped}"
+    );
+    let (code, stderr) = run(&[
+        "pendulum",
+        "--preset",
+        "paper",
+        "--integrator",
+        "generalized-alpha",
+        "--rho",
+        "0.9",
+    ]);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(!stderr.contains("warning"), "{stderr}");
+
+    let (_, stderr) = run(&["pendulum", "--h", "0.05"]);
+    let damped = lambda_warning(&stderr).expect("a step too large");
+    assert!(
+        damped.contains("the scheme damps it") && !damped.contains("ρ∞ < 1"),
+        "{damped}"
+    );
+    let advised = stderr
+        .split("rerun with --h ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .expect("the accuracy warning's h")
+        .to_string();
+    let (code, stderr) = run(&["pendulum", "--h", &advised]);
+    assert_eq!(code, Some(0), "--h {advised}: {stderr}");
+    assert!(!stderr.contains("warning"), "--h {advised}: {stderr}");
+}

@@ -224,7 +224,12 @@ pub fn pendulum(args: &PendulumArgs) -> Result<()> {
         grid.finish(&mut |row| stream.push(row));
     }
     let wall = clock.elapsed();
-    summary.print();
+    summary.print(
+        run.config
+            .scheme
+            .params()
+            .is_ok_and(|p| p.gamma > 0.5 + 1e-12),
+    );
     if ended.is_ok() {
         let stats = integ.stats();
         say!(
