@@ -357,55 +357,16 @@ pub fn refuse_overwriting_model(
 
 /// Refuses, before any work, an output that is a read-only file (mode 444,
 /// even for root, whom the rename into place would let replace it) or one
-/// the user may not write: the check `mstar::csv` makes for `--out`, with
-/// its message, for the outputs written otherwise (pictures, JSON, a model).
+/// the user may not write: the check `mstar::csv` makes for `--out`
+/// ([`mstar::csv::refuse_read_only`]), for the outputs written otherwise
+/// (pictures, JSON, a model).
 ///
 /// # Errors
 /// `could not write P: it is read-only (mode 444); make it writable
 /// (chmod u+w P) or name another file`.
 pub fn refuse_read_only(outputs: &[(&str, &Path)]) -> anyhow::Result<()> {
     for (_, path) in outputs {
-        let Ok(mstar::csv::Target::Replace(target)) = mstar::csv::target(path) else {
-            continue;
-        };
-        let Ok(m) = std::fs::metadata(&target) else {
-            continue;
-        };
-        if m.permissions().readonly() || access_denied(&target) {
-            anyhow::bail!(
-                "could not write {}: it is read-only{}; make it writable (chmod u+w {}) or name another file",
-                mstar::csv::display(path),
-                mode(&m),
-                target.display()
-            );
-        }
+        mstar::csv::refuse_read_only(path)?;
     }
     Ok(())
-}
-
-/// Whether access(2) denies the user writing `target`.
-#[cfg(unix)]
-fn access_denied(target: &Path) -> bool {
-    let c = std::ffi::CString::new(target.as_os_str().as_encoded_bytes()).ok();
-    // SAFETY: `c` is a NUL-terminated path.
-    c.is_some_and(|c| unsafe { libc::access(c.as_ptr(), libc::W_OK) } != 0)
-}
-
-/// Outside Unix, the read-only attribute alone says it.
-#[cfg(not(unix))]
-fn access_denied(_: &Path) -> bool {
-    false
-}
-
-/// ` (mode 444)`: the file's permission bits, for the message.
-#[cfg(unix)]
-fn mode(m: &std::fs::Metadata) -> String {
-    use std::os::unix::fs::PermissionsExt as _;
-    format!(" (mode {:o})", m.permissions().mode() & 0o7777)
-}
-
-/// Nothing outside Unix (no permission bits).
-#[cfg(not(unix))]
-fn mode(_: &std::fs::Metadata) -> String {
-    String::new()
 }

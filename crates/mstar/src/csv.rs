@@ -191,6 +191,20 @@ pub fn target(path: &Path) -> io::Result<Target> {
     Ok(Target::Direct)
 }
 
+/// Refuses, before anything is written, an output `path` that names a
+/// file its owner could not write (what writing it would refuse, for an
+/// output written by other means: a picture, a model, a JSON file).
+///
+/// # Errors
+/// `could not write P: it is read-only (mode 444); make it writable (chmod
+/// u+w P) or name another file`.
+pub fn refuse_read_only(path: &Path) -> io::Result<()> {
+    match target(path) {
+        Ok(Target::Replace(real)) => check_writable(path, &real),
+        _ => Ok(()),
+    }
+}
+
 /// Refuses to replace a file its owner could not write: one without write
 /// permission (mode 444, even for root, who could), or one the user may not
 /// write (access(2)); the rename would replace it all the same.
