@@ -140,6 +140,19 @@ impl Parameterized for FileParameter {
         }))
     }
 
+    /// A body's or point mass's `mass` and `inertia`, and every key of a
+    /// joint, driver or force: the initial state is the bodies' own keys
+    /// (`pose`, `velocity`, …), which these do not change.
+    fn keeps_initial_state(&self) -> bool {
+        let mut parts = self.key.split('.').map(str::trim);
+        let (kind, field) = (parts.next(), parts.nth(1));
+        match kind {
+            Some("body" | "point_mass") => matches!(field, Some("mass" | "inertia")),
+            Some("joint" | "driver" | "force") => true,
+            _ => false,
+        }
+    }
+
     /// The key's element, the elements that refer to it and the bodies
     /// they act on ([`ModelDocument::element_model`]); `None` for a key of
     /// no element.

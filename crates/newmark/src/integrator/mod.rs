@@ -4,6 +4,7 @@
 
 mod adjoint;
 mod control;
+mod initial;
 mod newton;
 mod sensitivity;
 mod start;

@@ -20,8 +20,9 @@
 //! factorization when there is one (once per step, full Newton: an iterate
 //! of the same step: a pass contracts by about 5e-11 on the N-four-bar; two solves and
 //! a product `J x`), else factored there. The initial sensitivities are
-//! central differences of the whole start (projection, consistent
-//! accelerations, the start on the discrete solution) at `p ± h_p`.
+//! differentiated through the start's own linear systems (`initial.rs`),
+//! or, for the paper's start and a start without projection, central
+//! differences of the whole start at `p ± h_p`.
 
 use std::collections::HashMap;
 
@@ -73,6 +74,15 @@ pub trait Parameterized {
         let _ = value;
         Ok(None)
     }
+
+    /// Whether the model's initial state as given (before the start)
+    /// is the same at every value of the parameter (a mass, a stiffness):
+    /// then, with a [`local_at`](Self::local_at) model, the whole model at
+    /// `p ± h_p` is not made at all. `false` (the default): the given
+    /// states' central difference is taken.
+    fn keeps_initial_state(&self) -> bool {
+        false
+    }
 }
 
 /// The central-difference step relative to `|p|` (absolute when `p = 0`):
@@ -96,26 +106,29 @@ pub(super) struct Parameter {
 /// the places of its coordinates and rows in the whole model) and their
 /// linearizations.
 pub(super) struct Partials {
-    plus: Side,
-    minus: Side,
+    pub(super) plus: Side,
+    pub(super) minus: Side,
     /// `None`: the whole model.
-    places: Option<Places>,
+    pub(super) places: Option<Places>,
     /// The whole model's state gathered onto the small model's coordinates
     /// and rows (unused for the whole model).
-    gathered: State,
+    pub(super) gathered: State,
 }
 
+/// The models at `p + h_p` and `p − h_p`.
+type Sides = (Box<dyn Variant>, Box<dyn Variant>);
+
 /// The model at one side of the difference and its linearization.
-struct Side {
-    variant: Box<dyn Variant>,
-    lin: Linearization,
+pub(super) struct Side {
+    pub(super) variant: Box<dyn Variant>,
+    pub(super) lin: Linearization,
 }
 
 /// Where a small model's coordinates and constraint rows are in the whole
 /// model's.
-struct Places {
-    coords: Vec<usize>,
-    rows: Vec<usize>,
+pub(super) struct Places {
+    pub(super) coords: Vec<usize>,
+    pub(super) rows: Vec<usize>,
 }
 
 impl Partials {
@@ -130,19 +143,7 @@ impl Partials {
         h: f64,
         mut f: impl FnMut(usize, f64),
     ) {
-        let at = match &self.places {
-            None => *x,
-            Some(places) => {
-                let g = &mut self.gathered;
-                for (i, &k) in places.coords.iter().enumerate() {
-                    (g.u[i], g.v[i], g.a[i]) = (x.u[k], x.v[k], x.a[k]);
-                }
-                for (j, &k) in places.rows.iter().enumerate() {
-                    g.lambda[j] = x.lambda[k];
-                }
-                g.at(x.t)
-            }
-        };
+        let at = Self::gather(self.places.as_ref(), &mut self.gathered, x);
         self.plus.lin.eval_residual(self.plus.variant.system(), &at);
         self.minus
             .lin
@@ -165,6 +166,27 @@ impl Partials {
                 for ((a, b), &k) in lp.phi().iter().zip(lm.phi()).zip(&places.rows) {
                     f(n + k, -central(*a, *b));
                 }
+            }
+        }
+    }
+
+    /// `x` (the whole model's state) as the partials' model reads it:
+    /// gathered into `g` for a small model at `places`.
+    pub(super) fn gather<'a>(
+        places: Option<&Places>,
+        g: &'a mut State,
+        x: &StateRef<'a>,
+    ) -> StateRef<'a> {
+        match places {
+            None => *x,
+            Some(places) => {
+                for (i, &k) in places.coords.iter().enumerate() {
+                    (g.u[i], g.v[i], g.a[i]) = (x.u[k], x.v[k], x.a[k]);
+                }
+                for (j, &k) in places.rows.iter().enumerate() {
+                    g.lambda[j] = x.lambda[k];
+                }
+                g.at(x.t)
             }
         }
     }
@@ -286,9 +308,11 @@ pub(super) fn central(plus: &[f64], minus: &[f64], h: f64) -> Vec<f64> {
 }
 
 impl<S: System + ?Sized> Integrator<'_, S> {
-    /// The sensitivities of the current (initial) state to `params`: central
-    /// differences of the start made at `p ± h_p`
-    /// ([`DIFFERENCE_STEP`]), with this integrator's configuration.
+    /// The sensitivities of the current (initial) state to `params`:
+    /// through the start's stages (`initial.rs`) for the consistent start
+    /// with projection, else central differences of the start made at
+    /// `p ± h_p` ([`DIFFERENCE_STEP`]), with this integrator's
+    /// configuration.
     ///
     /// # Errors
     /// [`IntegrationError::Config`] after the first step, for a parameter
@@ -305,10 +329,16 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         }
         // The models at p ± h_p share the analysis of the KKT pattern.
         let _shared = SharedAnalyses::begin();
+        let by_stages = self.starts_by_stages();
         let (mut names, mut scratch) = (None, None);
-        let mut out = Vec::with_capacity(params.len());
+        let (mut out, mut given) = (Vec::with_capacity(params.len()), Vec::new());
         for param in params {
-            out.push(self.parameter(*param, &mut names, &mut scratch)?);
+            let (p, g) = self.parameter(*param, &mut names, &mut scratch, by_stages)?;
+            out.push(p);
+            given.push(g);
+        }
+        if by_stages {
+            self.initial_by_stages(&mut out, &given)?;
         }
         Ok(Sensitivities {
             params: out,
@@ -318,41 +348,32 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         })
     }
 
-    /// One parameter's initial sensitivities and the models its partials
-    /// are formed from (`names`: the whole model's names, indexed when a
-    /// small model first needs them).
+    /// Whether the initial sensitivities are differentiated through the
+    /// start's stages (`initial.rs`): for the consistent start with
+    /// projection. Else (the paper's start with given `λ₀`, or a start
+    /// that may not project) they are central differences of whole starts.
+    fn starts_by_stages(&self) -> bool {
+        matches!(self.config.start, crate::Start::Consistent) && self.config.project
+    }
+
+    /// One parameter and the sensitivities `∂(u_g, u̇_g)/∂p` of the given
+    /// initial state (`u` and `v` of the second; empty unless
+    /// `by_stages`). Without `by_stages` the parameter's initial
+    /// sensitivities are central differences of whole starts at `p ± h_p`;
+    /// with it they are left to
+    /// [`initial_by_stages`](Self::initial_by_stages). `names`: the whole
+    /// model's names, indexed when a small model first needs them.
     fn parameter(
         &self,
         param: &dyn Parameterized,
         names: &mut Option<Names>,
         scratch: &mut Option<(Linearization, KktSolver)>,
-    ) -> Result<Parameter, IntegrationError> {
+        by_stages: bool,
+    ) -> Result<(Parameter, State), IntegrationError> {
         let name = param.name();
         let value = param.value();
         let step = difference_step(value);
         let bad = |why: String| IntegrationError::Config(format!("sensitivity to '{name}': {why}"));
-        let plus = param.at(value + step).map_err(bad)?;
-        let minus = param.at(value - step).map_err(bad)?;
-        let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
-        for v in [&plus, &minus] {
-            let sys = v.system();
-            if (sys.n_coords(), sys.n_constraints()) != (n, m) {
-                return Err(bad(format!(
-                    "the model changes size with it ({} coordinates and {} constraints instead of {n} and {m})",
-                    sys.n_coords(),
-                    sys.n_constraints()
-                )));
-            }
-        }
-        let s_plus = self.start_of(plus.as_ref(), scratch)?;
-        let s_minus = self.start_of(minus.as_ref(), scratch)?;
-        let s = State {
-            u: central(&s_plus.u, &s_minus.u, step),
-            v: central(&s_plus.v, &s_minus.v, step),
-            a: central(&s_plus.a, &s_minus.a, step),
-            a_alpha: central(&s_plus.a_alpha, &s_minus.a_alpha, step),
-            lambda: central(&s_plus.lambda, &s_minus.lambda, step),
-        };
         let local = match (
             param.local_at(value + step).map_err(bad)?,
             param.local_at(value - step).map_err(bad)?,
@@ -360,16 +381,82 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             (Some(p), Some(q)) => local_partials(self.sys, names, p, q),
             _ => None,
         };
-        let partials = match local {
-            Some(partials) => partials,
-            None => self.whole_partials(plus, minus).map_err(bad)?,
+        let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
+        let mut s = State::zeros(n, m);
+        let mut given = State::zeros(0, 0);
+        let whole = if local.is_some() && by_stages && param.keeps_initial_state() {
+            given = State::zeros(n, 0);
+            None
+        } else {
+            let (plus, minus) = self.whole_models(param, step).map_err(bad)?;
+            if by_stages {
+                let (p, q) = (plus.as_ref(), minus.as_ref());
+                given.u = central(p.initial_position(), q.initial_position(), step);
+                given.v = central(p.initial_velocity(), q.initial_velocity(), step);
+            } else {
+                s = self.start_difference(plus.as_ref(), minus.as_ref(), step, scratch)?;
+            }
+            Some((plus, minus))
         };
-        Ok(Parameter {
+        let partials = match (local, whole) {
+            (Some(partials), _) => partials,
+            (None, Some((plus, minus))) => self.whole_partials(plus, minus).map_err(bad)?,
+            // (The whole models are made whenever there is no small one.)
+            (None, None) => return Err(bad("no model at p ± h_p".into())),
+        };
+        let parameter = Parameter {
             name,
             value,
             step,
             partials,
             s,
+        };
+        Ok((parameter, given))
+    }
+
+    /// The whole model at `p ± step`, of this model's size.
+    fn whole_models(&self, param: &dyn Parameterized, step: f64) -> Result<Sides, String> {
+        let value = param.value();
+        let plus = param.at(value + step)?;
+        let minus = param.at(value - step)?;
+        let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
+        for v in [&plus, &minus] {
+            let sys = v.system();
+            if (sys.n_coords(), sys.n_constraints()) != (n, m) {
+                return Err(format!(
+                    "the model changes size with it ({} coordinates and {} constraints instead of {n} and {m})",
+                    sys.n_coords(),
+                    sys.n_constraints()
+                ));
+            }
+            let (u, v) = (v.initial_position(), v.initial_velocity());
+            if (u.len(), v.len()) != (n, n) {
+                return Err(format!(
+                    "its initial state has {} positions and {} velocities instead of {n}",
+                    u.len(),
+                    v.len()
+                ));
+            }
+        }
+        Ok((plus, minus))
+    }
+
+    /// The central difference of the whole starts of `plus` and `minus`.
+    fn start_difference(
+        &self,
+        plus: &dyn Variant,
+        minus: &dyn Variant,
+        step: f64,
+        scratch: &mut Option<(Linearization, KktSolver)>,
+    ) -> Result<State, IntegrationError> {
+        let s_plus = self.start_of(plus, scratch)?;
+        let s_minus = self.start_of(minus, scratch)?;
+        Ok(State {
+            u: central(&s_plus.u, &s_minus.u, step),
+            v: central(&s_plus.v, &s_minus.v, step),
+            a: central(&s_plus.a, &s_minus.a, step),
+            a_alpha: central(&s_plus.a_alpha, &s_minus.a_alpha, step),
+            lambda: central(&s_plus.lambda, &s_minus.lambda, step),
         })
     }
 

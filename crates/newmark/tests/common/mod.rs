@@ -45,6 +45,8 @@ impl Parameterized for Param {
 }
 
 /// The value of column `c` in a state.
+// (Not every test file that shares this module reads columns.)
+#[allow(dead_code)]
 pub fn column_of(u: &[f64], v: &[f64], a: &[f64], lambda: &[f64], c: Column) -> f64 {
     match c {
         Column::Position(i) => u[i],

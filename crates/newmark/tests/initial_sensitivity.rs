@@ -1,0 +1,246 @@
+//! The initial sensitivities `S₀` (`Integrator::sensitivities`, through
+//! the start's own linear systems) against central differences of whole
+//! starts (`Integrator::new` at `p ± δ`, `p ± 2δ`, extrapolated), which
+//! share nothing with them but the start itself: a planar slider-crank
+//! (a mass, a length that moves the given pose off the constraints, a
+//! constant torque) and a spatial chain of spinning bars (a mass, an axial
+//! inertia, the spin rate that sets the given velocities).
+
+mod common;
+
+use common::{Model, Param};
+use mstar_model::planar::{At, PlanarBuilder, PointMass, RigidBody, SpringDamper, TimeFunction};
+use mstar_model::spatial::{
+    Attach, JointSpec, JointType, SpatialBody, SpatialBuilder, SpatialInertia,
+};
+use mstar_newmark::{Config, Integrator, Newton, Parameterized, Scheme};
+
+/// A slider-crank at rest under gravity, driven by a torque `p[2]`, with a
+/// spring to the coupler; `p[0]` the crank mass, `p[1]` the coupler length
+/// (the pose is laid out for 1.5 m, so any other length moves the given
+/// positions off the constraints and the start projects them).
+fn slider_crank(p: &[f64]) -> Model {
+    let (r, l, theta) = (0.5, 1.5, 0.3_f64);
+    let (ax, ay) = (r * theta.cos(), r * theta.sin());
+    let bx = ax + (l * l - ay * ay).sqrt();
+    let phi = (-ay).atan2(bx - ax);
+    let mut b = PlanarBuilder::new();
+    b.gravity(0.0, -9.81);
+    let body = |mass: f64, length: f64, pose| RigidBody {
+        mass,
+        inertia: mass * length * length / 12.0,
+        pose,
+        velocity: [0.0; 3],
+    };
+    let crank = b.rigid_body("crank", body(p[0], r, [0.5 * ax, 0.5 * ay, theta]));
+    let coupler = b.rigid_body("coupler", body(1.2, l, [0.5 * (ax + bx), 0.5 * ay, phi]));
+    let slider = b.point_mass(
+        "slider",
+        PointMass {
+            mass: 0.8,
+            position: [bx, 0.0],
+            velocity: [0.0; 2],
+        },
+    );
+    b.revolute(
+        "hinge",
+        At::Ground([0.0, 0.0]),
+        At::Body(crank, [-0.5 * r, 0.0]),
+    );
+    let pin = [
+        At::Body(crank, [0.5 * r, 0.0]),
+        At::Body(coupler, [-0.5 * p[1], 0.0]),
+    ];
+    b.revolute("pin", pin[0], pin[1]);
+    let wrist = [
+        At::Body(coupler, [0.5 * p[1], 0.0]),
+        At::Body(slider, [0.0; 2]),
+    ];
+    b.revolute("wrist", wrist[0], wrist[1]);
+    b.prismatic(
+        "rail",
+        At::Ground([0.0, 0.0]),
+        [1.0, 0.0],
+        At::Body(slider, [0.0; 2]),
+    );
+    b.torque("motor", crank, TimeFunction::Constant(p[2]));
+    let spring = SpringDamper {
+        stiffness: 40.0,
+        damping: 0.0,
+        rest_length: 1.0,
+    };
+    b.spring(
+        "buffer",
+        At::Ground([1.5, 1.0]),
+        At::Body(coupler, [0.3, 0.0]),
+        spring,
+    );
+    let sys = b.build().expect("a valid slider-crank");
+    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+    Model {
+        sys: Box::new(sys),
+        u0,
+        v0,
+    }
+}
+
+/// Three bars (1 m, the first of mass `p[0]`, axial inertia `p[1]`) on
+/// spherical joints along +x, spinning about their axes at `p[2]` rad/s
+/// (consistent with the joints at every rate) and falling under gravity.
+fn spinning_chain(p: &[f64]) -> Model {
+    let mut b = SpatialBuilder::new();
+    b.gravity([0.0, 0.0, -9.81]);
+    let mut previous = Attach::Ground;
+    for k in 0..3 {
+        let id = b.body(
+            &format!("bar{}", k + 1),
+            SpatialBody {
+                mass: if k == 0 { p[0] } else { 1.0 },
+                inertia: SpatialInertia::Principal([p[1], 0.085, 0.083]),
+                position: [k as f64 + 0.5, 0.0, 0.0],
+                orientation: [1.0, 0.0, 0.0, 0.0],
+                velocity: [0.0; 3],
+                angular_velocity: [p[2], 0.0, 0.0],
+            },
+        );
+        let first = if k == 0 { [0.0; 3] } else { [0.5, 0.0, 0.0] };
+        b.joint(
+            &format!("joint{}", k + 1),
+            JointSpec {
+                kind: JointType::Spherical,
+                bodies: [previous, Attach::Body(id)],
+                points: [first, [-0.5, 0.0, 0.0]],
+                axes: [[0.0, 0.0, 1.0]; 2],
+                length: None,
+            },
+        );
+        previous = Attach::Body(id);
+    }
+    let sys = b.build().expect("a valid spatial chain");
+    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+    Model {
+        sys: Box::new(sys),
+        u0,
+        v0,
+    }
+}
+
+fn config(corrected_start: bool) -> Config {
+    Config {
+        h: 0.01,
+        tol: 1e-12,
+        newton: Newton::Full,
+        scheme: Scheme::GeneralizedAlpha { rho_inf: 0.8 },
+        corrected_start,
+        ..Config::default()
+    }
+}
+
+/// The start's `[u; u̇; ü; λ]` of `make` at `p`.
+fn start(make: fn(&[f64]) -> Model, p: &[f64], config: &Config) -> Vec<f64> {
+    let model = make(p);
+    let integ = Integrator::new(
+        model.sys.as_ref(),
+        config.clone(),
+        0.0,
+        &model.u0,
+        &model.v0,
+    )
+    .expect("the model starts");
+    let s = integ.view();
+    [s.u, s.v, s.a, s.lambda].concat()
+}
+
+/// Checks `S₀` of parameter `k` of `make` at `nominal` against whole
+/// starts at `p ± δ`, `p ± 2δ` (δ = 1e-3 relative): `D₁`, `D₂` err by
+/// `c δ²`, `4c δ²`, so `R = (4D₁ − D₂)/3` and `|D₁ − D₂|/3` bounds `D₁`'s
+/// error. The starts' own errors (the projection's tolerance `1e-15`, the
+/// solves' round-off, about `1e-14` relative) over `δ` and `S₀`'s central
+/// differences (about `1e-10` relative, `DIFFERENCE_STEP³` and round-off
+/// over it) stay below `1e-8` of each part's largest entry.
+fn check(make: fn(&[f64]) -> Model, nominal: &[f64], k: usize, config: &Config) {
+    let model = make(nominal);
+    let integ = Integrator::new(
+        model.sys.as_ref(),
+        config.clone(),
+        0.0,
+        &model.u0,
+        &model.v0,
+    )
+    .expect("the model starts");
+    let param = Param {
+        make,
+        nominal: nominal.to_vec(),
+        k,
+    };
+    let params: [&dyn Parameterized; 1] = [&param];
+    let sens = integ
+        .sensitivities(&params)
+        .expect("the sensitivities start");
+    let s0 = [sens.u(0), sens.v(0), sens.a(0), sens.lambda(0)].concat();
+    let delta = 1e-3 * nominal[k].abs();
+    let at = |c: f64| {
+        let mut p = nominal.to_vec();
+        p[k] += c * delta;
+        start(make, &p, config)
+    };
+    let (p1, m1, p2, m2) = (at(1.0), at(-1.0), at(2.0), at(-2.0));
+    let n = sens.u(0).len();
+    let parts = [0..n, n..2 * n, 2 * n..3 * n, 3 * n..s0.len()];
+    for (part, name) in parts.into_iter().zip(["u", "v", "a", "lambda"]) {
+        let size = s0[part.clone()].iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        for i in part {
+            let d1 = (p1[i] - m1[i]) / (2.0 * delta);
+            let d2 = (p2[i] - m2[i]) / (4.0 * delta);
+            let r = (4.0 * d1 - d2) / 3.0;
+            let bound = (d1 - d2).abs() / 3.0 + 1e-8 * size.max(1e-3);
+            let error = (s0[i] - r).abs();
+            assert!(
+                error <= bound,
+                "parameter {k}, {name}[{i}]: S₀ {} against {r} (error {error:e} > {bound:e})",
+                s0[i]
+            );
+        }
+        assert!(size.is_finite(), "parameter {k}: {name} is not finite");
+    }
+}
+
+#[test]
+fn slider_crank_initial_sensitivities_match_extrapolated_starts() {
+    let nominal = [1.0, 1.5, 3.0];
+    for corrected in [true, false] {
+        for k in 0..nominal.len() {
+            check(slider_crank, &nominal, k, &config(corrected));
+        }
+    }
+}
+
+#[test]
+fn spinning_chain_initial_sensitivities_match_extrapolated_starts() {
+    let nominal = [1.0, 0.05, 5.0];
+    for k in 0..nominal.len() {
+        check(spinning_chain, &nominal, k, &config(true));
+    }
+}
+
+/// A length that moves the given pose: `S₀` satisfies the differentiated
+/// constraints `B δu₀ + Φ_p = 0` (here checked as `δu₀` nonzero in the
+/// slider's x, which only the projection moves).
+#[test]
+fn a_length_moves_the_projected_pose() {
+    let nominal = [1.0, 1.5, 3.0];
+    let model = slider_crank(&nominal);
+    let integ = Integrator::new(model.sys.as_ref(), config(true), 0.0, &model.u0, &model.v0)
+        .expect("the model starts");
+    let param = Param {
+        make: slider_crank,
+        nominal: nominal.to_vec(),
+        k: 1,
+    };
+    let params: [&dyn Parameterized; 1] = [&param];
+    let sens = integ
+        .sensitivities(&params)
+        .expect("the sensitivities start");
+    let moved = sens.u(0).iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+    assert!(moved > 0.1, "δu₀ of the coupler length: {moved}");
+}
