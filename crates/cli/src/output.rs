@@ -146,6 +146,7 @@ pub fn conclude(
                 "wrote {} ({rows} rows)",
                 mstar::csv::display(out)
             ));
+            remove_stale_partial(out);
             return Ok(());
         }
         Err(stop) => stop,
@@ -160,6 +161,26 @@ pub fn conclude(
         tell_kept(out, &kept);
     }
     Err(why)
+}
+
+/// Removes the `<name>.partial.csv` an earlier stopped run of the same
+/// output left, now that the whole file is written (saying so): beside a
+/// complete file it would only pass for this run's.
+fn remove_stale_partial(out: &Path) {
+    let partial = partial_path(out);
+    if !std::fs::symlink_metadata(&partial).is_ok_and(|m| m.is_file()) {
+        return;
+    }
+    match std::fs::remove_file(&partial) {
+        Ok(()) => note(format_args!(
+            "note: removed {}, the samples of an earlier run of this output that stopped",
+            partial.display()
+        )),
+        Err(e) => note(format_args!(
+            "note: {} is from an earlier run of this output that stopped, and could not be removed: {e}",
+            partial.display()
+        )),
+    }
 }
 
 /// The error a stop ends the program with: a write error on a closed pipe

@@ -176,6 +176,34 @@ fn a_failed_chain_keeps_its_samples() {
     assert!(temporaries(&dir).is_empty(), "{:?}", temporaries(&dir));
 }
 
+/// A rerun that completes removes the `.partial.csv` its stopped run left
+/// (and says so), so that a complete file never stands beside a stale one.
+#[test]
+fn a_completed_rerun_removes_the_stale_partial_file() {
+    let dir = scratch("faults-stale-partial");
+    let out = dir.join("w.csv");
+    let run = |h: &str, t_end: &str| {
+        let out = path(&out);
+        let args = [
+            "chain", "--links", "20", "--h", h, "--t-end", t_end, "--out", &out,
+        ];
+        mstar(&args)
+    };
+    let failed = run("0.1", "5");
+    assert_eq!(failed.status.code(), Some(1), "{}", text(&failed.stderr));
+    let partial = dir.join("w.partial.csv");
+    assert!(partial.is_file(), "the failed run keeps its samples");
+    let ok = run("0.002", "0.2");
+    let err = text(&ok.stderr);
+    assert!(ok.status.success(), "{err}");
+    assert!(out.is_file());
+    assert!(!partial.exists(), "{err}");
+    assert!(
+        err.contains(&format!("removed {}", path(&partial))),
+        "{err}"
+    );
+}
+
 /// Starts `args` in `dir` and reads its standard output up to a line that
 /// starts with `ready` (the run has its output open and is integrating).
 fn start(args: &[&str], dir: &Path, ready: &str) -> (Child, String) {
