@@ -84,6 +84,65 @@ fn slider_crank(p: &[f64]) -> Model {
     }
 }
 
+/// [`slider_crank`] without the torque and the spring, its crank given an
+/// angular velocity `p[2]` and everything else at rest: inconsistent
+/// velocities, which the start's projection moves (the mechanism keeps
+/// one degree of freedom, so the projection's direction matters), and the
+/// coupler length `p[1]` turns that direction with `B`.
+fn spun_slider_crank(p: &[f64]) -> Model {
+    let (r, l, theta) = (0.5, 1.5, 0.3_f64);
+    let (ax, ay) = (r * theta.cos(), r * theta.sin());
+    let bx = ax + (l * l - ay * ay).sqrt();
+    let phi = (-ay).atan2(bx - ax);
+    let mut b = PlanarBuilder::new();
+    b.gravity(0.0, -9.81);
+    let body = |mass: f64, length: f64, pose, spin| RigidBody {
+        mass,
+        inertia: mass * length * length / 12.0,
+        pose,
+        velocity: [0.0, 0.0, spin],
+    };
+    let crank = b.rigid_body("crank", body(p[0], r, [0.5 * ax, 0.5 * ay, theta], p[2]));
+    let coupler_pose = [0.5 * (ax + bx), 0.5 * ay, phi];
+    let coupler = b.rigid_body("coupler", body(1.2, l, coupler_pose, 0.0));
+    let slider = b.point_mass(
+        "slider",
+        PointMass {
+            mass: 0.8,
+            position: [bx, 0.0],
+            velocity: [0.0; 2],
+        },
+    );
+    b.revolute(
+        "hinge",
+        At::Ground([0.0, 0.0]),
+        At::Body(crank, [-0.5 * r, 0.0]),
+    );
+    let pin = [
+        At::Body(crank, [0.5 * r, 0.0]),
+        At::Body(coupler, [-0.5 * p[1], 0.0]),
+    ];
+    b.revolute("pin", pin[0], pin[1]);
+    let wrist = [
+        At::Body(coupler, [0.5 * p[1], 0.0]),
+        At::Body(slider, [0.0; 2]),
+    ];
+    b.revolute("wrist", wrist[0], wrist[1]);
+    b.prismatic(
+        "rail",
+        At::Ground([0.0, 0.0]),
+        [1.0, 0.0],
+        At::Body(slider, [0.0; 2]),
+    );
+    let sys = b.build().expect("a valid slider-crank");
+    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
+    Model {
+        sys: Box::new(sys),
+        u0,
+        v0,
+    }
+}
+
 /// Three bars (1 m, the first of mass `p[0]`, axial inertia `p[1]`) on
 /// spherical joints along +x, spinning about their axes at `p[2]` rad/s
 /// (consistent with the joints at every rate) and falling under gravity.
@@ -155,9 +214,10 @@ fn start(make: fn(&[f64]) -> Model, p: &[f64], config: &Config) -> Vec<f64> {
 /// starts at `p ± δ`, `p ± 2δ` (δ = 1e-3 relative): `D₁`, `D₂` err by
 /// `c δ²`, `4c δ²`, so `R = (4D₁ − D₂)/3` and `|D₁ − D₂|/3` bounds `D₁`'s
 /// error. The starts' own errors (the projection's tolerance `1e-15`, the
-/// solves' round-off, about `1e-14` relative) over `δ` and `S₀`'s central
-/// differences (about `1e-10` relative, `DIFFERENCE_STEP³` and round-off
-/// over it) stay below `1e-8` of each part's largest entry.
+/// solves' round-off, about `1e-14` of each part's largest value) enter
+/// `R` as at most `1e-13` of that value over `δ` (ten times over); `S₀`'s
+/// central differences (about `1e-10` relative, `DIFFERENCE_STEP³` and
+/// round-off over it) stay below `1e-8` of each part's largest entry.
 fn check(make: fn(&[f64]) -> Model, nominal: &[f64], k: usize, config: &Config) {
     let model = make(nominal);
     let integ = Integrator::new(
@@ -187,13 +247,16 @@ fn check(make: fn(&[f64]) -> Model, nominal: &[f64], k: usize, config: &Config) 
     let (p1, m1, p2, m2) = (at(1.0), at(-1.0), at(2.0), at(-2.0));
     let n = sens.u(0).len();
     let parts = [0..n, n..2 * n, 2 * n..3 * n, 3 * n..s0.len()];
+    let nominal_start = start(make, nominal, config);
+    let largest = |v: &[f64]| v.iter().fold(0.0_f64, |m, x| m.max(x.abs()));
     for (part, name) in parts.into_iter().zip(["u", "v", "a", "lambda"]) {
-        let size = s0[part.clone()].iter().fold(0.0_f64, |m, x| m.max(x.abs()));
+        let size = largest(&s0[part.clone()]);
+        let rounding = 1e-13 * largest(&nominal_start[part.clone()]) / delta;
         for i in part {
             let d1 = (p1[i] - m1[i]) / (2.0 * delta);
             let d2 = (p2[i] - m2[i]) / (4.0 * delta);
             let r = (4.0 * d1 - d2) / 3.0;
-            let bound = (d1 - d2).abs() / 3.0 + 1e-8 * size.max(1e-3);
+            let bound = (d1 - d2).abs() / 3.0 + 1e-8 * size.max(1e-3) + rounding;
             let error = (s0[i] - r).abs();
             assert!(
                 error <= bound,
@@ -212,6 +275,26 @@ fn slider_crank_initial_sensitivities_match_extrapolated_starts() {
         for k in 0..nominal.len() {
             check(slider_crank, &nominal, k, &config(corrected));
         }
+    }
+}
+
+#[test]
+fn spun_slider_crank_moved_velocities_match_extrapolated_starts() {
+    let nominal = [1.0, 1.5, 4.0];
+    for k in 0..nominal.len() {
+        check(spun_slider_crank, &nominal, k, &config(true));
+    }
+}
+
+/// Given positions off the constraints (laid out for a coupler of 1.5 m,
+/// the nominal one 1.52 m): the start projects them, and the initial
+/// sensitivities are central differences of whole starts, which the
+/// extrapolated starts check as well.
+#[test]
+fn moved_positions_match_extrapolated_starts() {
+    let nominal = [1.0, 1.52, 3.0];
+    for k in 0..nominal.len() {
+        check(slider_crank, &nominal, k, &config(true));
     }
 }
 

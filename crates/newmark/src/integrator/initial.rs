@@ -8,7 +8,7 @@
 //!
 //! ```text
 //! positions     K = [I Bᵀ; B 0](u₀)   F = [0; −Φ(u)]                      u₀ = u_g + y_u
-//! velocities    K = [I Bᵀ; B 0](u₀)   F = [0; −(B u̇ + Φ_t)]               u̇₀ = u̇_g + y_u
+//! velocities    K = [I Bᵀ; B 0](u₀)   F = [−Bᵀμ; −(B u̇ + Φ_t)]            u̇₀ = u̇_g + y_u
 //! accelerations K = [M Bᵀ; B 0](u₀)   F = [r(u, u̇, ü, λ); c(u, u̇) − B ü]  (ü₀, λ₀) = y
 //! Taylor states K = [M Bᵀ; B 0](u±)   the same at (t₀ ± h, u±, u̇±)       u⃛₀ = (ü₊ − ü₋)/2h
 //! correction    K = [M Bᵀ; B 0](u₀)   F = [−M δu̇ − Bᵀμ; −B(δu̇ + k u⃛₀)]   u̇ = u̇₀ + δu̇
@@ -23,9 +23,13 @@
 //! state's) a central difference of the given states at `p ± h_p`, or zero
 //! for a parameter that keeps them ([`Parameterized::keeps_initial_state`]).
 //!
-//! The projections are differentiated at the projected state: for a given
-//! state that projection moved, the difference to the derivative of the
-//! iterated projection is of the order of that move.
+//! The velocity projection is linear in the given velocities and is
+//! differentiated exactly (its multipliers `μ`). The position projection
+//! (minimum-norm Newton iterations) is differentiated as the projection of
+//! a consistent state, `δu₀ = δu_g + y_u` with `F = [0; −Φ]`: exact when the
+//! given positions satisfy the constraints, and off by the order of the move
+//! otherwise, so a start that moved them by more than [`MOVED`] (relative)
+//! takes central differences of whole starts instead (`sensitivity.rs`).
 
 use mstar_kkt::{KktOptions, KktSolver};
 use mstar_linearize::{Coefficients, Linearization, max_abs};
@@ -35,12 +39,21 @@ use super::sensitivity::{DIFFERENCE_STEP, Parameter, Partials};
 use super::{Integrator, State};
 use crate::{AlphaParams, IntegrationError};
 
+/// The largest move of the given positions by the start's projection,
+/// relative to `max(1, ‖u‖∞)`, with which the initial sensitivities are
+/// differentiated through the stages: the position stage's error is of the
+/// order of the move, here below the central differences' `1e-10`.
+pub(super) const MOVED: f64 = 1e-10;
+
 /// What a stage's `F` evaluates (see the module's table): `n + m` rows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Level {
     /// `[0; −Φ(u)]`.
     Position,
-    /// `[0; −(B u̇ + Φ_t)]`.
+    /// `[−Bᵀμ; −(B u̇ + Φ_t)]`, read with `λ = μ`, the projection's
+    /// multipliers: the projection `u̇₀ = u̇_g − Bᵀμ` with `B u̇₀ + Φ_t = 0`
+    /// is linear in `u̇_g`, and `−Bᵀμ` carries the change of its direction
+    /// with `B` (zero when the given velocities were consistent).
     Velocity,
     /// `[r(u, u̇, ü, λ); c(u, u̇) − B ü]`.
     Acceleration,
@@ -84,6 +97,8 @@ pub(super) fn stage_rows<S: System + ?Sized>(
             };
             lin.eval_residual(sys, &at);
             f.fill(0.0);
+            lin.b_pattern().mul_transpose_add(lin.b(), x.lambda, f);
+            f.iter_mut().for_each(|o| *o = -*o);
             sys.phi_t_into(x.t, x.u, e);
             lin.b_pattern().mul_add(lin.b(), x.v, e);
             e.iter_mut().for_each(|o| *o = -*o);
@@ -349,13 +364,13 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             .factor(self.sys, (t, &nominal.u), true)
             .map_err(fail)?;
         let zeros_n = vec![0.0; n];
-        let zeros_m = vec![0.0; self.sys.n_constraints()];
+        let mu = self.velocity_multipliers(stages, nominal).map_err(fail)?;
         let x = StateRef {
             t,
             u: &nominal.u,
             v: &nominal.v,
             a: &zeros_n,
-            lambda: &zeros_m,
+            lambda: &mu,
         };
         for (param, g) in params.iter_mut().zip(given) {
             let level = (&x, Level::Position);
@@ -380,6 +395,34 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             param.s.v = g.v.iter().zip(&y).map(|(g, y)| g + y).collect();
         }
         Ok(())
+    }
+
+    /// The multipliers `μ` of the start's velocity projection (zero when
+    /// it did not move the given velocities), solved again from the given
+    /// velocities with the projection matrix factored at `u₀`.
+    fn velocity_multipliers(
+        &self,
+        stages: &mut Stages,
+        nominal: &Nominal,
+    ) -> Result<Vec<f64>, mstar_kkt::KktError> {
+        let (n, m) = (self.sys.n_coords(), self.sys.n_constraints());
+        let moved = &self.start.velocity_correction;
+        if moved.len() != n || moved.iter().all(|d| *d == 0.0) {
+            return Ok(vec![0.0; m]);
+        }
+        let given: Vec<f64> = nominal.v.iter().zip(moved).map(|(v, d)| v - d).collect();
+        let (zeros_n, zeros_m) = (vec![0.0; n], vec![0.0; m]);
+        let x = StateRef {
+            t: self.t,
+            u: &nominal.u,
+            v: &given,
+            a: &zeros_n,
+            lambda: &zeros_m,
+        };
+        let mut y = vec![0.0; n + m];
+        stage_rows(self.sys, &mut stages.eval, &x, Level::Velocity, &mut y);
+        stages.solve(&mut y, true)?;
+        Ok(y.split_off(n))
     }
 
     /// The consistent accelerations and multipliers: `δü₀`, `δλ₀` (and

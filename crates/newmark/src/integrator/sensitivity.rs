@@ -350,10 +350,15 @@ impl<S: System + ?Sized> Integrator<'_, S> {
 
     /// Whether the initial sensitivities are differentiated through the
     /// start's stages (`initial.rs`): for the consistent start with
-    /// projection. Else (the paper's start with given `λ₀`, or a start
-    /// that may not project) they are central differences of whole starts.
+    /// projection, when the projection did not move the given positions
+    /// beyond [`initial::MOVED`](super::initial::MOVED). Else (the paper's
+    /// start with given `λ₀`, a start that may not project, given positions
+    /// off the constraints) they are central differences of whole starts.
     fn starts_by_stages(&self) -> bool {
-        matches!(self.config.start, crate::Start::Consistent) && self.config.project
+        let moved = max_abs(&self.start.position_correction);
+        matches!(self.config.start, crate::Start::Consistent)
+            && self.config.project
+            && moved <= super::initial::MOVED * max_abs(&self.state.u).max(1.0)
     }
 
     /// One parameter and the sensitivities `∂(u_g, u̇_g)/∂p` of the given
