@@ -218,7 +218,9 @@ def sweep(
     """
     items = []
     for key, values in params.items():
-        if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+        # (A dict or a set iterates as its keys, in no order the caller
+        # wrote: neither is a list of values.)
+        if isinstance(values, (str, bytes, dict, set, frozenset)) or not hasattr(values, "__iter__"):
             raise TypeError(f"params[{key!r}]: expected a list of values, got {type(values).__name__} {values!r}")
         items.append((key, [toml_literal(v, f"params[{key!r}]", lists=True) for v in values]))
     jobs = None if jobs is None else integer(jobs, "jobs")

@@ -127,6 +127,10 @@ def test_a_bad_sweep_value_writes_nothing(tmp_path: Path):
         mstar.sweep(MODELS / "double-pendulum.toml", {"body.upper.mass": [1.0, {"a": 1}]}, out)
     with pytest.raises(TypeError, match=r"^params\['body.upper.mass'\]: expected a list of values, got float"):
         mstar.sweep(MODELS / "double-pendulum.toml", {"body.upper.mass": 1.0}, out)
+    # A dict or a set would iterate as its keys.
+    for value in ({"a": 1}, {1.0, 2.0}):
+        with pytest.raises(TypeError, match=r"^params\['body.upper.mass'\]: expected a list of values, got (dict|set)"):
+            mstar.sweep(MODELS / "double-pendulum.toml", {"body.upper.mass": value}, out)
     assert not out.exists()
     # The folder is free for the good plan.
     s = mstar.sweep(MODELS / "double-pendulum.toml", {"body.upper.mass": [1.0], "simulation.t_end": [0.01]}, out)

@@ -59,14 +59,25 @@ fn energy_warning(stats: &RunStats, config: &Config, files: bool) -> Option<Stri
         // An undamped scheme's growing period-2h mode is what drifts, and a
         // smaller h makes it grow sooner (as the local warning says).
         _ if undamped(config) => format!(
-            "the scheme is undamped (γ = 1/2): on an index-3 system its period-2h oscillation              of ü and λ grows and carries the energy away, and a smaller h makes it grow sooner;              rerun with {}",
+            "the scheme is undamped (γ = 1/2): on an index-3 system its period-2h oscillation \
+             of ü and λ grows and carries the energy away, and a smaller h makes it grow sooner; \
+             rerun with {}",
             damped_scheme(config, files)
+        ),
+        // The iterations left the constraints too loose: no step size
+        // mends that (the local warning names the Newton tolerance too).
+        _ if stats.error.newton_exceeded > 0 => format!(
+            "the Newton tolerance --tol {} is too loose for it: rerun with --tol {}",
+            short(config.tol),
+            short(newton_tolerance(config))
         ),
         (false, _) => format!("rerun with --h {}", short(h)),
         (true, false) => format!("rerun with --h {0} --h-max {0}", short(h)),
         (true, true) => format!("rerun with --h {0} --set simulation.h_max={0}", short(h)),
     };
-    let why = if adaptive {
+    let why = if stats.error.newton_exceeded > 0 {
+        "the iterations stopped with the constraints violated beyond the tolerance"
+    } else if adaptive {
         "adaptive steps keep each step's local error within the tolerance, not the run's, and \
          their errors added up to this loss"
     } else {

@@ -165,20 +165,30 @@ fn integrate(plan: &Plan, dir: &Dir, index: usize, stop: &dyn Fn() -> bool) -> O
     Some(figures)
 }
 
+/// The summary's `status` of a run: `ok`, `beyond tolerance: <warning>`
+/// (two warnings set apart by ` | `) or why it did not reach its end, on
+/// one line whatever the message.
+fn status(error: Option<&str>, beyond: Option<&str>) -> String {
+    let one_line = |why: &str| why.split_whitespace().collect::<Vec<_>>().join(" ");
+    match (error, beyond) {
+        (Some(why), _) => one_line(why),
+        (None, Some(warning)) => {
+            // Each warning (the local error's, the energy's) on its own.
+            let each: Vec<String> = warning
+                .lines()
+                .map(|w| one_line(w.strip_prefix("warning: ").unwrap_or(w)))
+                .collect();
+            format!("{}{}", super::files::BEYOND, each.join(" | "))
+        }
+        (None, None) => super::files::OK.to_string(),
+    }
+}
+
 /// The summary row (see [`super::summary_header`]).
 fn row(plan: &Plan, index: usize, f: &Figures, wall: f64) -> Row {
     let mut fields = vec![index.to_string()];
     fields.extend(plan.values(index).into_iter().map(str::to_string));
-    // One line, whatever the message.
-    let one_line = |why: &str| why.split_whitespace().collect::<Vec<_>>().join(" ");
-    let status = match (&f.error, &f.beyond) {
-        (Some(why), _) => one_line(why),
-        (None, Some(warning)) => {
-            let what = warning.strip_prefix("warning: ").unwrap_or(warning);
-            format!("{}{}", super::files::BEYOND, one_line(what))
-        }
-        (None, None) => super::files::OK.to_string(),
-    };
+    let status = status(f.error.as_deref(), f.beyond.as_deref());
     fields.push(status);
     let number = |x: Option<f64>| x.map(format_number).unwrap_or_default();
     fields.push(number(f.last.as_ref().map(|l| l.0)));
@@ -195,4 +205,20 @@ fn row(plan: &Plan, index: usize, f: &Figures, wall: f64) -> Row {
     fields.push(f.steps.map(|s| s.to_string()).unwrap_or_default());
     fields.push(format!("{wall:.6}"));
     Row::new(index, plan.params().len() + 1, fields)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::status;
+
+    #[test]
+    fn a_status_is_one_line_and_sets_two_warnings_apart() {
+        assert_eq!(status(None, None), "ok");
+        assert_eq!(status(Some("a\n  b"), Some("warning: c")), "a b");
+        let two = "warning: the local   error\nwarning: the energy";
+        assert_eq!(
+            status(None, Some(two)),
+            "beyond tolerance: the local error | the energy"
+        );
+    }
 }
