@@ -163,6 +163,10 @@ fn a_loose_newton_tolerance_is_named_and_the_advised_one_works() {
     let (code, stderr) = run(&["pendulum", "--tol", "0.1"]);
     assert_eq!(code, Some(3), "{stderr}");
     assert!(stderr.contains("constraint violation"), "{stderr}");
+    // Its energy drifts as well; that warning advises the same --tol, no
+    // smaller h (which cannot help).
+    assert!(stderr.contains("energy"), "{stderr}");
+    assert!(!stderr.contains("--h "), "{stderr}");
     let tol = advised(&stderr, "--tol").unwrap_or_else(|| panic!("no --tol advice: {stderr}"));
     let (code, stderr) = run(&["pendulum", "--tol", &tol]);
     assert_eq!(code, Some(0), "{stderr}");
