@@ -216,6 +216,7 @@ impl NativeModel {
     /// `mstar check`'s findings with the settings `overrides`.
     fn check<'py>(&self, py: Python<'py>, overrides: Vec<String>) -> PyResult<Bound<'py, PyDict>> {
         let (fresh, sim) = self.settings(&overrides).map_err(|e| model_error(&e))?;
+        refuse_placed(&sim)?;
         let mechanism = fresh.as_ref().unwrap_or(&self.mechanism);
         let (config, _) = mstar::run::config(&sim)
             .map_err(|e| ModelError::new_err(format!("{}: {e}", self.origin)))?;
@@ -236,6 +237,7 @@ impl NativeModel {
         sensitivities: Vec<String>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let (fresh, sim) = self.settings(&overrides).map_err(|e| model_error(&e))?;
+        refuse_placed(&sim)?;
         let params = self.parameters(&overrides, &sensitivities)?;
         let mechanism = fresh.as_ref().unwrap_or(&self.mechanism);
         let sys = mechanism.system();
@@ -499,6 +501,16 @@ fn objective_of(
 fn is_toml(path: &std::path::Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+}
+
+/// Settings the integrator refuses, blamed on the key that gives them as
+/// `mstar run` blames them ([`mstar::placed::config`]); those no key is to
+/// blame for are left to the run's own error.
+fn refuse_placed(sim: &Simulation) -> PyResult<()> {
+    match mstar::placed::config(sim) {
+        Err(mstar::placed::Refusal::Placed(e)) => Err(model_error(&e)),
+        _ => Ok(()),
+    }
 }
 
 /// The warning `mstar run` prints (and exits 3 for) when a run's steps went

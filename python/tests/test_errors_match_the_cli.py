@@ -45,7 +45,8 @@ def test_a_value_out_of_range_is_a_model_error(run_cli, tmp_path):
         # (`--h -1` names the option instead: the CLI's own value. The
         # message quotes the --set as given: -1.0, as Python writes it.)
         ({"h": -1.0}, ["--set", "simulation.h=-1.0"]),
-        ({"kkt": "nope"}, ["--set", "simulation.kkt=nope"]),
+        # (A string as Python passes it: a TOML string, quoted.)
+        ({"kkt": "nope"}, ["--set", 'simulation.kkt="nope"']),
         ({"integrator": "rk4"}, ["--set", "simulation.integrator=rk4"]),
         ({"no_such_key": 1}, ["--set", "simulation.no_such_key=1"]),
     ],

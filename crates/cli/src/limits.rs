@@ -140,26 +140,50 @@ pub fn check_steps(t_end: f64, h: f64) -> Result<f64> {
 pub const MAX_ROWS: f64 = 1e9;
 
 /// Refuses more than [`MAX_ROWS`] rows (`rows`: the grid's `t_end / dt`
-/// and the last state).
+/// and the last state). `on_disk` is the most grid rows the output's file
+/// system holds ([`grid_rows_on_disk`]), when known: the advice fits it
+/// too, so that [`check_output`] passes the run that follows it.
 ///
 /// # Errors
 /// Too many rows, with the estimate and an `--output-every` and a `--t-end`
 /// that pass.
-pub fn check_rows(rows: f64, t_end: f64, dt: f64) -> Result<()> {
+pub fn check_rows(rows: f64, (t_end, h): (f64, f64), dt: f64, on_disk: Option<f64>) -> Result<()> {
     if rows <= MAX_ROWS {
         return Ok(());
     }
     // Room for the grid's two extra rows (t = 0 and the last state).
-    let fit = MAX_ROWS - 2.0;
+    let fit = (MAX_ROWS - 2.0).min(on_disk.unwrap_or(f64::INFINITY));
+    if fit < 1.0 {
+        bail!(
+            "--output-every {} s to t_end = {} s is {} rows, more than the {MAX_ROWS:e} that \
+             mstar writes in one run, and not even a few rows fit on the output's file system: \
+             write to another file system, or no --out",
+            Short(dt),
+            Short(t_end),
+            about(rows)
+        );
+    }
+    let disk = if fit < MAX_ROWS - 2.0 {
+        format!(
+            ", and the free space of the output's file system holds {} rows",
+            about(fit)
+        )
+    } else {
+        String::new()
+    };
+    // A shorter run only where it still takes a step (`check_steps`).
+    let shorter = round2(dt * fit, false);
+    let shorter = match shorter.parse::<f64>() {
+        Ok(t) if t > RESOLUTION * h => format!(" or a shorter run (--t-end {shorter} or less)"),
+        _ => String::new(),
+    };
     bail!(
         "--output-every {} s to t_end = {} s is {} rows, more than the {MAX_ROWS:e} \
-         that mstar writes in one run: write fewer rows (--output-every {} or more) or a \
-         shorter run (--t-end {} or less)",
+         that mstar writes in one run{disk}: write fewer rows (--output-every {} or more){shorter}",
         Short(dt),
         Short(t_end),
         about(rows),
-        round2(t_end / fit, true),
-        round2(dt * fit, false)
+        round2(t_end / fit, true)
     )
 }
 
@@ -230,6 +254,19 @@ pub struct Output<'a> {
     pub every_time: Option<f64>,
 }
 
+/// The most rows of a time grid (less its first and last states and the
+/// header) that `free` bytes hold, `fields` fields a row at the largest
+/// size a field can take in the format of `path`.
+pub fn grid_rows_on_disk(path: &Path, fields: usize, free: f64) -> f64 {
+    // An `.npz` field is one double, 8 bytes exactly.
+    let max_per_field = if mstar::csv::is_npz(path) {
+        8.0
+    } else {
+        MAX_BYTES_PER_FIELD
+    };
+    (free / (fields as f64 * max_per_field)).floor() - 3.0
+}
+
 /// Refuses an output file larger than the free space of its file system.
 ///
 /// The advice is a time grid of rows (`--output-every`), never a larger
@@ -242,10 +279,10 @@ pub struct Output<'a> {
 /// With the estimate, the free space, and the values that fit.
 pub fn check_output(o: &Output<'_>, free: Option<f64>) -> Result<()> {
     // An `.npz` field is one double, 8 bytes exactly.
-    let (per_field, max_per_field) = if mstar::csv::is_npz(o.path) {
-        (8.0, 8.0)
+    let per_field = if mstar::csv::is_npz(o.path) {
+        8.0
     } else {
-        (BYTES_PER_FIELD, MAX_BYTES_PER_FIELD)
+        BYTES_PER_FIELD
     };
     let size = o.rows * o.fields as f64 * per_field;
     let Some(free) = free else {
@@ -264,8 +301,9 @@ pub fn check_output(o: &Output<'_>, free: Option<f64>) -> Result<()> {
         bytes(free)
     );
     // Rows that fit at the largest size a row can take, less one row's
-    // room for the header and two for a grid's first and last states.
-    let grid_rows = (free / (o.fields as f64 * max_per_field)).floor() - 3.0;
+    // room for the header and two for a grid's first and last states, and
+    // no more than `check_rows` passes.
+    let grid_rows = grid_rows_on_disk(o.path, o.fields, free).min(MAX_ROWS - 2.0);
     if grid_rows < 1.0 {
         bail!("{head}: not even a few rows fit; write to another file system, or no --out");
     }
@@ -532,6 +570,46 @@ mod tests {
             e.contains("another file system") && !e.contains("--output-every"),
             "{e}"
         );
+    }
+
+    /// Rows every Δt refused as too many: the `--output-every` advised
+    /// passes both the row count and, when the file system's free space
+    /// binds, the free space; a `--t-end` is advised only where the run
+    /// would still take a step.
+    #[test]
+    fn rows_advice_fits_the_free_space_too() {
+        let path = Path::new("run.csv");
+        let (t_end, h, fields) = (2.0, 1e-3, 40);
+        for free in [None, Some(1e9), Some(1e13)] {
+            let on_disk = free.map(|f| grid_rows_on_disk(path, fields, f));
+            let e = check_rows(2e12, (t_end, h), 1e-12, on_disk)
+                .expect_err("refused")
+                .to_string();
+            let dt = option(&e, "(--output-every");
+            let rows = t_end / dt + 2.0;
+            assert!(check_rows(rows, (t_end, h), dt, on_disk).is_ok(), "{e}");
+            let o = Output {
+                path,
+                rows,
+                fields,
+                t_end,
+                every_time: Some(dt),
+            };
+            assert!(check_output(&o, free).is_ok(), "{free:?}: {e}");
+            let shorter = option(&e, "--t-end");
+            assert!(t_end_passes(shorter, h, 1e-12, on_disk), "{e}");
+        }
+        let e = check_rows(2e300, (t_end, h), 1e-300, None)
+            .expect_err("refused")
+            .to_string();
+        assert!(!e.contains("--t-end"), "{e}");
+    }
+
+    /// Whether a run to `t_end` with rows every `dt` passes `check_steps`
+    /// and `check_rows`.
+    fn t_end_passes(t_end: f64, h: f64, dt: f64, on_disk: Option<f64>) -> bool {
+        check_steps(t_end, h).is_ok()
+            && check_rows(t_end / dt + 2.0, (t_end, h), dt, on_disk).is_ok()
     }
 
     #[test]

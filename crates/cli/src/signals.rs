@@ -42,8 +42,11 @@ pub fn install(stop: bool) {
         #[cfg(not(unix))]
         let signals = [SIGINT, SIGTERM];
         for signal in signals {
-            // The order matters: the default action is armed by the first
-            // signal, and taken by the next.
+            // The order matters: the temporary file goes before the default
+            // action, which is armed by the first signal and taken by the
+            // next.
+            #[cfg(unix)]
+            remove_temporary_on_second(signal);
             let _ = signal_hook::flag::register_conditional_default(signal, &STOPPING);
             let _ = signal_hook::flag::register_usize(
                 signal,
@@ -52,6 +55,52 @@ pub fn install(stop: bool) {
             );
             let _ = signal_hook::flag::register(signal, &STOPPING);
         }
+    }
+}
+
+/// The temporary file being written ([`removed_if_killed`]), as a C string
+/// for `unlink(2)` in a signal handler; null when none.
+#[cfg(unix)]
+static TEMPORARY: std::sync::atomic::AtomicPtr<libc::c_char> =
+    std::sync::atomic::AtomicPtr::new(std::ptr::null_mut());
+
+/// Registers the handler that removes [`TEMPORARY`] when `signal` comes
+/// while a stop signal is already being handled (the program then ends at
+/// once, by the handler registered next).
+#[cfg(unix)]
+fn remove_temporary_on_second(signal: i32) {
+    let action = || {
+        let path = TEMPORARY.load(Ordering::SeqCst);
+        if STOPPING.load(Ordering::SeqCst) && !path.is_null() {
+            // SAFETY: `path` is a NUL-terminated string that is never freed
+            // (`removed_if_killed` leaks it); unlink(2) is async-signal-safe.
+            unsafe { libc::unlink(path) };
+        }
+    };
+    // SAFETY: the action only reads atomics and calls unlink(2), which are
+    // async-signal-safe; it allocates nothing and takes no lock.
+    let _ = unsafe { signal_hook::low_level::register(signal, action) };
+}
+
+/// Runs `write`, which writes the temporary file `path`: a second stop
+/// signal, which ends the program before `write` can clean up, removes the
+/// file first. (The first one is `write`'s to handle: [`received`].)
+pub fn removed_if_killed<T>(path: &std::path::Path, write: impl FnOnce() -> T) -> T {
+    #[cfg(unix)]
+    {
+        use std::os::unix::ffi::OsStrExt;
+        // (Leaked: a handler running on another thread may still hold it.)
+        let raw = std::ffi::CString::new(path.as_os_str().as_bytes())
+            .map_or(std::ptr::null_mut(), std::ffi::CString::into_raw);
+        TEMPORARY.store(raw, Ordering::SeqCst);
+        let out = write();
+        TEMPORARY.store(std::ptr::null_mut(), Ordering::SeqCst);
+        out
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = path;
+        write()
     }
 }
 

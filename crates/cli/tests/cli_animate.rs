@@ -34,6 +34,20 @@ fn gif_frames(file: &Path) -> usize {
     n
 }
 
+/// The frames of a GIF file and their total delay, 1/100 s.
+fn gif_frames_and_delay(file: &Path) -> (usize, u32) {
+    let data = std::fs::File::open(file).expect("the GIF");
+    let mut decoder = gif::DecodeOptions::new()
+        .read_info(data)
+        .expect("a GIF header");
+    let (mut n, mut delay) = (0, 0);
+    while let Some(frame) = decoder.read_next_frame().expect("a valid frame") {
+        n += 1;
+        delay += u32::from(frame.delay);
+    }
+    (n, delay)
+}
+
 /// The number of entries of the page's time list.
 fn html_frames(html: &str) -> usize {
     let times = html
@@ -364,5 +378,94 @@ fn a_vibration_mode_is_drawn_moving() {
         "x.gif",
     ]);
     assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A mode's GIF shows its two periods once per loop, as docs/model-format.md
+/// says: at `--fps 10 --duration 3` 30 frames of 1/10 s (3 s, the first
+/// state not repeated at the end); by default in real time, round(2T /
+/// 0.03 s) frames of 3/100 s. A `--mode` that is not a mode number (0, -1,
+/// 2.5, a word) says which numbers are (exit 2); one past the degrees of
+/// freedom names them (exit 1); a model without degrees of freedom says so,
+/// and its advice, a run drawn instead, works.
+#[test]
+fn a_mode_gif_loops_over_two_periods_and_bad_modes_say_what_is_valid() {
+    let dir = scratch("animate-mode-gif");
+    let file = dir.join("double.toml");
+    std::fs::write(&file, DOUBLE_PENDULUM).expect("written");
+    let gif = dir.join("mode1.gif");
+    let model_file = path(&file);
+    let draw = |extra: &[&str]| {
+        let mut args = vec!["animate", model_file.as_str(), "--mode", "1"];
+        args.extend_from_slice(extra);
+        mstar(&args)
+    };
+    let o = draw(&["--gif", &path(&gif), "--fps", "10", "--duration", "3"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert_eq!(gif_frames_and_delay(&gif), (30, 300));
+    let o = draw(&["--gif", &path(&gif)]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let omega = (9.81_f64 * (2.0 - 2.0_f64.sqrt())).sqrt();
+    let two_periods = 2.0 * std::f64::consts::TAU / omega;
+    let count = (two_periods / 0.03).round() as usize;
+    assert_eq!(gif_frames_and_delay(&gif), (count, 3 * count as u32));
+    for bad in ["0", "-1", "2.5", "first"] {
+        let o = mstar(&["animate", &path(&file), "--mode", bad, "--gif", &path(&gif)]);
+        let e = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{bad}: {e}");
+        assert!(
+            e.contains(&format!(
+                "'{bad}' is not a mode number: give a whole number from 1"
+            )),
+            "{bad}: {e}"
+        );
+    }
+    let four_bar = model("four-bar.toml");
+    let o = mstar(&["animate", &four_bar, "--mode", "1", "--gif", &path(&gif)]);
+    let e = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(e.contains("the model has no degrees of freedom"), "{e}");
+    assert!(e.contains("draw a run instead"), "{e}");
+    let csv = dir.join("four-bar.csv");
+    run(&four_bar, "0.1", &csv);
+    let o = mstar(&["animate", &four_bar, &path(&csv), "--gif", &path(&gif)]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A results file saved with `\r\n` line ends animates, and an error in it
+/// is reported at the line an editor shows, as for the same file with `\n`
+/// (a blank line counted too).
+#[test]
+fn errors_in_a_crlf_results_file_name_the_right_line() {
+    let dir = scratch("animate-crlf");
+    let double = model("double-pendulum.toml");
+    let csv = dir.join("run.csv");
+    run(&double, "0.01", &csv);
+    let lf = std::fs::read_to_string(&csv).expect("the CSV");
+    let mut lines: Vec<String> = lf.lines().map(String::from).collect();
+    let crlf = dir.join("crlf.csv");
+    std::fs::write(&crlf, lines.join("\r\n") + "\r\n").expect("written");
+    let png = dir.join("frame.png");
+    let o = mstar(&["animate", &double, &path(&crlf), "--png", &path(&png)]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    // Line 7 holds a word where u:upper.x (the second column) was, after a
+    // blank line 4.
+    let fields: Vec<&str> = lines[5].splitn(3, ',').collect();
+    lines[5] = format!("{},abc,{}", fields[0], fields[2]);
+    lines.insert(3, String::new());
+    for (name, ending) in [("lf.csv", "\n"), ("crlf.csv", "\r\n")] {
+        let file = dir.join(name);
+        std::fs::write(&file, lines.join(ending) + ending).expect("written");
+        let o = mstar(&["animate", &double, &path(&file), "--png", &path(&png)]);
+        let e = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{name}: {e}");
+        assert!(
+            e.contains(&format!(
+                "{name}:7:2: column 'u:upper.x': 'abc' is not a finite number"
+            )),
+            "{name}: {e}"
+        );
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -467,3 +467,110 @@ fn an_interrupted_animation_leaves_no_temporary_file() {
         .collect();
     assert!(!names.iter().any(|n| n.contains("long.gif")), "{names:?}");
 }
+
+/// Ctrl-C pressed twice while a GIF frame draws (4096×4096 frames take
+/// about a second each): the second signal ends the program at once, as it
+/// does a run, and the GIF's temporary file goes first; a GIF already
+/// there is untouched.
+#[test]
+fn a_second_ctrl_c_during_a_gif_frame_leaves_no_temporary_file() {
+    let dir = four_bar("edges-animate-second-signal");
+    std::fs::write(dir.join("old.gif"), b"the GIF of an earlier animation").expect("written");
+    let child = Command::new(BIN)
+        .args(["animate", "fb.toml", "fb.csv", "--gif", "old.gif"])
+        .args(["--size", "4096x4096", "--max-frames", "20"])
+        .current_dir(&dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("starts");
+    let temporary = |dir: &Path| -> Vec<String> {
+        std::fs::read_dir(dir)
+            .expect("dir")
+            .flatten()
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.contains("tmp"))
+            .collect()
+    };
+    // The temporary file exists once the first frame draws.
+    let started = std::time::Instant::now();
+    while temporary(&dir).is_empty() && started.elapsed().as_secs() < 60 {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    assert!(
+        !temporary(&dir).is_empty(),
+        "no temporary file while drawing"
+    );
+    let pid = i32::try_from(child.id()).expect("a pid");
+    for _ in 0..2 {
+        // SAFETY: kill has no memory effects.
+        assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let run = child.wait_with_output().expect("ends");
+    // Ended by the second signal's default action.
+    use std::os::unix::process::ExitStatusExt as _;
+    assert_eq!(
+        run.status.signal(),
+        Some(libc::SIGINT),
+        "{}",
+        text(&run.stderr)
+    );
+    assert_eq!(temporary(&dir), Vec::<String>::new());
+    assert_eq!(
+        std::fs::read(dir.join("old.gif")).expect("the old GIF"),
+        b"the GIF of an earlier animation"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Rows at a tiny `--output-every` into a regular file: the refusal's
+/// `--output-every` fits the free space of the file system as well as the
+/// 10⁹ rows, so the run given it is accepted (it starts integrating; it is
+/// stopped there with Ctrl-C, its rows kept in the partial file).
+#[test]
+fn the_output_every_advised_for_too_many_rows_is_accepted() {
+    let dir = four_bar("edges-rows-advice");
+    let refused = mstar_in(
+        &dir,
+        &[
+            "run",
+            "fb.toml",
+            "--output-every",
+            "1e-300",
+            "--out",
+            "x.csv",
+        ],
+    );
+    let err = text(&refused.stderr);
+    assert_eq!(refused.status.code(), Some(1), "{err}");
+    assert!(err.contains("rows, more than the 1e9"), "{err}");
+    let every = err
+        .split("--output-every ")
+        .nth(2)
+        .and_then(|s| s.split(' ').next())
+        .unwrap_or_else(|| panic!("no advice in: {err}"))
+        .to_string();
+    let mut child = Command::new(BIN)
+        .args(["run", "fb.toml", "--output-every", &every, "--out", "x.csv"])
+        .current_dir(&dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("starts");
+    let stdout = child.stdout.take().expect("piped");
+    let started = BufReader::new(stdout)
+        .lines()
+        .map_while(Result::ok)
+        .any(|line| line.starts_with("KKT solver:"));
+    if started {
+        let pid = i32::try_from(child.id()).expect("a pid");
+        // SAFETY: kill has no memory effects.
+        assert_eq!(unsafe { libc::kill(pid, libc::SIGINT) }, 0);
+    }
+    let run = child.wait_with_output().expect("ends");
+    let err = text(&run.stderr);
+    assert!(started, "--output-every {every} refused: {err}");
+    assert_eq!(run.status.code(), Some(130), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

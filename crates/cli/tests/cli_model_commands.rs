@@ -449,22 +449,97 @@ fn refused_settings_are_placed_at_their_key_and_the_advice_runs() {
         let o = mstar(&["run", &path, "--set", advice]);
         assert!(o.status.success(), "{advice}: {}", text(&o.stderr));
     }
-    // Given by --set: the library's message, as Python's `run(beta=0.2)`
-    // gives it (python/tests/test_errors_match_the_cli.py), with no line.
-    let o = mstar(&[
-        "check",
-        &model("four-bar.toml"),
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A setting that the integrator refuses, given on the command line, is
+/// blamed on the `--set KEY=VALUE` (or the option) that gave it, with no
+/// line, for `check` and `run`, for a file and a built-in model; the
+/// advice in each message runs.
+#[test]
+fn refused_settings_name_the_override_that_gave_them() {
+    let dir = scratch("refused-overrides");
+    let out = dir.join("out.csv").display().to_string();
+    let four_bar = model("four-bar.toml");
+    let beta = [
         "--set",
         "simulation.integrator=newmark",
         "--set",
         "simulation.beta=0.2",
-    ]);
-    let e = text(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{e}");
-    assert!(
-        e.contains("four-bar.toml: invalid configuration: Newmark with β = 0.2"),
-        "{e}"
-    );
+    ];
+    for command in ["check", "run"] {
+        let mut args = vec![command, four_bar.as_str()];
+        args.extend(beta);
+        let o = mstar(&args);
+        let e = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{command}: {e}");
+        let says = "four-bar.toml: --set simulation.beta=0.2: [simulation]: beta: Newmark with β = 0.2 < γ/2 = 0.25";
+        assert!(e.contains(says), "{command}: {e}");
+    }
+    let crank = model("crank-and-spring.toml");
+    let cases: [(&[&str], &str, &[&str]); 4] = [
+        (
+            &["--set", "simulation.kkt=cholesky"],
+            "crank-and-spring.toml: --set simulation.kkt=cholesky: [simulation]: kkt: no KKT solver is called 'cholesky'",
+            &["--set", "simulation.kkt=lu"],
+        ),
+        // Refused when the integrator starts, not when the settings are
+        // read: exit 1, a refused run.
+        (
+            &["--set", "simulation.kkt=ldlt"],
+            "crank-and-spring.toml: --set simulation.kkt=ldlt: [simulation]: kkt: invalid configuration: the ldlt KKT backend needs a symmetric iteration matrix",
+            &["--set", "simulation.kkt=lu"],
+        ),
+        (
+            &[
+                "--set",
+                "simulation.h=1e-3",
+                "--set",
+                "simulation.h_max=1e-4",
+            ],
+            "crank-and-spring.toml: --set simulation.h_max=1e-4: [simulation]: h_max: must be at least h = 0.001",
+            &["--set", "simulation.h_max=1e-3"],
+        ),
+        // An option is named as given, not as the override it stands for.
+        (
+            &["--rtol", "0", "--atol", "0"],
+            "crank-and-spring.toml: --atol 0: [simulation]: atol: rtol and atol cannot both be 0",
+            &["--rtol", "0", "--atol", "1e-6"],
+        ),
+    ];
+    for (args, says, advice) in cases {
+        let mut run = vec!["run", crank.as_str(), "--t-end", "0.01", "--out", &out];
+        run.extend(args);
+        let o = mstar(&run);
+        let e = text(&o.stderr);
+        assert!(matches!(o.status.code(), Some(1 | 2)), "{args:?}: {e}");
+        assert!(
+            e.starts_with("error: ") && e.contains(says),
+            "{args:?}: {e}"
+        );
+        let mut rerun = vec!["run", crank.as_str(), "--t-end", "0.01", "--out", &out];
+        rerun.extend(advice);
+        let o = mstar(&rerun);
+        assert!(o.status.success(), "{advice:?}: {}", text(&o.stderr));
+    }
+    let builtin: [(&[&str], &str); 2] = [
+        (
+            &["--set", "simulation.tol=2"],
+            "error: --set simulation.tol=2: invalid configuration: the Newton tolerance must be in (0, 1)",
+        ),
+        (
+            &["--rtol", "0", "--atol", "0"],
+            "error: --atol 0: invalid configuration: rtol and atol cannot both be 0",
+        ),
+    ];
+    for (args, says) in builtin {
+        let mut run = vec!["run", "--builtin", "pendulum", "--t-end", "0.01"];
+        run.extend(args);
+        let o = mstar(&run);
+        let e = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        assert!(e.contains(says), "{args:?}: {e}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -48,6 +48,7 @@ pub mod linear;
 pub mod modes;
 pub mod npz;
 pub mod pendulum;
+pub mod placed;
 pub mod record;
 pub mod redundant;
 pub mod run;

@@ -170,8 +170,12 @@ fn draw_item<DB: DrawingBackend>(
 /// which the image encoder goes by) and renames it into place: `path` is
 /// written completely or not at all.
 /// A device or a FIFO is written directly, never replaced; a directory is an
-/// error (see [`mstar::csv::target`]).
-fn via_temporary(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+/// error (see [`mstar::csv::target`]). A stop signal removes the temporary
+/// file: one that comes while `write` draws is `write`'s to answer, one
+/// after it stops before the rename (at `t_last`, the time of the last
+/// frame), and a second one ends the program at once, after removing it
+/// ([`crate::signals::removed_if_killed`]).
+fn via_temporary(path: &Path, t_last: f64, write: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
     let path = &match mstar::csv::target(path)? {
         mstar::csv::Target::Replace(target) => target,
         mstar::csv::Target::Stdout => return write(Path::new("/dev/stdout")),
@@ -193,15 +197,21 @@ fn via_temporary(path: &Path, write: impl FnOnce(&Path) -> Result<()>) -> Result
     ));
     // Created here first: an I/O error then reads as one (plotters' own
     // errors print their internals).
-    let result = std::fs::File::create(&tmp)
-        .map_err(anyhow::Error::from)
-        .and_then(|_| write(&tmp))
-        .and_then(|()| {
-            std::fs::File::open(&tmp)
-                .and_then(|f| f.sync_all())
-                .and_then(|()| std::fs::rename(&tmp, path))
-                .map_err(anyhow::Error::from)
-        });
+    let written = crate::signals::removed_if_killed(&tmp, || {
+        std::fs::File::create(&tmp)
+            .map_err(anyhow::Error::from)
+            .and_then(|_| write(&tmp))
+    });
+    let result = written.and_then(|()| {
+        std::fs::File::open(&tmp)
+            .and_then(|f| f.sync_all())
+            .map_err(anyhow::Error::from)?;
+        // A signal after the last frame: no file, as before it.
+        if let Some(signal) = crate::signals::received() {
+            return Err(crate::signals::Interrupted { signal, t: t_last }.into());
+        }
+        std::fs::rename(&tmp, path).map_err(anyhow::Error::from)
+    });
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }
@@ -270,7 +280,8 @@ pub fn write_gif(
 ) -> Result<()> {
     register_font()?;
     let size = (canvas.view.width, canvas.view.height);
-    via_temporary(path, |tmp| {
+    let t_last = frames.last().map_or(0.0, |(t, _)| *t);
+    via_temporary(path, t_last, |tmp| {
         let root = BitMapBackend::gif(tmp, size, 10 * delay_cs)
             .map_err(|e| {
                 in_words(DrawingAreaErrorKind::BackendError(
@@ -299,7 +310,7 @@ pub fn write_gif(
 pub fn write_png(path: &Path, canvas: &Canvas<'_>, t: f64, u: &[f64]) -> Result<()> {
     register_font()?;
     let size = (canvas.view.width, canvas.view.height);
-    via_temporary(path, |tmp| {
+    via_temporary(path, t, |tmp| {
         let root = BitMapBackend::new(tmp, size).into_drawing_area();
         canvas.draw(&root, t, u).map_err(in_words)?;
         root.present().map_err(in_words)?;

@@ -45,7 +45,9 @@ pub fn read(path: &Path, wanted: &[(String, usize)], n_coords: usize) -> Result<
     parse(std::io::BufReader::new(file), path, wanted, n_coords)
 }
 
-/// [`read`] from any reader; `path` names it in messages.
+/// [`read`] from any reader; `path` names it in messages. Lines end in
+/// `\n` or `\r\n` (a file saved on Windows): both are counted alike in
+/// the line numbers of errors, and a blank line is skipped.
 pub fn parse(
     reader: impl std::io::Read,
     path: &Path,
@@ -53,13 +55,21 @@ pub fn parse(
     n_coords: usize,
 ) -> Result<Results> {
     let name = path.display();
+    // Records end at `\n` only (a `\r` before it ends the last field, and
+    // is trimmed), and lines are counted here: the reader's own count skips
+    // blank lines, and the line ends of `\r\n` files.
+    let mut lines = Lines::default();
     let mut csv = csv::ReaderBuilder::new()
         .has_headers(true)
-        .from_reader(reader);
-    let header = csv
+        .flexible(true)
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_reader(lines.counting(reader));
+    let header: csv::StringRecord = csv
         .headers()
         .with_context(|| format!("{name}: could not read the header"))?
-        .clone();
+        .iter()
+        .map(|h| h.strip_suffix('\r').unwrap_or(h))
+        .collect();
     let (time, columns) =
         columns(&header, wanted, n_coords).map_err(|e| anyhow::anyhow!("{name}: {e}"))?;
     let mut out = Results {
@@ -67,24 +77,23 @@ pub fn parse(
         states: Vec::new(),
     };
     let mut record = csv::StringRecord::new();
-    loop {
-        match csv.read_record(&mut record) {
-            Ok(true) => {}
-            Ok(false) => break,
-            Err(e) => bail!("{name}: {e}"),
+    while csv
+        .read_record(&mut record)
+        .with_context(|| format!("{name}: could not read a row"))?
+    {
+        // The row's last byte, its `\n`: the reader places a row after a
+        // blank line at the blank line.
+        let line = lines.at(csv.position().byte().saturating_sub(1));
+        if record.len() == 1 && record[0].trim().is_empty() {
+            continue;
         }
-        let line = record.position().map_or(0, csv::Position::line);
-        let number = |field: usize, column: &str| -> Result<f64> {
-            let text = record.get(field).unwrap_or_default().trim();
-            match text.parse::<f64>() {
-                Ok(x) if x.is_finite() => Ok(x),
-                _ => bail!(
-                    "{name}:{line}:{}: column '{column}': '{text}' is not a finite number",
-                    field + 1
-                ),
-            }
+        let at = Row {
+            name: &name,
+            record: &record,
+            line,
         };
-        let t = number(time, "t")?;
+        at.check_len(header.len())?;
+        let t = at.number(time, "t")?;
         if let Some(&before) = out.times.last()
             && t < before
         {
@@ -96,7 +105,7 @@ pub fn parse(
         }
         let mut u = vec![0.0; n_coords];
         for c in &columns {
-            u[c.coord] = number(c.field, &c.name)?;
+            u[c.coord] = at.number(c.field, &c.name)?;
         }
         out.times.push(t);
         out.states.push(u);
@@ -105,6 +114,98 @@ pub fn parse(
         bail!("{name}: no rows after the header");
     }
     Ok(out)
+}
+
+/// The line numbers of a file read through [`Lines::counting`]: the byte
+/// offsets of the `\n`s read but not yet passed, and the line reached.
+#[derive(Default)]
+struct Lines {
+    /// Offsets of the `\n`s read ahead, in order.
+    ends: std::rc::Rc<std::cell::RefCell<std::collections::VecDeque<u64>>>,
+    /// Line ends before the last offset asked for.
+    passed: u64,
+}
+
+impl Lines {
+    /// `reader`, noting each `\n` it reads.
+    fn counting<R: std::io::Read>(&mut self, reader: R) -> LineEnds<R> {
+        LineEnds {
+            inner: reader,
+            read: 0,
+            ends: self.ends.clone(),
+        }
+    }
+
+    /// The line (from 1) of byte `offset`; offsets come in increasing order.
+    /// (A `\n` is the last byte of its line.)
+    fn at(&mut self, offset: u64) -> u64 {
+        let mut ends = self.ends.borrow_mut();
+        while ends.front().is_some_and(|&end| end < offset) {
+            ends.pop_front();
+            self.passed += 1;
+        }
+        self.passed + 1
+    }
+}
+
+/// A reader that notes where its `\n`s are ([`Lines`]).
+struct LineEnds<R> {
+    inner: R,
+    /// Bytes read so far.
+    read: u64,
+    ends: std::rc::Rc<std::cell::RefCell<std::collections::VecDeque<u64>>>,
+}
+
+impl<R: std::io::Read> std::io::Read for LineEnds<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        let mut ends = self.ends.borrow_mut();
+        for (i, _) in buf[..n].iter().enumerate().filter(|(_, b)| **b == b'\n') {
+            ends.push_back(self.read + i as u64);
+        }
+        self.read += n as u64;
+        Ok(n)
+    }
+}
+
+/// A row of a results file, for its numbers and their errors.
+struct Row<'a> {
+    /// The file, for messages.
+    name: &'a dyn std::fmt::Display,
+    /// Its fields.
+    record: &'a csv::StringRecord,
+    /// Its line, from 1.
+    line: u64,
+}
+
+impl Row<'_> {
+    /// Refuses a row with another number of fields than the header's.
+    fn check_len(&self, header: usize) -> Result<()> {
+        if self.record.len() == header {
+            return Ok(());
+        }
+        bail!(
+            "{}:{}: {} fields, but the header has {header}: a row cut short or joined with \
+             another (write the file again with mstar run)",
+            self.name,
+            self.line,
+            self.record.len()
+        )
+    }
+
+    /// The finite number in field `field` (column `column`).
+    fn number(&self, field: usize, column: &str) -> Result<f64> {
+        let text = self.record.get(field).unwrap_or_default().trim();
+        match text.parse::<f64>() {
+            Ok(x) if x.is_finite() => Ok(x),
+            _ => bail!(
+                "{}:{}:{}: column '{column}': '{text}' is not a finite number",
+                self.name,
+                self.line,
+                field + 1
+            ),
+        }
+    }
 }
 
 /// [`read`] of an `.npz` (`mstar run --out FILE.npz`): the same columns by
@@ -299,7 +400,38 @@ mod tests {
         let empty = parse_text(header).expect_err("no rows");
         assert!(empty.to_string().contains("no rows"), "{empty}");
         let short = parse_text(&format!("{header}0,1,2,3,4,5\n0.1,1,2\n")).expect_err("short");
-        assert!(short.to_string().contains("r.csv: "), "{short}");
+        assert!(
+            short
+                .to_string()
+                .contains("r.csv:3: 3 fields, but the header has 6"),
+            "{short}"
+        );
+    }
+
+    /// A file whose lines end in `\r\n` reads as with `\n`, its errors at
+    /// the same lines; blank lines are skipped.
+    #[test]
+    fn crlf_lines_are_counted_as_lf_lines() {
+        let header = "t,\"u:a, \"\"b\"\".x\",\"u:a, \"\"b\"\".y\",\"u:a, \"\"b\"\".theta\",u:bob.x,u:bob.y\n";
+        let rows = "0,1,2,3,4,5\n0.1,1,2,3,4,5\n\n0.2,1,2,x3,4,5\n";
+        for ending in ["\n", "\r\n"] {
+            let text = format!("{header}{rows}").replace('\n', ending);
+            let bad = parse_text(&text).expect_err("x3");
+            assert!(
+                bad.to_string()
+                    .contains("r.csv:5:4: column 'u:a, \"b\".theta': 'x3' is not a finite number"),
+                "{ending:?}: {bad}"
+            );
+            let good = text.replace("x3", "3");
+            let r = parse_text(&good).expect("readable");
+            assert_eq!(r.times, [0.0, 0.1, 0.2], "{ending:?}");
+            assert_eq!(r.states[2], [1.0, 2.0, 3.0, 4.0, 5.0], "{ending:?}");
+            let short = parse_text(&text.replace("0.1,1,2,3,4,5", "0.1,1,2")).expect_err("short");
+            assert!(
+                short.to_string().contains("r.csv:3: 3 fields"),
+                "{ending:?}: {short}"
+            );
+        }
     }
 
     #[test]

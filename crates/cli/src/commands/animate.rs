@@ -36,7 +36,7 @@ pub struct AnimateArgs {
     /// Draw vibration mode K (1 = the lowest, as `mstar modes` numbers
     /// them) moving about the state it was found at, instead of a run.
     #[arg(long, value_name = "K", conflicts_with = "results",
-          value_parser = clap::value_parser!(u32).range(1..))]
+          value_parser = mode_number, allow_hyphen_values = true)]
     mode: Option<u32>,
     /// The state of --mode: `equilibrium` (found from the file's pose, as
     /// `mstar equilibrium`) or `initial` (the file's pose, held by the
@@ -119,6 +119,18 @@ fn size(text: &str) -> Result<Size, String> {
         width: side(w)?,
         height: side(h)?,
     })
+}
+
+/// A mode number: a whole number from 1 (the model's degrees of freedom
+/// bound it above once the model is read: `mode_frames`).
+fn mode_number(text: &str) -> Result<u32, String> {
+    match text.trim().parse::<u32>() {
+        Ok(k) if k >= 1 => Ok(k),
+        _ => Err(format!(
+            "'{text}' is not a mode number: give a whole number from 1 (the lowest mode) to the \
+             model's degrees of freedom (mstar modes MODEL lists the modes)"
+        )),
+    }
 }
 
 /// A positive, finite number.
@@ -273,6 +285,12 @@ fn mode_frames(args: &AnimateArgs, sys: &dyn mstar::run::ModelLookup, k: usize) 
     };
     let found = match mstar::modes::modes(sys, &u, &lambda, &options) {
         Ok(found) => found,
+        Err(mstar::modes::ModesError::TooMany { dof: 0, .. }) => bail!(
+            "{}: --mode {k}: the model has no degrees of freedom (its joints and drivers fix every \
+             coordinate), so no vibration modes to draw; draw a run instead (mstar run {0} --out \
+             RESULTS.csv, then mstar animate {0} RESULTS.csv)",
+            args.model.display()
+        ),
         Err(mstar::modes::ModesError::TooMany { dof, .. }) => bail!(
             "{}: --mode {k}: the model has {dof} degree(s) of freedom; give --mode 1 to {dof}",
             args.model.display()
@@ -437,7 +455,10 @@ struct GifPlan {
 impl GifPlan {
     /// The plan for a run lasting `span` s: real time, or over 1 s for a
     /// shorter run (or `--speed`, or the whole run in `--duration`) at
-    /// `--fps`, at most `--max-frames`.
+    /// `--fps`, at most `--max-frames`. A run's first and last states are
+    /// both drawn; a `--mode`'s motion is periodic, and its last state (the
+    /// first again) is left out so that the GIF loops without a pause: its
+    /// frames split the span evenly, as many as the speed asks for, rounded.
     fn new(span: f64, args: &AnimateArgs) -> Self {
         let delay_cs = (100.0 / f64::from(args.fps)).round().max(2.0) as u32;
         let shown = f64::from(delay_cs) / 100.0;
@@ -449,21 +470,25 @@ impl GifPlan {
             _ => 1.0,
         };
         let step = speed * shown;
-        let count = if span > 0.0 {
+        let looping = args.mode.is_some() && span > 0.0;
+        let count = if looping {
+            ((span / step).round() as usize).max(2)
+        } else if span > 0.0 {
             (span / step + 1e-9).floor() as usize + 1
         } else {
             1
         };
         let max = args.max_frames.max(1) as usize;
         if count <= max || max < 2 {
+            let count = count.min(max);
             return Self {
                 delay_cs,
-                step,
-                count: count.min(max),
+                step: if looping { span / count as f64 } else { step },
+                count,
                 note: None,
             };
         }
-        let step = span / (max - 1) as f64;
+        let step = span / (max - usize::from(!looping)) as f64;
         let note = format!(
             "{count} frames would be more than --max-frames {max}: drawing {max}, the run plays at {:.3}× real time",
             step / shown

@@ -48,8 +48,10 @@ pub fn check_output(
     };
     // Also for devices and standard output, which have no free space to
     // tell: rows at a tiny Δt are not bounded by the steps.
+    let free = limits::free_space(path);
     if let Some(dt) = every_time {
-        limits::check_rows(rows, t_end, dt)?;
+        let on_disk = free.map(|f| limits::grid_rows_on_disk(path, fields, f));
+        limits::check_rows(rows, (t_end, h), dt, on_disk)?;
     }
     let o = limits::Output {
         path,
@@ -58,7 +60,7 @@ pub fn check_output(
         t_end,
         every_time,
     };
-    limits::check_output(&o, limits::free_space(path))
+    limits::check_output(&o, free)
 }
 
 /// Opens the CSV output, if any, and says which leftovers of killed runs it
@@ -119,87 +121,36 @@ pub fn load_model(
 }
 
 /// The integrator configuration and end time of a model file's
-/// `[simulation]` (`mstar::run::config`). A setting refused there (a
-/// Newmark β below γ/2, an `h_min` above the default `h`, a KKT solver
-/// that does not exist) is blamed on the key that gives it, as the
-/// reader's errors are: `FILE:LINE:COLUMN: [simulation]: beta: …`, or the
-/// `--set` that gave it.
+/// `[simulation]`, a refused setting blamed on the key that gives it
+/// ([`mstar::placed::config`]).
 ///
 /// # Errors
 /// [`mstar::file::FileError`] at the key; [`mstar::run::RunError::Settings`]
 /// when no key given is to blame (a built-in model's defaults).
 pub fn config(sim: &mstar::file::Simulation) -> Result<(Config, f64)> {
-    use mstar::run::SettingsError;
-    let e = match mstar::run::config(sim) {
-        Ok(c) => return Ok(c),
-        Err(e) => e,
-    };
-    let placed = match &e {
-        SettingsError::UnknownKkt { name, known } => sim.error_at(
-            "kkt",
-            format!(
-                "no KKT solver is called '{name}'; the solvers are: auto, {}",
-                known.join(", ")
-            ),
-        ),
-        SettingsError::Refused(refused) => refused_key(sim).and_then(|key| {
-            let why = match refused {
-                mstar::IntegrationError::Config(why) => why.clone(),
-                other => other.to_string(),
-            };
-            sim.error_at(key, why)
-        }),
-        _ => None,
-    };
-    // A value a `--set` gave is reported as the library reports it (what
-    // Python's `run(**settings)` says too, `python/tests`): the place is
-    // for a key written in the file.
-    let placed = placed.filter(|p| p.place.is_some());
-    Err(match placed {
-        Some(placed) => placed.into(),
-        None => mstar::run::RunError::Settings(e).into(),
+    mstar::placed::config(sim).map_err(|e| match e {
+        mstar::placed::Refusal::Placed(placed) => placed.into(),
+        mstar::placed::Refusal::Settings(e) => mstar::run::RunError::Settings(e).into(),
     })
 }
 
-/// The keys of `[simulation]` the integrator may refuse after the reader
-/// accepted each alone, the scheme's first (`beta` before `gamma`: the
-/// condition β ≥ γ/2 is about β).
-const REFUSABLE: [&str; 11] = [
-    "beta",
-    "gamma",
-    "alpha",
-    "rho",
-    "h_min",
-    "h_max",
-    "h",
-    "tol",
-    "rtol",
-    "atol",
-    "max_iterations",
-];
-
-/// The key given in `sim` that the integrator refuses: the first whose
-/// default makes the settings pass, else the first given.
-fn refused_key(sim: &mstar::file::Simulation) -> Option<&'static str> {
-    let given = || REFUSABLE.into_iter().filter(|k| sim.is_given(k));
-    let passes_without = |key: &str| {
-        let mut s = sim.clone();
-        match key {
-            "beta" => s.beta = None,
-            "gamma" => s.gamma = None,
-            "alpha" => s.alpha = None,
-            "rho" => s.rho = None,
-            "h_min" => s.h_min = None,
-            "h_max" => s.h_max = None,
-            "h" => s.h = None,
-            "tol" => s.tol = None,
-            "rtol" => s.rtol = None,
-            "atol" => s.atol = None,
-            _ => s.max_iterations = None,
-        }
-        mstar::run::config(&s).is_ok()
+/// The integrator's refusal to start `e`, placed at `[simulation] kkt`
+/// when the model gives that key (a KKT solver named there that this model
+/// does not fit: `ldlt` or `schur` with a damper, `schur` with a singular
+/// mass matrix): `FILE:LINE:COLUMN: [simulation]: kkt: …`, or the `--set`
+/// that gave it. The error stays an [`mstar::IntegrationError`] (exit 1, a
+/// refused run).
+pub fn start_error(sim: &mstar::file::Simulation, e: mstar::IntegrationError) -> anyhow::Error {
+    let at = match &e {
+        mstar::IntegrationError::Config(_) => sim.error_at("kkt", ""),
+        _ => None,
     };
-    given()
-        .find(|k| passes_without(k))
-        .or_else(|| given().next())
+    match at {
+        Some(at) => {
+            let at = at.to_string();
+            let at = at.trim_end_matches(": ").to_string();
+            anyhow::Error::new(e).context(at)
+        }
+        None => e.into(),
+    }
 }

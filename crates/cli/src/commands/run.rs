@@ -185,11 +185,11 @@ pub fn run(args: &RunArgs) -> ExitCode {
     }
     let model = match load(args) {
         Ok(model) => model,
-        Err(e) => return failed(e, None),
+        Err(e) => return failed(named_as_given(e, args), None),
     };
     let code = match run_model(args, &model) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => failed(e, Some(&model)),
+        Err(e) => failed(named_as_given(e, args), Some(&model)),
     };
     // The process ends next and its memory with it: freeing a 10⁵-body
     // model piece by piece took 0.3 s.
@@ -350,7 +350,13 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
             let subset = RowSubset::new(sys, rows.kept.clone());
             let hold = |u: &[f64]| mstar::run::left_out_rows_hold(named, &rows, u);
             let mut expanded = Expanded::new(&subset, &mut output);
-            let outcome = integrate(&subset, start, &hold, None, &mut expanded);
+            let outcome = integrate(
+                (&subset, &model.simulation),
+                start,
+                &hold,
+                None,
+                &mut expanded,
+            );
             let drift = expanded
                 .drifted()
                 .map(|d| mstar::run::redundancy_changed(named, d));
@@ -360,7 +366,13 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
             let refs: Vec<&dyn Parameterized> =
                 params.iter().map(|p| p as &dyn Parameterized).collect();
             let sensitivities = sensitivity_columns.as_ref().map(|c| (&refs[..], c));
-            let outcome = integrate(sys, start, &|_| Ok(()), sensitivities, &mut output);
+            let outcome = integrate(
+                (sys, &model.simulation),
+                start,
+                &|_| Ok(()),
+                sensitivities,
+                &mut output,
+            );
             (outcome, None)
         }
     };
@@ -464,15 +476,17 @@ fn independent_rows(model: &Loaded) -> Result<Option<mstar::redundant::Rows>> {
 type Outcome = (mstar::RunStats, f64, f64, Result<(), Stop>);
 
 /// Integrates `sys` from `(u0, v0)` to `t_end`, every sample to `observer`,
-/// once `check_start` accepts the start state.
+/// once `check_start` accepts the start state; a refusal to start is placed
+/// at `sim`'s `kkt` ([`super::start_error`]).
 fn integrate<S: System + ?Sized>(
-    sys: &S,
+    (sys, sim): (&S, &Simulation),
     (config, u0, v0, t_end): (mstar::Config, &[f64], &[f64], f64),
     check_start: &dyn Fn(&[f64]) -> Result<(), mstar::run::RunError>,
     sensitivities: Option<(&[&dyn Parameterized], &SensitivityColumns)>,
     observer: &mut dyn Observer,
 ) -> Result<Outcome> {
-    let mut integ = Integrator::new(sys, config, 0.0, u0, v0)?;
+    let mut integ =
+        Integrator::new(sys, config, 0.0, u0, v0).map_err(|e| super::start_error(sim, e))?;
     check_start(integ.view().u)?;
     let mut sens = match sensitivities {
         Some((params, columns)) => {
@@ -523,7 +537,9 @@ fn load(args: &RunArgs) -> Result<Loaded> {
     check_options(args)?;
     let set = overrides(args);
     if let Some(builtin) = args.builtin {
-        return builtin_model(builtin, &set);
+        let model = builtin_model(builtin, &set)?;
+        check_builtin_settings(&model.simulation, args)?;
+        return Ok(model);
     }
     let path = args.model.as_deref().context("a model file or --builtin")?;
     let file = MechanismFile::load_with(path, &set)?;
@@ -607,23 +623,66 @@ fn sensitivity_parameters(
 /// `--h`, `--rtol`, `--atol`, `--tol`, `--adaptive`, `--strict`.
 fn overrides(args: &RunArgs) -> Vec<String> {
     let mut set = args.set.clone();
-    for (key, value) in [
-        ("t_end", args.t_end),
-        ("h", args.h),
-        ("rtol", args.rtol),
-        ("atol", args.atol),
-        ("tol", args.tol),
+    set.extend(option_overrides(args).into_iter().map(|(_, a)| a));
+    set
+}
+
+/// The overrides that options stand for, each with the option as given:
+/// (`--atol 0`, `simulation.atol=0e0`).
+fn option_overrides(args: &RunArgs) -> Vec<(String, String)> {
+    let mut set = Vec::new();
+    for (option, key, value) in [
+        ("--t-end", "t_end", args.t_end),
+        ("--h", "h", args.h),
+        ("--rtol", "rtol", args.rtol),
+        ("--atol", "atol", args.atol),
+        ("--tol", "tol", args.tol),
     ] {
         if let Some(v) = value {
-            set.push(format!("simulation.{key}={v:e}"));
+            let given = format!("{option} {}", Short(v));
+            set.push((given, format!("simulation.{key}={v:e}")));
         }
     }
-    for (flag, mode) in [(args.adaptive, "adaptive"), (args.strict, "strict")] {
+    for (flag, option, mode) in [
+        (args.adaptive, "--adaptive", "adaptive"),
+        (args.strict, "--strict", "strict"),
+    ] {
         if flag {
-            set.push(format!("simulation.error_control={mode}"));
+            let assignment = format!("simulation.error_control={mode}");
+            set.push((option.to_string(), assignment));
         }
     }
     set
+}
+
+/// How the command line gave `assignment`, one of [`overrides`]: the
+/// option it stands for (`--atol 0`), else `--set ASSIGNMENT`.
+fn as_given(args: &RunArgs, assignment: &str) -> String {
+    if args.set.iter().any(|a| a == assignment) {
+        return format!("--set {assignment}");
+    }
+    option_overrides(args)
+        .into_iter()
+        .find(|(_, a)| a == assignment)
+        .map_or_else(|| format!("--set {assignment}"), |(given, _)| given)
+}
+
+/// `e` with an override that an option stands for named as the option
+/// (`--atol 0: …`, not the `--set simulation.atol=0e0: …` the file reader
+/// names).
+fn named_as_given(mut e: anyhow::Error, args: &RunArgs) -> anyhow::Error {
+    if let Some(fe) = e.downcast_mut::<mstar::file::FileError>() {
+        for (given, assignment) in option_overrides(args) {
+            let generated = format!("--set {assignment}: ");
+            if let Some(rest) = fe.message.strip_prefix(&generated)
+                && !args.set.contains(&assignment)
+            {
+                fe.message = format!("{given}: {rest}");
+                break;
+            }
+        }
+    }
+    e
 }
 
 /// Refuses a command-line value out of range, naming the option (before
@@ -766,6 +825,38 @@ const BUILTIN_KEYS: [&str; 6] = [
     "simulation.atol",
     "simulation.error_control",
 ];
+
+/// Refuses a built-in model's settings (`simulation`, with the command
+/// line's overrides) that the integrator refuses, naming the override to
+/// blame: the last one given whose default makes the settings pass, else
+/// the last one given.
+///
+/// # Errors
+/// [`mstar::run::RunError::Settings`] (exit 2), with the override as given
+/// (`--set simulation.tol=2`, `--atol 0`).
+fn check_builtin_settings(simulation: &Simulation, args: &RunArgs) -> Result<()> {
+    let Err(e) = mstar::run::config(simulation) else {
+        return Ok(());
+    };
+    let set = overrides(args);
+    let passes_without = |assignment: &&String| {
+        let mut s = simulation.clone();
+        match assignment.split_once('=').map(|(k, _)| k.trim()) {
+            Some("simulation.tol") => s.tol = None,
+            Some("simulation.rtol") => s.rtol = None,
+            Some("simulation.atol") => s.atol = None,
+            Some("simulation.error_control") => s.error_control = None,
+            _ => return false,
+        }
+        mstar::run::config(&s).is_ok()
+    };
+    let blamed = set.iter().rev().find(passes_without).or(set.last());
+    let e = anyhow::Error::from(mstar::run::RunError::Settings(e));
+    Err(match blamed {
+        Some(assignment) => e.context(as_given(args, assignment)),
+        None => e,
+    })
+}
 
 /// A built-in model with its defaults and the command line's overrides
 /// ([`builtin_setting`]).
