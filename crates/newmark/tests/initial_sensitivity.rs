@@ -9,87 +9,20 @@
 mod common;
 
 use common::{Model, Param};
-use mstar_model::planar::{At, PlanarBuilder, PointMass, RigidBody, SpringDamper, TimeFunction};
+use mstar_model::planar::{
+    At, BodyId, PlanarBuilder, PointMass, RigidBody, SpringDamper, TimeFunction,
+};
 use mstar_model::spatial::{
     Attach, JointSpec, JointType, SpatialBody, SpatialBuilder, SpatialInertia,
 };
 use mstar_newmark::{Config, Integrator, Newton, Parameterized, Scheme};
 
-/// A slider-crank at rest under gravity, driven by a torque `p[2]`, with a
-/// spring to the coupler; `p[0]` the crank mass, `p[1]` the coupler length
+/// A slider-crank under gravity, its crank of mass `mass` given an angular
+/// velocity `spin` (everything else at rest), the coupler `length` long
 /// (the pose is laid out for 1.5 m, so any other length moves the given
-/// positions off the constraints and the start projects them).
-fn slider_crank(p: &[f64]) -> Model {
-    let (r, l, theta) = (0.5, 1.5, 0.3_f64);
-    let (ax, ay) = (r * theta.cos(), r * theta.sin());
-    let bx = ax + (l * l - ay * ay).sqrt();
-    let phi = (-ay).atan2(bx - ax);
-    let mut b = PlanarBuilder::new();
-    b.gravity(0.0, -9.81);
-    let body = |mass: f64, length: f64, pose| RigidBody {
-        mass,
-        inertia: mass * length * length / 12.0,
-        pose,
-        velocity: [0.0; 3],
-    };
-    let crank = b.rigid_body("crank", body(p[0], r, [0.5 * ax, 0.5 * ay, theta]));
-    let coupler = b.rigid_body("coupler", body(1.2, l, [0.5 * (ax + bx), 0.5 * ay, phi]));
-    let slider = b.point_mass(
-        "slider",
-        PointMass {
-            mass: 0.8,
-            position: [bx, 0.0],
-            velocity: [0.0; 2],
-        },
-    );
-    b.revolute(
-        "hinge",
-        At::Ground([0.0, 0.0]),
-        At::Body(crank, [-0.5 * r, 0.0]),
-    );
-    let pin = [
-        At::Body(crank, [0.5 * r, 0.0]),
-        At::Body(coupler, [-0.5 * p[1], 0.0]),
-    ];
-    b.revolute("pin", pin[0], pin[1]);
-    let wrist = [
-        At::Body(coupler, [0.5 * p[1], 0.0]),
-        At::Body(slider, [0.0; 2]),
-    ];
-    b.revolute("wrist", wrist[0], wrist[1]);
-    b.prismatic(
-        "rail",
-        At::Ground([0.0, 0.0]),
-        [1.0, 0.0],
-        At::Body(slider, [0.0; 2]),
-    );
-    b.torque("motor", crank, TimeFunction::Constant(p[2]));
-    let spring = SpringDamper {
-        stiffness: 40.0,
-        damping: 0.0,
-        rest_length: 1.0,
-    };
-    b.spring(
-        "buffer",
-        At::Ground([1.5, 1.0]),
-        At::Body(coupler, [0.3, 0.0]),
-        spring,
-    );
-    let sys = b.build().expect("a valid slider-crank");
-    let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
-    Model {
-        sys: Box::new(sys),
-        u0,
-        v0,
-    }
-}
-
-/// [`slider_crank`] without the torque and the spring, its crank given an
-/// angular velocity `p[2]` and everything else at rest: inconsistent
-/// velocities, which the start's projection moves (the mechanism keeps
-/// one degree of freedom, so the projection's direction matters), and the
-/// coupler length `p[1]` turns that direction with `B`.
-fn spun_slider_crank(p: &[f64]) -> Model {
+/// positions off the constraints and the start projects them): the
+/// builder and the crank's and coupler's ids.
+fn slider_crank_parts(mass: f64, length: f64, spin: f64) -> (PlanarBuilder, [BodyId; 2]) {
     let (r, l, theta) = (0.5, 1.5, 0.3_f64);
     let (ax, ay) = (r * theta.cos(), r * theta.sin());
     let bx = ax + (l * l - ay * ay).sqrt();
@@ -102,7 +35,7 @@ fn spun_slider_crank(p: &[f64]) -> Model {
         pose,
         velocity: [0.0, 0.0, spin],
     };
-    let crank = b.rigid_body("crank", body(p[0], r, [0.5 * ax, 0.5 * ay, theta], p[2]));
+    let crank = b.rigid_body("crank", body(mass, r, [0.5 * ax, 0.5 * ay, theta], spin));
     let coupler_pose = [0.5 * (ax + bx), 0.5 * ay, phi];
     let coupler = b.rigid_body("coupler", body(1.2, l, coupler_pose, 0.0));
     let slider = b.point_mass(
@@ -120,11 +53,11 @@ fn spun_slider_crank(p: &[f64]) -> Model {
     );
     let pin = [
         At::Body(crank, [0.5 * r, 0.0]),
-        At::Body(coupler, [-0.5 * p[1], 0.0]),
+        At::Body(coupler, [-0.5 * length, 0.0]),
     ];
     b.revolute("pin", pin[0], pin[1]);
     let wrist = [
-        At::Body(coupler, [0.5 * p[1], 0.0]),
+        At::Body(coupler, [0.5 * length, 0.0]),
         At::Body(slider, [0.0; 2]),
     ];
     b.revolute("wrist", wrist[0], wrist[1]);
@@ -134,6 +67,11 @@ fn spun_slider_crank(p: &[f64]) -> Model {
         [1.0, 0.0],
         At::Body(slider, [0.0; 2]),
     );
+    (b, [crank, coupler])
+}
+
+/// The model `b` builds, with its initial state.
+fn model_of(b: &PlanarBuilder) -> Model {
     let sys = b.build().expect("a valid slider-crank");
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
     Model {
@@ -141,6 +79,34 @@ fn spun_slider_crank(p: &[f64]) -> Model {
         u0,
         v0,
     }
+}
+
+/// [`slider_crank_parts`] at rest, driven by a torque `p[2]`, with a
+/// spring to the coupler; `p[0]` the crank mass, `p[1]` the coupler length.
+fn slider_crank(p: &[f64]) -> Model {
+    let (mut b, [crank, coupler]) = slider_crank_parts(p[0], p[1], 0.0);
+    b.torque("motor", crank, TimeFunction::Constant(p[2]));
+    let spring = SpringDamper {
+        stiffness: 40.0,
+        damping: 0.0,
+        rest_length: 1.0,
+    };
+    b.spring(
+        "buffer",
+        At::Ground([1.5, 1.0]),
+        At::Body(coupler, [0.3, 0.0]),
+        spring,
+    );
+    model_of(&b)
+}
+
+/// [`slider_crank_parts`] with its crank given the angular velocity `p[2]`
+/// and everything else at rest: inconsistent velocities, which the start's
+/// projection moves (the mechanism keeps one degree of freedom, so the
+/// projection's direction matters), and the coupler length `p[1]` turns
+/// that direction with `B`.
+fn spun_slider_crank(p: &[f64]) -> Model {
+    model_of(&slider_crank_parts(p[0], p[1], p[2]).0)
 }
 
 /// Three bars (1 m, the first of mass `p[0]`, axial inertia `p[1]`) on

@@ -334,20 +334,36 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         }
     }
 
-    /// `F_p + F_z δz` of one stage at `x` into a new vector.
-    fn stage_rhs(
+    /// `K⁻¹ (F_p + F_z δz)` of one stage at `x` for one parameter, `K` as
+    /// `stages` last factored it (`projection`: `[I Bᵀ; B 0]`).
+    fn solve_stage(
         &self,
-        eval: &mut Linearization,
+        stages: &mut Stages,
         (x, level): (&StateRef<'_>, Level),
-        partials: &mut Partials,
-        step: f64,
+        (partials, step): (&mut Partials, f64),
         (du, dv): (&[f64], &[f64]),
-    ) -> Vec<f64> {
+        projection: bool,
+    ) -> Result<Vec<f64>, mstar_kkt::KktError> {
         let n = self.sys.n_coords();
         let mut rhs = vec![0.0; n + self.sys.n_constraints()];
         partials.each_stage(x, n, step, level, |k, c| rhs[k] = c);
-        add_directional(self.sys, eval, (x, level), du, dv, &mut rhs);
-        rhs
+        add_directional(self.sys, &mut stages.eval, (x, level), du, dv, &mut rhs);
+        stages.solve(&mut rhs, projection)?;
+        Ok(rhs)
+    }
+
+    /// `K⁻¹ F` of the nominal start at `x`: a stage's values as the start
+    /// solved them (`K` as `stages` last factored it).
+    fn solve_nominal(
+        &self,
+        stages: &mut Stages,
+        (x, level): (&StateRef<'_>, Level),
+        projection: bool,
+    ) -> Result<Vec<f64>, mstar_kkt::KktError> {
+        let mut y = vec![0.0; self.sys.n_coords() + self.sys.n_constraints()];
+        stage_rows(self.sys, &mut stages.eval, x, level, &mut y);
+        stages.solve(&mut y, projection)?;
+        Ok(y)
     }
 
     /// The two projections: `δu₀` and `δu̇₀` (before the correction).
@@ -374,24 +390,26 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         };
         for (param, g) in params.iter_mut().zip(given) {
             let level = (&x, Level::Position);
-            let mut y = self.stage_rhs(
-                &mut stages.eval,
-                level,
-                &mut param.partials,
-                param.step,
-                (&g.u, &zeros_n),
-            );
-            stages.solve(&mut y, true).map_err(fail)?;
+            let y = self
+                .solve_stage(
+                    stages,
+                    level,
+                    (&mut param.partials, param.step),
+                    (&g.u, &zeros_n),
+                    true,
+                )
+                .map_err(fail)?;
             param.s.u = g.u.iter().zip(&y).map(|(g, y)| g + y).collect();
             let level = (&x, Level::Velocity);
-            let mut y = self.stage_rhs(
-                &mut stages.eval,
-                level,
-                &mut param.partials,
-                param.step,
-                (&param.s.u, &g.v),
-            );
-            stages.solve(&mut y, true).map_err(fail)?;
+            let y = self
+                .solve_stage(
+                    stages,
+                    level,
+                    (&mut param.partials, param.step),
+                    (&param.s.u, &g.v),
+                    true,
+                )
+                .map_err(fail)?;
             param.s.v = g.v.iter().zip(&y).map(|(g, y)| g + y).collect();
         }
         Ok(())
@@ -419,9 +437,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             a: &zeros_n,
             lambda: &zeros_m,
         };
-        let mut y = vec![0.0; n + m];
-        stage_rows(self.sys, &mut stages.eval, &x, Level::Velocity, &mut y);
-        stages.solve(&mut y, true)?;
+        let mut y = self.solve_nominal(stages, (&x, Level::Velocity), true)?;
         Ok(y.split_off(n))
     }
 
@@ -448,14 +464,15 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         for param in params.iter_mut() {
             let dz = (param.s.u.clone(), param.s.v.clone());
             let level = (&x, Level::Acceleration);
-            let mut y = self.stage_rhs(
-                &mut stages.eval,
-                level,
-                &mut param.partials,
-                param.step,
-                (&dz.0, &dz.1),
-            );
-            stages.solve(&mut y, false).map_err(fail)?;
+            let y = self
+                .solve_stage(
+                    stages,
+                    level,
+                    (&mut param.partials, param.step),
+                    (&dz.0, &dz.1),
+                    false,
+                )
+                .map_err(fail)?;
             param.s.a = y[..n].to_vec();
             param.s.a_alpha = param.s.a.clone();
             param.s.lambda = y[n..].to_vec();
@@ -522,31 +539,25 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             a: &zeros.0,
             lambda: &zeros.1,
         };
-        let mut y = vec![0.0; n + m];
-        stage_rows(
-            self.sys,
-            &mut stages.eval,
-            &rest,
-            Level::Acceleration,
-            &mut y,
-        );
-        stages.solve(&mut y, false).map_err(fail)?;
+        let y = self
+            .solve_nominal(stages, (&rest, Level::Acceleration), false)
+            .map_err(fail)?;
         let (a, lambda) = y.split_at(n);
         let x = StateRef { a, lambda, ..rest };
         let mut out = Vec::with_capacity(params.len());
         for param in params.iter_mut() {
             let (dus, dvs) = shift(&param.s.u, &param.s.v, &param.s.a);
             let level = (&x, Level::Acceleration);
-            let mut y = self.stage_rhs(
-                &mut stages.eval,
-                level,
-                &mut param.partials,
-                param.step,
-                (&dus, &dvs),
-            );
-            stages.solve(&mut y, false).map_err(fail)?;
-            y.truncate(n);
-            out.push(y);
+            let y = self
+                .solve_stage(
+                    stages,
+                    level,
+                    (&mut param.partials, param.step),
+                    (&dus, &dvs),
+                    false,
+                )
+                .map_err(fail)?;
+            out.push(y[..n].to_vec());
         }
         Ok(out)
     }
@@ -583,9 +594,9 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             a: &zeros.0,
             lambda: &zeros.1,
         };
-        let mut y = vec![0.0; n + m];
-        stage_rows(self.sys, &mut stages.eval, &rest, Level::Correction, &mut y);
-        stages.solve(&mut y, false).map_err(fail)?;
+        let y = self
+            .solve_nominal(stages, (&rest, Level::Correction), false)
+            .map_err(fail)?;
         let (dv, mu) = y.split_at(n);
         let w: Vec<f64> = dv.iter().zip(&kj).map(|(d, j)| d + j).collect();
         let x = StateRef {
@@ -598,14 +609,15 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             let kdj: Vec<f64> = dj.iter().map(|j| k * j).collect();
             let du = param.s.u.clone();
             let level = (&x, Level::Correction);
-            let mut y = self.stage_rhs(
-                &mut stages.eval,
-                level,
-                &mut param.partials,
-                param.step,
-                (&du, &kdj),
-            );
-            stages.solve(&mut y, false).map_err(fail)?;
+            let y = self
+                .solve_stage(
+                    stages,
+                    level,
+                    (&mut param.partials, param.step),
+                    (&du, &kdj),
+                    false,
+                )
+                .map_err(fail)?;
             for (v, y) in param.s.v.iter_mut().zip(&y) {
                 *v += y;
             }
