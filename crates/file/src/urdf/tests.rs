@@ -110,6 +110,106 @@ fn origins_chain_and_massless_links_merge_into_their_parent() {
     assert_eq!(sys.n_constraints(), 12);
 }
 
+/// A massless link `m` moved by a revolute joint, with a link of mass `a`
+/// fixed to it at (0, 1, 0) in its frame: `a`'s body carries `m`, so `j1`
+/// joins the ground and `a` at `m`'s origin (1, 0, 0) and `j2` hangs from
+/// `a`. The same robot written without `m` (`a` on `j1` directly, its
+/// inertial origin and `j2`'s origin moved by (0, 1, 0)) has the same
+/// bodies and joints.
+#[test]
+fn a_massless_link_on_a_moving_joint_is_carried_by_the_link_fixed_to_it() {
+    let with_frame = robot(&format!(
+        "<link name=\"base\"/><link name=\"m\"/>{}{}{}{}{}",
+        link("a", "xyz=\"0.5 0 0\""),
+        link("b", "xyz=\"0.5 0 0\""),
+        joint(
+            "j1",
+            "revolute",
+            "base",
+            "m",
+            "<origin xyz=\"1 0 0\"/><axis xyz=\"0 0 1\"/>"
+        ),
+        joint("fix", "fixed", "m", "a", "<origin xyz=\"0 1 0\"/>"),
+        joint(
+            "j2",
+            "revolute",
+            "a",
+            "b",
+            "<origin xyz=\"1 0 0\"/><axis xyz=\"0 1 0\"/>"
+        ),
+    ));
+    let direct = robot(&format!(
+        "<link name=\"base\"/>{}{}{}{}",
+        link("a", "xyz=\"0.5 1 0\""),
+        link("b", "xyz=\"0.5 0 0\""),
+        joint(
+            "j1",
+            "revolute",
+            "base",
+            "a",
+            "<origin xyz=\"1 0 0\"/><axis xyz=\"0 0 1\"/>"
+        ),
+        joint(
+            "j2",
+            "revolute",
+            "a",
+            "b",
+            "<origin xyz=\"1 1 0\"/><axis xyz=\"0 1 0\"/>"
+        ),
+    ));
+    let (a, b) = (
+        load(&with_frame).expect("valid"),
+        load(&direct).expect("valid"),
+    );
+    for body in ["a", "b"] {
+        close(&pose(&a, body), &pose(&b, body));
+    }
+    close(&pose(&a, "a"), &[1.5, 1.0, 0.0, 1.0, 0.0, 0.0, 0.0]);
+    let (doc, _) = crate::convert_urdf(&with_frame, "r.urdf").expect("valid");
+    assert!(
+        doc.contains(
+            "name = \"j1\"\ntype = \"revolute\"\nbodies = [\"ground\", \"a\"]\nat = [1.0, 0.0, 0.0]"
+        ),
+        "{doc}"
+    );
+    assert!(
+        !doc.contains("name = \"fix\""),
+        "a weld of a to itself: {doc}"
+    );
+    let Mechanism::Spatial(sys) = &a.mechanism else {
+        panic!("spatial")
+    };
+    use mstar_model::System;
+    // Rows: a.norm, j1 (5), b.norm, j2 (5).
+    assert_eq!(sys.n_constraints(), 12);
+}
+
+/// A massless link moved by a joint and carrying a further moving joint,
+/// with no link of mass fixed to it, is refused at that joint; the advice
+/// (make the joint fixed) loads.
+#[test]
+fn a_massless_link_between_moving_joints_is_refused_and_the_advice_loads() {
+    let make = |kind: &str| {
+        robot(&format!(
+            "<link name=\"base\"/><link name=\"m\"/>{}{}{}",
+            link("b", "xyz=\"0.5 0 0\""),
+            joint("j1", kind, "base", "m", "<axis xyz=\"0 0 1\"/>"),
+            joint("j2", "revolute", "m", "b", "<axis xyz=\"0 1 0\"/>"),
+        ))
+    };
+    let Err(e) = load(&make("revolute")) else {
+        panic!("a massless link between moving joints loaded")
+    };
+    let text = e.to_string();
+    assert!(text.starts_with("r.urdf:"), "{text}");
+    assert!(
+        text.contains("joint 'j1': its child link 'm' has no mass"),
+        "{text}"
+    );
+    assert!(text.contains("or make the joint fixed"), "{text}");
+    load(&make("fixed")).expect("the advice loads");
+}
+
 /// A continuous joint is a revolute joint: the same document.
 #[test]
 fn continuous_is_revolute() {

@@ -36,7 +36,9 @@ struct Frame {
 enum Carrier {
     /// The ground (a massless root, or massless links fixed to it).
     Ground,
-    /// The body of the link with this index.
+    /// The body of the link with this index (the link itself, its parent's
+    /// for a massless link fixed to it, or for a massless link moved by a
+    /// joint the first link with mass welded to it).
     Body(usize),
     /// Nothing: a massless leaf moved by a joint, left out with its joint.
     Dropped,
@@ -115,6 +117,11 @@ fn carrier(
         // A massless frame fixed to its parent: the parent's body carries it.
         return Ok(parent);
     }
+    // A massless frame moved by the joint, with a link of mass welded to
+    // it (through fixed joints): that link's body carries it.
+    if let Some(body) = fixed_body(robot, joint.child) {
+        return Ok(Carrier::Body(body));
+    }
     let (line, column) = joint.place;
     if robot.children[joint.child].is_empty() {
         notes.push(format!(
@@ -129,7 +136,7 @@ fn carrier(
         origin: robot.origin.clone(),
         place: Some((line, column)),
         message: format!(
-            "joint '{}': its child link '{}' has no mass (no <inertial>, or mass 0) and carries further joints: a {} joint between massless links cannot be merged into a body; give '{}' an <inertial> with a mass, or make the joint fixed",
+            "joint '{}': its child link '{}' has no mass (no <inertial>, or mass 0) and carries further joints, none of them fixed to a link with mass: a {} joint between massless links cannot be merged into a body; give '{}' an <inertial> with a mass, or make the joint fixed",
             joint.name.escape_debug(),
             child.name.escape_debug(),
             if joint.kind == Kind::Revolute {
@@ -141,6 +148,25 @@ fn carrier(
         ),
         in_override: false,
     })
+}
+
+/// The first link with mass (breadth first) welded to the massless link `l`
+/// through fixed joints and massless links, if any.
+fn fixed_body(robot: &Robot, l: usize) -> Option<usize> {
+    let mut queue = std::collections::VecDeque::from([l]);
+    while let Some(link) = queue.pop_front() {
+        for &j in &robot.children[link] {
+            let joint = &robot.joints[j];
+            if joint.kind != Kind::Fixed {
+                continue;
+            }
+            if robot.links[joint.child].inertial.is_some() {
+                return Some(joint.child);
+            }
+            queue.push_back(joint.child);
+        }
+    }
+    None
 }
 
 /// The frame of a joint's child link: the parent frame, moved by the
@@ -342,7 +368,7 @@ impl Placement {
         }
         let frame = &self.frames[joint.child];
         let parent = self.carrier_name(robot, joint.parent);
-        let child = &robot.links[joint.child].name;
+        let child = self.carrier_name(robot, joint.child);
         let mut text = format!(
             "\n[[joint]]\nname = {}\ntype = \"{}\"\nbodies = [{}, {}]\nat = {}\n",
             quoted(&joint.name),
@@ -367,10 +393,14 @@ impl Placement {
         self.has(&robot.joints[j])
     }
 
-    /// Whether `joint` joins two bodies of the model: its child is a body
-    /// of its own (not merged into its parent, not left out).
+    /// Whether `joint` joins two bodies of the model: its child is carried
+    /// by a body (its own, or that of a link with mass welded to it), not
+    /// the one that carries its parent (a massless link fixed to its
+    /// parent, a link with mass welded to the massless link it carries),
+    /// and not left out.
     fn has(&self, joint: &super::robot::Joint) -> bool {
-        self.carriers[joint.child] == Carrier::Body(joint.child)
+        let child = self.carriers[joint.child];
+        matches!(child, Carrier::Body(_)) && child != self.carriers[joint.parent]
     }
 
     /// The names the model gives bodies and joints, each with where the URDF
