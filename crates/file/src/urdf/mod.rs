@@ -49,6 +49,11 @@ impl Places {
             Some((_, place)) => FileError {
                 origin: self.origin.clone(),
                 place: Some(*place),
+                // (A URDF link has no [[point_mass]] to be instead.)
+                message: e.message.replace(
+                    "a body without rotational inertia is a [[point_mass]]",
+                    "give the link's <inertia> positive moments ixx, iyy, izz",
+                ),
                 ..e
             },
             None => e,

@@ -456,4 +456,22 @@ fn spatial_errors_point_at_the_urdf_element() {
         "{e}"
     );
     assert!(e.message.starts_with("body 'a': "), "{e}");
+    // No rotational inertia: the advice is the URDF's, not a
+    // [[point_mass]] (which a URDF has no way to give); followed, it loads.
+    let link = |moments: &str| {
+        robot(&format!(
+            "<link name=\"base\"/>\n<link name=\"a\"><inertial><mass value=\"1\"/>\
+             <inertia {moments} ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial></link>\n\
+             <joint name=\"j\" type=\"fixed\"><parent link=\"base\"/><child link=\"a\"/></joint>"
+        ))
+    };
+    let e = load(&link("ixx=\"0\" iyy=\"0\" izz=\"0\"")).expect_err("no inertia");
+    assert_eq!(e.place, Some((4, 1)), "{e}");
+    assert!(
+        e.message
+            .contains("give the link's <inertia> positive moments"),
+        "{e}"
+    );
+    assert!(!e.message.contains("point_mass"), "{e}");
+    load(&link("ixx=\"0.01\" iyy=\"0.01\" izz=\"0.01\"")).expect("the advice loads");
 }
