@@ -277,6 +277,19 @@ struct Nominal {
 }
 
 impl<S: System + ?Sized> Integrator<'_, S> {
+    /// Whether the initial sensitivities are differentiated through the
+    /// start's stages (`initial.rs`): for the consistent start with
+    /// projection, when the projection did not move the given positions
+    /// beyond [`MOVED`]. Else (the paper's
+    /// start with given `λ₀`, a start that may not project, given positions
+    /// off the constraints) they are central differences of whole starts.
+    pub(super) fn starts_by_stages(&self) -> bool {
+        let moved = max_abs(&self.start.position_correction);
+        matches!(self.config.start, crate::Start::Consistent)
+            && self.config.project
+            && moved <= MOVED * max_abs(&self.state.u).max(1.0)
+    }
+
     /// Fills the initial sensitivities `S₀` of `params` through the start's
     /// stages (the module's doc); `given[k]`: `∂(u_g, u̇_g)/∂p_k` of the
     /// given initial state (its `u` and `v`).
