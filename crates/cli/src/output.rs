@@ -165,10 +165,21 @@ pub fn conclude(
 
 /// Removes the `<name>.partial.csv` an earlier stopped run of the same
 /// output left, now that the whole file is written (saying so): beside a
-/// complete file it would only pass for this run's.
+/// complete file it would only pass for this run's. Only for a file output,
+/// and a CSV file only when its header is this output's.
 fn remove_stale_partial(out: &Path) {
+    // Only a file output keeps a partial file (not standard output, a FIFO
+    // or a device).
+    if !matches!(mstar::csv::target(out), Ok(mstar::csv::Target::Replace(_))) {
+        return;
+    }
     let partial = partial_path(out);
     if !std::fs::symlink_metadata(&partial).is_ok_and(|m| m.is_file()) {
+        return;
+    }
+    // A CSV file of other columns is not this output's samples (a file a
+    // user named so): left alone.
+    if !mstar::csv::is_npz(out) && first_line(&partial) != first_line(out) {
         return;
     }
     match std::fs::remove_file(&partial) {
@@ -181,6 +192,16 @@ fn remove_stale_partial(out: &Path) {
             partial.display()
         )),
     }
+}
+
+/// The first line of the text file `path` (empty when it cannot be read).
+fn first_line(path: &Path) -> String {
+    use std::io::BufRead as _;
+    let mut line = String::new();
+    if let Ok(f) = std::fs::File::open(path) {
+        let _ = std::io::BufReader::new(f).read_line(&mut line);
+    }
+    line
 }
 
 /// The error a stop ends the program with: a write error on a closed pipe

@@ -202,6 +202,14 @@ fn a_completed_rerun_removes_the_stale_partial_file() {
         err.contains(&format!("removed {}", path(&partial))),
         "{err}"
     );
+    // A file of other columns under that name is not this output's: kept.
+    std::fs::write(&partial, "a,b\n1,2\n").expect("a user's file");
+    let ok = run("0.002", "0.2");
+    assert!(ok.status.success(), "{}", text(&ok.stderr));
+    assert_eq!(
+        std::fs::read_to_string(&partial).ok().as_deref(),
+        Some("a,b\n1,2\n")
+    );
 }
 
 /// Starts `args` in `dir` and reads its standard output up to a line that

@@ -75,7 +75,7 @@ fn energy_warning(stats: &RunStats, config: &Config, files: bool) -> Option<Stri
         (true, false) => format!("rerun with --h {0} --h-max {0}", short(h)),
         (true, true) => format!("rerun with --h {0} --set simulation.h_max={0}", short(h)),
     };
-    let why = if stats.error.newton_exceeded > 0 {
+    let why = if stats.error.newton_exceeded > 0 && !undamped(config) {
         "the iterations stopped with the constraints violated beyond the tolerance"
     } else if adaptive {
         "adaptive steps keep each step's local error within the tolerance, not the run's, and \

@@ -9,6 +9,7 @@
 mod common;
 
 use common::{Model, Param};
+use mstar_kkt::{Backend, KktOptions};
 use mstar_model::planar::{
     At, BodyId, PlanarBuilder, PointMass, RigidBody, SpringDamper, TimeFunction,
 };
@@ -241,6 +242,23 @@ fn slider_crank_initial_sensitivities_match_extrapolated_starts() {
         for k in 0..nominal.len() {
             check(slider_crank, &nominal, k, &config(corrected));
         }
+    }
+}
+
+/// The same with the sparse LU, whose KKT structure carries `BᵀB` (the
+/// stages' right-hand sides augmented as the start's are).
+#[test]
+fn on_the_augmented_structure_the_sensitivities_match_extrapolated_starts() {
+    let config = Config {
+        kkt: KktOptions {
+            backend: Backend::SPARSE_LU,
+            ..KktOptions::default()
+        },
+        ..config(true)
+    };
+    for k in 0..3 {
+        check(slider_crank, &[1.0, 1.5, 3.0], k, &config);
+        check(spun_slider_crank, &[1.0, 1.5, 4.0], k, &config);
     }
 }
 

@@ -197,24 +197,27 @@ fn via_temporary(path: &Path, t_last: f64, write: impl FnOnce(&Path) -> Result<(
     ));
     // Created here first: an I/O error then reads as one (plotters' own
     // errors print their internals).
-    let written = crate::signals::removed_if_killed(&tmp, || {
-        std::fs::File::create(&tmp)
+    // Everything up to the rename (or the removal) under the guard: a
+    // second signal at any point removes the temporary file.
+    let result = crate::signals::removed_if_killed(&tmp, || {
+        let result = std::fs::File::create(&tmp)
             .map_err(anyhow::Error::from)
             .and_then(|_| write(&tmp))
-    });
-    let result = written.and_then(|()| {
-        std::fs::File::open(&tmp)
-            .and_then(|f| f.sync_all())
-            .map_err(anyhow::Error::from)?;
-        // A signal after the last frame: no file, as before it.
-        if let Some(signal) = crate::signals::received() {
-            return Err(crate::signals::Interrupted { signal, t: t_last }.into());
+            .and_then(|()| {
+                std::fs::File::open(&tmp)
+                    .and_then(|f| f.sync_all())
+                    .map_err(anyhow::Error::from)?;
+                // A signal after the last frame: no file, as before it.
+                if let Some(signal) = crate::signals::received() {
+                    return Err(crate::signals::Interrupted { signal, t: t_last }.into());
+                }
+                std::fs::rename(&tmp, path).map_err(anyhow::Error::from)
+            });
+        if result.is_err() {
+            let _ = std::fs::remove_file(&tmp);
         }
-        std::fs::rename(&tmp, path).map_err(anyhow::Error::from)
+        result
     });
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
     result.with_context(|| format!("could not write {}", path.display()))
 }
 

@@ -337,7 +337,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             out.push(p);
             given.push(g);
         }
-        if by_stages {
+        if by_stages && !out.is_empty() {
             self.initial_by_stages(&mut out, &given)?;
         }
         Ok(Sensitivities {
