@@ -235,13 +235,18 @@ fn check(make: fn(&[f64]) -> Model, nominal: &[f64], k: usize, config: &Config) 
     }
 }
 
+/// [`check`] for every parameter of `make` at `nominal`.
+fn check_each(make: fn(&[f64]) -> Model, nominal: &[f64], config: &Config) {
+    for k in 0..nominal.len() {
+        check(make, nominal, k, config);
+    }
+}
+
 #[test]
 fn slider_crank_initial_sensitivities_match_extrapolated_starts() {
     let nominal = [1.0, 1.5, 3.0];
     for corrected in [true, false] {
-        for k in 0..nominal.len() {
-            check(slider_crank, &nominal, k, &config(corrected));
-        }
+        check_each(slider_crank, &nominal, &config(corrected));
     }
 }
 
@@ -256,18 +261,14 @@ fn on_the_augmented_structure_the_sensitivities_match_extrapolated_starts() {
         },
         ..config(true)
     };
-    for k in 0..3 {
-        check(slider_crank, &[1.0, 1.5, 3.0], k, &config);
-        check(spun_slider_crank, &[1.0, 1.5, 4.0], k, &config);
-    }
+    check_each(slider_crank, &[1.0, 1.5, 3.0], &config);
+    check_each(spun_slider_crank, &[1.0, 1.5, 4.0], &config);
 }
 
 #[test]
 fn spun_slider_crank_moved_velocities_match_extrapolated_starts() {
     let nominal = [1.0, 1.5, 4.0];
-    for k in 0..nominal.len() {
-        check(spun_slider_crank, &nominal, k, &config(true));
-    }
+    check_each(spun_slider_crank, &nominal, &config(true));
 }
 
 /// Given positions off the constraints (laid out for a coupler of 1.5 m,
@@ -277,17 +278,13 @@ fn spun_slider_crank_moved_velocities_match_extrapolated_starts() {
 #[test]
 fn moved_positions_match_extrapolated_starts() {
     let nominal = [1.0, 1.52, 3.0];
-    for k in 0..nominal.len() {
-        check(slider_crank, &nominal, k, &config(true));
-    }
+    check_each(slider_crank, &nominal, &config(true));
 }
 
 #[test]
 fn spinning_chain_initial_sensitivities_match_extrapolated_starts() {
     let nominal = [1.0, 0.05, 5.0];
-    for k in 0..nominal.len() {
-        check(spinning_chain, &nominal, k, &config(true));
-    }
+    check_each(spinning_chain, &nominal, &config(true));
 }
 
 /// A length that moves the given pose: `S₀` satisfies the differentiated

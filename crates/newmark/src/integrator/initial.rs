@@ -475,14 +475,13 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             lambda: &nominal.lambda,
         };
         for param in params.iter_mut() {
-            let dz = (param.s.u.clone(), param.s.v.clone());
             let level = (&x, Level::Acceleration);
             let y = self
                 .solve_stage(
                     stages,
                     level,
                     (&mut param.partials, param.step),
-                    (&dz.0, &dz.1),
+                    (&param.s.u, &param.s.v),
                     false,
                 )
                 .map_err(fail)?;
@@ -620,14 +619,13 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         };
         for (param, dj) in params.iter_mut().zip(jerks) {
             let kdj: Vec<f64> = dj.iter().map(|j| k * j).collect();
-            let du = param.s.u.clone();
             let level = (&x, Level::Correction);
             let y = self
                 .solve_stage(
                     stages,
                     level,
                     (&mut param.partials, param.step),
-                    (&du, &kdj),
+                    (&param.s.u, &kdj),
                     false,
                 )
                 .map_err(fail)?;
