@@ -140,37 +140,74 @@ impl EnvelopeLdlt {
     /// Returns `‖x‖∞`, NaN if `x` has a NaN or an infinity.
     pub(crate) fn solve(&self, x: &mut [f64], negate: bool) -> f64 {
         let n = self.d.len();
-        // L z = b.
-        for i in 0..n {
-            let (range, fi) = self.row(i);
-            let row = &self.values[range.start..range.end - 1];
-            let s: f64 = row.iter().zip(&x[fi..i]).map(|(l, z)| l * z).sum();
-            x[i] -= s;
-        }
+        let x = &mut x[..n];
+        self.forward(x);
         // D w = z (a separate pass: a division in the sweep above would
         // lengthen its chain of dependent operations).
         for (xi, &d) in x.iter_mut().zip(&self.d) {
             *xi /= d;
         }
-        // Lᵀ x = w from the last row up: x_i is final once the rows below
-        // it have been subtracted; ‖x‖∞ on the way.
-        let sign = if negate { -1.0 } else { 1.0 };
-        let mut max = MaxAbs::new();
-        for i in (0..n).rev() {
-            let (range, fi) = self.row(i);
-            let row = &self.values[range.start..range.end - 1];
-            let xi = x[i];
-            for (xk, l) in x[fi..i].iter_mut().zip(row) {
-                *xk -= l * xi;
-            }
-            x[i] = sign * xi;
-            max.push(xi);
-        }
+        let max = self.backward(x, if negate { -1.0 } else { 1.0 });
         if max.is_finite() {
             max.value()
         } else {
             f64::NAN
         }
+    }
+
+    /// `L z = b` in place, row by row. The term of column `i − 1` (a row's
+    /// last below the diagonal) is added last, from `z_{i−1}` kept in a
+    /// register: the chain of dependent operations from row to row is one
+    /// product and two sums, without a store and a load of `z_{i−1}`. The
+    /// sums are those of `Iterator::sum` over the row in order (from
+    /// `−0.0`): the same values to the bit.
+    fn forward(&self, x: &mut [f64]) {
+        let mut previous = 0.0;
+        for (i, w) in self.row_ptr.windows(2).enumerate() {
+            let l = &self.values[w[0] as usize..w[1] as usize - 1];
+            let (done, rest) = x.split_at_mut(i);
+            let s = match l.split_last() {
+                Some((&l_last, l_rest)) => {
+                    let z = &done[i - l.len()..];
+                    let head: f64 = l_rest.iter().zip(z).map(|(l, z)| l * z).sum();
+                    head + l_last * previous
+                }
+                None => -0.0,
+            };
+            let zi = rest[0] - s;
+            rest[0] = zi;
+            previous = zi;
+        }
+    }
+
+    /// `Lᵀ x = w` in place from the last row up, each row's `x_i` (final
+    /// once the rows below it have been subtracted) subtracted from the
+    /// entries above it; `x_{i−1}`'s update stays in a register (it is the
+    /// next row's `x_i`). Stores `sign x`; returns `‖x‖∞`.
+    fn backward(&self, x: &mut [f64], sign: f64) -> MaxAbs {
+        let mut max = MaxAbs::new();
+        let Some(&last) = x.last() else {
+            return max;
+        };
+        let mut xi = last;
+        for (i, w) in self.row_ptr.windows(2).enumerate().rev() {
+            let l = &self.values[w[0] as usize..w[1] as usize - 1];
+            let (above, rest) = x.split_at_mut(i);
+            rest[0] = sign * xi;
+            max.push(xi);
+            let next = match l.split_last() {
+                Some((&l_last, l_rest)) => {
+                    let fi = i - l.len();
+                    for (xk, l) in above[fi..].iter_mut().zip(l_rest) {
+                        *xk -= l * xi;
+                    }
+                    above[i - 1] - l_last * xi
+                }
+                None => above.last().copied().unwrap_or(0.0),
+            };
+            xi = next;
+        }
+        max
     }
 }
 

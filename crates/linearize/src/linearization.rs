@@ -8,6 +8,9 @@ use mstar_kkt::{Csc, MaxAbs, Structure, max_abs};
 use crate::csc::scatter;
 use crate::layout::{Layout, MStar, Patterns, bb_pairs};
 
+/// One of [`Pattern`]'s products `y ± A x` (`mul_add`, `mul_sub`).
+type MulFn = fn(&Pattern, &[f64], &[f64], &mut [f64]);
+
 /// Errors in a system's declared structure.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -554,25 +557,38 @@ impl Linearization {
     /// # Panics
     /// If `x`, `w` or `y` is not of length `n`.
     pub fn tangent_mul_add(&self, x: &[f64], w: &[f64], y: &mut [f64]) {
+        self.tangent_product::<false>(x, w, y);
+    }
+
+    /// `y −= K_T x + C_T w`: [`tangent_mul_add`](Self::tangent_mul_add)
+    /// subtracting, for a residual formed in place (no buffer, no pass).
+    ///
+    /// # Panics
+    /// If `x`, `w` or `y` is not of length `n`.
+    pub fn tangent_mul_sub(&self, x: &[f64], w: &[f64], y: &mut [f64]) {
+        self.tangent_product::<true>(x, w, y);
+    }
+
+    /// `y ± (K_T x + C_T w)`, each matrix's entries added or subtracted in
+    /// place (`K_T`'s `−∂g/∂u` and `C_T`'s `−∂g/∂u̇` with the other sign).
+    fn tangent_product<const SUB: bool>(&self, x: &[f64], w: &[f64], y: &mut [f64]) {
         let [hessian, g_u, g_v, mass_du] = &self.tangent_patterns;
+        let (plus, minus): (MulFn, MulFn) = if SUB {
+            (Pattern::mul_sub, Pattern::mul_add)
+        } else {
+            (Pattern::mul_add, Pattern::mul_sub)
+        };
         if !self.hessian.is_empty() {
-            hessian.mul_add(&self.hessian, x, y);
+            plus(hessian, &self.hessian, x, y);
         }
         if !self.mass_du.is_empty() {
-            mass_du.mul_add(&self.mass_du, x, y);
+            plus(mass_du, &self.mass_du, x, y);
         }
-        if self.g_u.is_empty() && self.g_v.is_empty() {
-            return;
-        }
-        let mut minus = vec![0.0; self.n];
         if !self.g_u.is_empty() {
-            g_u.mul_add(&self.g_u, x, &mut minus);
+            minus(g_u, &self.g_u, x, y);
         }
         if !self.g_v.is_empty() {
-            g_v.mul_add(&self.g_v, w, &mut minus);
-        }
-        for (y, m) in y.iter_mut().zip(&minus) {
-            *y -= m;
+            minus(g_v, &self.g_v, w, y);
         }
     }
 
@@ -587,7 +603,6 @@ impl Linearization {
     /// If `x`, `y` or `z` is not of length `n`.
     pub fn tangent_mul_transpose_add(&self, x: &[f64], y: &mut [f64], z: &mut [f64]) {
         let [hessian, g_u, g_v, mass_du] = &self.tangent_patterns;
-        let mut minus = vec![0.0; self.n];
         if !self.hessian.is_empty() {
             hessian.mul_transpose_add(&self.hessian, x, y);
         }
@@ -595,17 +610,10 @@ impl Linearization {
             mass_du.mul_transpose_add(&self.mass_du, x, y);
         }
         if !self.g_u.is_empty() {
-            g_u.mul_transpose_add(&self.g_u, x, &mut minus);
-        }
-        for (y, m) in y.iter_mut().zip(&minus) {
-            *y -= m;
+            g_u.mul_transpose_sub(&self.g_u, x, y);
         }
         if !self.g_v.is_empty() {
-            minus.fill(0.0);
-            g_v.mul_transpose_add(&self.g_v, x, &mut minus);
-            for (z, m) in z.iter_mut().zip(&minus) {
-                *z -= m;
-            }
+            g_v.mul_transpose_sub(&self.g_v, x, z);
         }
     }
 

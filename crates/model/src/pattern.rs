@@ -75,12 +75,16 @@ impl Pattern {
     /// # Panics
     /// If `values`, `x` or `y` do not match the pattern's dimensions.
     pub fn mul_add(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
-        assert_eq!(values.len(), self.entries.len());
-        assert_eq!(x.len(), self.ncols);
-        assert_eq!(y.len(), self.nrows);
-        for (&(i, j), &a) in self.entries.iter().zip(values) {
-            y[i] += a * x[j];
-        }
+        self.product::<false, false>(values, x, y);
+    }
+
+    /// `y −= A x`, for a residual `r − A x` formed in place (no buffer for
+    /// `A x`).
+    ///
+    /// # Panics
+    /// As [`mul_add`](Self::mul_add).
+    pub fn mul_sub(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
+        self.product::<false, true>(values, x, y);
     }
 
     /// `y += Aᵀ x` for the matrix `A` with these values.
@@ -88,11 +92,40 @@ impl Pattern {
     /// # Panics
     /// If `values`, `x` or `y` do not match the pattern's dimensions.
     pub fn mul_transpose_add(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
+        self.product::<true, false>(values, x, y);
+    }
+
+    /// `y −= Aᵀ x`, as [`mul_sub`](Self::mul_sub).
+    ///
+    /// # Panics
+    /// As [`mul_transpose_add`](Self::mul_transpose_add).
+    pub fn mul_transpose_sub(&self, values: &[f64], x: &[f64], y: &mut [f64]) {
+        self.product::<true, true>(values, x, y);
+    }
+
+    /// `y ± A x` (`A` or, with `TRANSPOSE`, `Aᵀ`; subtracting with `SUB`):
+    /// one loop for the four products, the choices resolved at compile time.
+    fn product<const TRANSPOSE: bool, const SUB: bool>(
+        &self,
+        values: &[f64],
+        x: &[f64],
+        y: &mut [f64],
+    ) {
+        let (rows, cols) = if TRANSPOSE {
+            (self.ncols, self.nrows)
+        } else {
+            (self.nrows, self.ncols)
+        };
         assert_eq!(values.len(), self.entries.len());
-        assert_eq!(x.len(), self.nrows);
-        assert_eq!(y.len(), self.ncols);
+        assert_eq!(x.len(), cols);
+        assert_eq!(y.len(), rows);
         for (&(i, j), &a) in self.entries.iter().zip(values) {
-            y[j] += a * x[i];
+            let (to, from) = if TRANSPOSE { (j, i) } else { (i, j) };
+            if SUB {
+                y[to] -= a * x[from];
+            } else {
+                y[to] += a * x[from];
+            }
         }
     }
 
@@ -121,6 +154,11 @@ mod tests {
         let mut z = [0.0; 3];
         p.mul_transpose_add(&vals, &[1.0, 1.0], &mut z);
         assert_eq!(z, [4.0, 0.0, 2.0]);
+        // The subtracting forms undo the adding ones.
+        p.mul_sub(&vals, &[1.0, 10.0, 100.0], &mut y);
+        assert_eq!(y, [0.0, 0.0]);
+        p.mul_transpose_sub(&vals, &[1.0, 2.0], &mut z);
+        assert_eq!(z, [0.0, 0.0, -2.0]);
         assert_eq!(p.to_dense(&vals)[0][0], 4.0);
         assert_eq!(p.out_of_bounds(), None);
         assert_eq!(

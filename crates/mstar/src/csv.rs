@@ -75,15 +75,9 @@ fn join_fields(names: &[String]) -> String {
 
 /// A number in shortest round-trip form: plain for `1e-4 ≤ |x| < 1e15` (and 0),
 /// exponent notation otherwise.
+/// −0 reads as 0 (a multiplier of an unloaded joint).
 fn number(out: &mut String, x: f64) {
-    // −0 reads as 0 (a multiplier of an unloaded joint).
-    let x = if x == 0.0 { 0.0 } else { x };
-    let a = x.abs();
-    if x == 0.0 || (1e-4..1e15).contains(&a) || !x.is_finite() {
-        let _ = write!(out, "{x}");
-    } else {
-        let _ = write!(out, "{x:e}");
-    }
+    crate::decimal::push_number(out, x);
 }
 
 /// `x` as the CSV files write it (see [`to_csv`]): shortest round-trip form,

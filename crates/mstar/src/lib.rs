@@ -43,6 +43,7 @@ pub mod accuracy;
 pub mod analysis;
 pub mod columns;
 pub mod csv;
+mod decimal;
 pub mod equilibrium;
 pub mod linear;
 pub mod modes;

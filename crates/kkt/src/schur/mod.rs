@@ -610,10 +610,12 @@ impl Schur {
             }
         }
         let sign = if envelope { -1.0 } else { 1.0 };
-        for (j, (&fj, &inv)) in f.iter().zip(&self.inverse).enumerate() {
+        let columns = self.b_col_ptr.windows(2).zip(f.iter().zip(&self.inverse));
+        for (w, (&fj, &inv)) in columns {
             let xj = sign * (inv * fj);
-            for q in range(&self.b_col_ptr, j) {
-                g[self.b_rows[q] as usize] += self.b_values[q] * xj;
+            let col = w[0] as usize..w[1] as usize;
+            for (&r, &b) in self.b_rows[col.clone()].iter().zip(&self.b_values[col]) {
+                g[r as usize] += b * xj;
             }
         }
         match &mut self.cf {
@@ -632,19 +634,24 @@ impl Schur {
     /// the scratch `y`).
     fn diagonal_primal(&mut self, f: &mut [f64], g: &[f64], check: bool) -> (MaxAbs, f64) {
         let (mut f_max, mut primal_res) = (MaxAbs::new(), MaxAbs::new());
-        for (j, (fj, &inv)) in f.iter_mut().zip(&self.inverse).enumerate() {
+        let columns = self
+            .b_col_ptr
+            .windows(2)
+            .zip(f.iter_mut().zip(&self.inverse));
+        for (j, (w, (fj, &inv))) in columns.enumerate() {
+            let col = w[0] as usize..w[1] as usize;
+            let (rows, values) = (&self.b_rows[col.clone()], &self.b_values[col]);
             let mut s = *fj;
-            let col = range(&self.b_col_ptr, j);
-            for q in col.clone() {
-                s -= self.b_values[q] * g[self.b_rows[q] as usize];
+            for (&r, &b) in rows.iter().zip(values) {
+                s -= b * g[r as usize];
             }
             let x = inv * s;
             *fj = x;
             f_max.push(x);
             if check {
                 primal_res.push(self.s_values[j] * x - s);
-                for q in col {
-                    self.y[self.b_rows[q] as usize] += self.b_values[q] * x;
+                for (&r, &b) in rows.iter().zip(values) {
+                    self.y[r as usize] += b * x;
                 }
             }
         }

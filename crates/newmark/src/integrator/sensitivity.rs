@@ -577,14 +577,10 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         self.predict_sensitivity(&param.s, h, rescale, &mut scratch.predicted);
         // rhs = [r_p − K_T δu^p − C_T δu̇^p; −Φ_p − B δu^p]
         self.partials_into(param, &mut scratch.rhs);
-        let (pred, tmp) = (&scratch.predicted, &mut scratch.j_x);
-        tmp.fill(0.0);
-        let (top, bottom) = tmp.split_at_mut(n);
-        self.lin.tangent_mul_add(&pred.u, &pred.v, top);
-        self.lin.b_pattern().mul_add(self.lin.b(), &pred.u, bottom);
-        for (r, t) in scratch.rhs.iter_mut().zip(tmp.iter()) {
-            *r -= t;
-        }
+        let pred = &scratch.predicted;
+        let (top, bottom) = scratch.rhs.split_at_mut(n);
+        self.lin.tangent_mul_sub(&pred.u, &pred.v, top);
+        self.lin.b_pattern().mul_sub(self.lin.b(), &pred.u, bottom);
         self.solve_sensitivity(scratch, (solves, factorizations), h, refine)?;
         let c = self.p.coefficients(h, self.config.scaling);
         let a_p = 1.0 / (self.p.beta * h * h);
@@ -675,22 +671,22 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     ) -> Result<(), IntegrationError> {
         let n = self.sys.n_coords();
         if *refine {
-            scratch.x.fill(0.0);
-            scratch.residual.copy_from_slice(&scratch.rhs);
             // The last pass's change of `x`, relative; after the first pass
-            // `x = y`, a change of 1.
+            // (`x` solved from `rhs`) a change of 1.
             let mut previous = 1.0;
             for pass in 0..MAX_REFINEMENTS {
                 // Without the backend's own refinement step (`schur-lu`'s,
                 // against the factored matrix): this loop refines against
                 // `J` at the converged state, and corrects that solve's
                 // error as well.
-                self.solve_scaled(&scratch.residual, h, &mut scratch.y, true)?;
                 *solves += 1;
-                for (x, y) in scratch.x.iter_mut().zip(&scratch.y) {
-                    *x += y;
-                }
-                if pass > 0 {
+                if pass == 0 {
+                    self.solve_scaled(&scratch.rhs, h, &mut scratch.x, true)?;
+                } else {
+                    self.solve_scaled(&scratch.residual, h, &mut scratch.y, true)?;
+                    for (x, y) in scratch.x.iter_mut().zip(&scratch.y) {
+                        *x += y;
+                    }
                     let change = relative_change(&scratch.y, &scratch.x, n);
                     // Contracting by `change / previous` a pass, the next
                     // pass would change `x` by `change² / previous`.
@@ -721,25 +717,21 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             rhs,
             x,
             residual,
-            j_x,
             x_v,
             x_a,
             ..
         } = scratch;
         let (x_u, x_l) = x.split_at(n);
-        j_x.fill(0.0);
-        let (top, bottom) = j_x.split_at_mut(n);
+        residual.copy_from_slice(rhs);
+        let (top, bottom) = residual.split_at_mut(n);
         for ((v, a), x) in x_v.iter_mut().zip(x_a.iter_mut()).zip(x_u) {
             (*v, *a) = (c.c_v * x, c.c_a * x);
         }
-        self.lin.tangent_mul_add(x_u, x_v, top);
-        self.lin.mass_pattern().mul_add(self.lin.mass(), x_a, top);
+        self.lin.tangent_mul_sub(x_u, x_v, top);
+        self.lin.mass_pattern().mul_sub(self.lin.mass(), x_a, top);
         let (b, b_pattern) = (self.lin.b(), self.lin.b_pattern());
-        b_pattern.mul_transpose_add(b, x_l, top);
-        b_pattern.mul_add(b, x_u, bottom);
-        for ((o, r), j) in residual.iter_mut().zip(rhs.iter()).zip(j_x.iter()) {
-            *o = r - j;
-        }
+        b_pattern.mul_transpose_sub(b, x_l, top);
+        b_pattern.mul_sub(b, x_u, bottom);
     }
 
     /// `y = J⁻¹ f` with the factored (scaled, possibly augmented) KKT
@@ -801,7 +793,6 @@ struct Scratch {
     x: Vec<f64>,
     residual: Vec<f64>,
     y: Vec<f64>,
-    j_x: Vec<f64>,
     x_v: Vec<f64>,
     x_a: Vec<f64>,
 }
@@ -814,7 +805,6 @@ impl Default for Scratch {
             x: Vec::new(),
             residual: Vec::new(),
             y: Vec::new(),
-            j_x: Vec::new(),
             x_v: Vec::new(),
             x_a: Vec::new(),
         }
@@ -827,13 +817,7 @@ impl Scratch {
         if self.predicted.u.len() != n {
             self.predicted = State::zeros(n, 0);
         }
-        for v in [
-            &mut self.rhs,
-            &mut self.x,
-            &mut self.residual,
-            &mut self.y,
-            &mut self.j_x,
-        ] {
+        for v in [&mut self.rhs, &mut self.x, &mut self.residual, &mut self.y] {
             v.resize(n + m, 0.0);
         }
         self.x_v.resize(n, 0.0);
