@@ -142,6 +142,10 @@ enum Command {
 
 fn main() -> Result<()> {
     let cli = Cli::parse();
+    // A file named on the command line is the caller's: resolved against
+    // the directory the command was run from, before the studies move to
+    // the workspace root.
+    let caller = std::env::current_dir().unwrap_or_default();
     let root = project_root();
     std::env::set_current_dir(&root)
         .with_context(|| format!("could not change to {}", root.display()))?;
@@ -163,9 +167,13 @@ fn main() -> Result<()> {
             bars,
             out,
             duplicate,
-        } => setup::write_file(bars, duplicate, &out),
-        Command::SpatialChainFile { links, out } => setup::write_spatial_chain(links, &out),
-        Command::HangingChainFile { links, out } => setup::write_hanging_chain(links, &out),
+        } => setup::write_file(bars, duplicate, &caller.join(out)),
+        Command::SpatialChainFile { links, out } => {
+            setup::write_spatial_chain(links, &caller.join(out))
+        }
+        Command::HangingChainFile { links, out } => {
+            setup::write_hanging_chain(links, &caller.join(out))
+        }
     }
 }
 

@@ -142,11 +142,6 @@ impl EnvelopeLdlt {
         let n = self.d.len();
         let x = &mut x[..n];
         self.forward(x);
-        // D w = z (a separate pass: a division in the sweep above would
-        // lengthen its chain of dependent operations).
-        for (xi, &d) in x.iter_mut().zip(&self.d) {
-            *xi /= d;
-        }
         let max = self.backward(x, if negate { -1.0 } else { 1.0 });
         if max.is_finite() {
             max.value()
@@ -180,18 +175,37 @@ impl EnvelopeLdlt {
         }
     }
 
-    /// `Lᵀ x = w` in place from the last row up, each row's `x_i` (final
-    /// once the rows below it have been subtracted) subtracted from the
-    /// entries above it; `x_{i−1}`'s update stays in a register (it is the
-    /// next row's `x_i`). Stores `sign x`; returns `‖x‖∞`.
+    /// `D w = z`, then `Lᵀ x = w`, in place from the last row up: each
+    /// row's `x_i` (final once the rows below it have been subtracted) is
+    /// subtracted from the entries above it; `x_{i−1}`'s update stays in a
+    /// register (it is the next row's `x_i`). Each `w_k = z_k / d_k` is
+    /// formed just before the first row that subtracts from it: the same
+    /// operations in the same order as a pass of divisions first, whose
+    /// throughput now overlaps the sweep's chain of dependent operations.
+    /// Stores `sign x`; returns `‖x‖∞`.
     fn backward(&self, x: &mut [f64], sign: f64) -> MaxAbs {
         let mut max = MaxAbs::new();
-        let Some(&last) = x.last() else {
+        let n = x.len();
+        if n == 0 {
             return max;
-        };
-        let mut xi = last;
+        }
+        let d = &self.d[..n];
+        // x[k] for k ≥ divided holds w_k.
+        let mut divided = n - 1;
+        x[n - 1] /= d[n - 1];
+        let mut xi = x[n - 1];
         for (i, w) in self.row_ptr.windows(2).enumerate().rev() {
             let l = &self.values[w[0] as usize..w[1] as usize - 1];
+            // The entries this row subtracts from, and x_{i−1}.
+            let lowest = if l.is_empty() {
+                i.saturating_sub(1)
+            } else {
+                i - l.len()
+            };
+            while divided > lowest {
+                divided -= 1;
+                x[divided] /= d[divided];
+            }
             let (above, rest) = x.split_at_mut(i);
             rest[0] = sign * xi;
             max.push(xi);

@@ -201,6 +201,11 @@ pub struct Linearization {
     phi: Vec<f64>,
     /// The system's scratch for [`System::phi_b_into`].
     work: Vec<f64>,
+    /// The `(t, u)` at which [`System::phi_b_into`] last wrote `work`
+    /// (`u` empty: none, or a workspace of no values): the Jacobians at the
+    /// same state may read it ([`System::hessian_after_phi_b`]).
+    work_t: f64,
+    work_u: Vec<f64>,
     /// `max(‖g‖∞, ‖Bᵀλ‖∞, ‖M ü‖∞, ‖λ‖∞)` of the last residual evaluation.
     force_scale: f64,
     /// `‖r‖∞` of the last residual evaluation (NaN if `r` has a NaN).
@@ -276,6 +281,8 @@ impl Linearization {
             r: vec![0.0; n],
             phi: vec![0.0; m],
             work: vec![0.0; sys.workspace_len()],
+            work_t: 0.0,
+            work_u: Vec::new(),
             force_scale: 0.0,
             r_max: 0.0,
             phi_max: 0.0,
@@ -317,6 +324,8 @@ impl Linearization {
         if same {
             self.mass_ready = false;
             self.forces_ready = false;
+            // `work` holds the previous system's table.
+            self.work_u.clear();
         }
         same
     }
@@ -524,6 +533,24 @@ impl Linearization {
             self.mass_ready = true;
         }
         sys.phi_b_into(t, u, &mut self.phi, &mut self.b, &mut self.work);
+        if !self.work.is_empty() {
+            self.work_t = t;
+            self.work_u.clear();
+            self.work_u.extend_from_slice(u);
+        }
+    }
+
+    /// `true` when `work` is what [`System::phi_b_into`] wrote at `(t, u)`
+    /// (bit for bit: `−0.0` and `0.0` have different sines).
+    fn work_is_at(&self, t: f64, u: &[f64]) -> bool {
+        !self.work_u.is_empty()
+            && self.work_t.to_bits() == t.to_bits()
+            && self.work_u.len() == u.len()
+            && self
+                .work_u
+                .iter()
+                .zip(u)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
     }
 
     /// Evaluates the parts of `K_T` and `C_T` (eqs. 6-7): the constraint Hessian
@@ -535,7 +562,13 @@ impl Linearization {
         // (An empty pattern needs no call: the defaults of a constant M or
         // constant forces would evaluate nothing.)
         if !self.hessian.is_empty() {
-            sys.hessian_with_work(t, u, lambda, &mut self.hessian, &mut self.work);
+            if self.work_is_at(t, u) {
+                sys.hessian_after_phi_b(t, u, lambda, &mut self.hessian, &mut self.work);
+            } else {
+                sys.hessian_with_work(t, u, lambda, &mut self.hessian, &mut self.work);
+                // `work` is no longer what phi_b_into wrote.
+                self.work_u.clear();
+            }
         }
         if !self.g_u.is_empty() {
             sys.forces_du_into(t, u, v, &mut self.g_u);

@@ -210,6 +210,23 @@ pub trait System: Send + Sync {
         self.hessian_into(t, u, mu, out);
     }
 
+    /// [`hessian_with_work`](System::hessian_with_work) when `work` holds
+    /// what [`phi_b_into`](System::phi_b_into) wrote at this same `(t, u)`
+    /// and nothing has written to it since (the caller knows: a Newton
+    /// iteration's Jacobians at the state of its residual). A system whose
+    /// workspace is then a table of `u` reads it instead of computing it
+    /// again (default: `hessian_with_work`).
+    fn hessian_after_phi_b(
+        &self,
+        t: f64,
+        u: &[f64],
+        mu: &[f64],
+        out: &mut [f64],
+        work: &mut [f64],
+    ) {
+        self.hessian_with_work(t, u, mu, out, work);
+    }
+
     /// The acceleration-level right-hand side `c = −(B u̇)_u u̇ − 2 B_t u̇ − Φ_tt`,
     /// so that the second time derivative of `Φ = 0` reads `B ü = c`
     /// (`algorithm.md` §6, consistent initialization). Size `m` (default:

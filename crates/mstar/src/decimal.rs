@@ -5,8 +5,7 @@
 //! which took a third of a run that writes every tenth step
 //! (docs/performance.md, "Writing numbers"). Both give the fewest digits
 //! that read back as the same number; where two such are equally near it
-//! (a tie, rare), `zmij` keeps the even last digit and the standard library
-//! the one above.
+//! (a tie, rare), the two may write different last digits.
 
 use std::fmt::Write as _;
 

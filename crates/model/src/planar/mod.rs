@@ -379,6 +379,25 @@ impl System for PlanarSystem {
         self.hessian_of_others(t, u, mu, out);
     }
 
+    fn hessian_after_phi_b(
+        &self,
+        t: f64,
+        u: &[f64],
+        mu: &[f64],
+        out: &mut [f64],
+        work: &mut [f64],
+    ) {
+        // phi_b_into left the table of this `u` in `work`.
+        let Some(trig) = work.get(..2 * self.angles.len()) else {
+            self.hessian_into(t, u, mu, out);
+            return;
+        };
+        crate::parallel::hessian_in_parts(&self.revolutes, out, |k, out, base| {
+            k.hessian_from(u, trig, mu, out, base);
+        });
+        self.hessian_of_others(t, u, mu, out);
+    }
+
     fn accel_rhs_into(&self, t: f64, u: &[f64], v: &[f64], out: &mut [f64]) {
         // c = −vᵀ (∂²Φ/∂q²) v − Φ_tt (no element has a B_t). An element
         // has at most two bodies (6 slots): its Hessian at most 3 × 6 × 6

@@ -27,7 +27,7 @@
 use std::collections::HashMap;
 
 use mstar_kkt::{KktOptions, KktSolver, SharedAnalyses};
-use mstar_linearize::{Linearization, max_abs};
+use mstar_linearize::{Linearization, MaxAbs, max_abs};
 use mstar_model::{StateRef, System};
 
 use super::{Integrator, State};
@@ -585,15 +585,23 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         let c = self.p.coefficients(h, self.config.scaling);
         let a_p = 1.0 / (self.p.beta * h * h);
         let (x, pred, s) = (&scratch.x, &scratch.predicted, &mut param.s);
+        // ‖·‖ is NaN or infinite exactly when an entry is (checked on the
+        // way, not in a pass of its own).
+        let mut norm = MaxAbs::new();
         for i in 0..n {
             let du = x[i];
             s.u[i] = pred.u[i] + du;
+            norm.push(s.u[i]);
             s.v[i] = pred.v[i] + c.c_v * du;
             s.a[i] = c.c_a * du;
             s.a_alpha[i] = pred.a_alpha[i] + a_p * du;
         }
         s.lambda.copy_from_slice(&x[n..]);
-        if let Some(i) = s.u.iter().chain(&s.lambda).position(|x| !x.is_finite()) {
+        let finite = norm.is_finite() && max_abs(&s.lambda).is_finite();
+        if let Some(i) = (!finite)
+            .then(|| s.u.iter().chain(&s.lambda).position(|x| !x.is_finite()))
+            .flatten()
+        {
             return Err(IntegrationError::NonFinite {
                 t: self.t,
                 what: format!(
@@ -684,10 +692,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                     self.solve_scaled(&scratch.rhs, h, &mut scratch.x, true)?;
                 } else {
                     self.solve_scaled(&scratch.residual, h, &mut scratch.y, true)?;
-                    for (x, y) in scratch.x.iter_mut().zip(&scratch.y) {
-                        *x += y;
-                    }
-                    let change = relative_change(&scratch.y, &scratch.x, n);
+                    let change = add_change(&mut scratch.x, &scratch.y, n);
                     // Contracting by `change / previous` a pass, the next
                     // pass would change `x` by `change² / previous`.
                     if change * change <= REFINED * previous || change <= REFINED {
@@ -842,14 +847,23 @@ const MAX_REFINEMENTS: usize = 3;
 /// with the factorization (docs/performance.md, "Forward sensitivities").
 const REFINED_PARAMETERS: usize = 1;
 
-/// The larger of `‖y_u‖∞ / ‖x_u‖∞` and `‖y_λ‖∞ / ‖x_λ‖∞` (each 0 when `y`'s
-/// part is 0): coordinates and multipliers have units of their own.
-fn relative_change(y: &[f64], x: &[f64], n: usize) -> f64 {
-    let part = |y: &[f64], x: &[f64]| {
-        let (dy, sx) = (max_abs(y), max_abs(x));
-        if dy == 0.0 { 0.0 } else { dy / sx }
+/// `x += y`, and the larger of `‖y_u‖∞ / ‖x_u‖∞` and `‖y_λ‖∞ / ‖x_λ‖∞`
+/// after it (each 0 when `y`'s part is 0): coordinates and multipliers have
+/// units of their own. The norms are taken in the same pass.
+fn add_change(x: &mut [f64], y: &[f64], n: usize) -> f64 {
+    let part = |x: &mut [f64], y: &[f64]| {
+        let (mut dy, mut sx) = (MaxAbs::new(), MaxAbs::new());
+        for (x, &y) in x.iter_mut().zip(y) {
+            *x += y;
+            dy.push(y);
+            sx.push(*x);
+        }
+        let dy = dy.value();
+        if dy == 0.0 { 0.0 } else { dy / sx.value() }
     };
-    part(&y[..n], &x[..n]).max(part(&y[n..], &x[n..]))
+    let (x_u, x_l) = x.split_at_mut(n);
+    let (y_u, y_l) = y.split_at(n);
+    part(x_u, y_u).max(part(x_l, y_l))
 }
 
 /// The whole model's coordinates and constraint rows by name.
