@@ -369,14 +369,11 @@ impl System for PlanarSystem {
     fn hessian_with_work(&self, t: f64, u: &[f64], mu: &[f64], out: &mut [f64], work: &mut [f64]) {
         // The table of phi_b_into: one sin_cos a body instead of one per
         // side of each revolute joint.
-        let Some(trig) = self.trig_table(u, work) else {
+        if self.trig_table(u, work).is_none() {
             self.hessian_into(t, u, mu, out);
             return;
-        };
-        crate::parallel::hessian_in_parts(&self.revolutes, out, |k, out, base| {
-            k.hessian_from(u, trig, mu, out, base);
-        });
-        self.hessian_of_others(t, u, mu, out);
+        }
+        self.hessian_after_phi_b(t, u, mu, out, work);
     }
 
     fn hessian_after_phi_b(
@@ -387,7 +384,8 @@ impl System for PlanarSystem {
         out: &mut [f64],
         work: &mut [f64],
     ) {
-        // phi_b_into left the table of this `u` in `work`.
+        // phi_b_into (or hessian_with_work) left the table of this `u` in
+        // `work`.
         let Some(trig) = work.get(..2 * self.angles.len()) else {
             self.hessian_into(t, u, mu, out);
             return;
