@@ -31,4 +31,7 @@ def test_check_refusing_redundant_constraints(check_cli):
     assert cli.code == 1 and r["can_run"] is False
     assert r["report"] == cli.stdout
     assert r["error"] == cli.python_error()
-    assert r["start_error"].startswith("at start-up (t = 0)")
+    assert r["start_error"] == (
+        "at start-up (t = 0): the KKT matrix is singular with the redundant constraints of "
+        "right-top: their multipliers are undetermined"
+    )

@@ -494,6 +494,14 @@ pub fn check<S: ModelLookup + ?Sized>(
                 left_out_rows_hold(sys, rows, &u).map_err(|e| e.to_string())?;
                 Ok((moved, u))
             }),
+        // Without minimum-norm multipliers the KKT matrix is singular: the
+        // solver's pivot would name a row of the dependent set that need
+        // not be the redundant joint.
+        Ok(rows) if !rows.dependent.is_empty() => Err(format!(
+            "at start-up (t = 0): the KKT matrix is singular with the redundant constraints of \
+             {}: their multipliers are undetermined",
+            owners(sys, &rows.dependent).join(", ")
+        )),
         _ => start_report(sys, config, &u0, &v0),
     };
     let (projection, start_error) = match start {

@@ -396,6 +396,15 @@ at = [0.5, 0.5]
     assert_eq!(report.degrees_of_freedom(), Some(1));
     assert_eq!(report.redundant, vec!["middle-top".to_string()]);
     assert!(!report.can_run());
+    // The start names the redundant joint, not the row the solver's pivot
+    // met first (a row of the dependent set that may be another joint's).
+    assert!(
+        report.to_string().contains(
+            "start: fails: at start-up (t = 0): the KKT matrix is singular with the redundant \
+             constraints of middle-top: their multipliers are undetermined\n"
+        ),
+        "{report}"
+    );
     // Without the third crank's top joint: one degree of freedom, no
     // redundancy, and it starts.
     let plain = parallelogram.replace("name = \"middle-top\"", "name = \"middle-top\"\n# removed").replace(
