@@ -138,8 +138,9 @@ class Model:
         ``position_violation`` and ``velocity_violation`` (``(owner, row,
         value)`` or None), ``projection`` (``{"position": (coordinate, by),
         "velocity": ...}`` or None when the start fails), ``start_error``,
-        ``can_run``, ``error`` (the refusal of redundant constraints, as
-        ``mstar check`` prints it, or None) and ``report`` (its text).
+        ``can_run``, ``error`` (the refusal of redundant constraints, or of a
+        KKT solver that does not fit the model at the setting that chose it,
+        as ``mstar check`` prints it, or None) and ``report`` (its text).
         ``settings`` override ``[simulation]`` keys, ``overrides`` any key
         (as :meth:`run`).
 

@@ -223,7 +223,17 @@ impl NativeModel {
         let redundant = sim.redundant.unwrap_or_default();
         let report =
             py.detach(|| mstar::run::check(mstar::run::lookup(mechanism), &config, redundant));
-        check_dict(py, &report)
+        // A KKT solver that does not fit the model, placed as `mstar check`
+        // and `mstar run` place it.
+        let config_refusal = report
+            .start_refuses_config
+            .then_some(report.start_error.as_deref())
+            .flatten()
+            .map(|why| match sim.error_at("kkt", why) {
+                Some(placed) => placed.to_string(),
+                None => format!("{}: {why}", self.origin),
+            });
+        check_dict(py, &report, config_refusal)
     }
 
     /// Runs the model with the settings `overrides`, GIL released: a dict of
@@ -532,8 +542,14 @@ fn expected_rows(sim: &Simulation) -> Option<usize> {
     (rows.is_finite() && rows < 1e8).then_some(rows as usize)
 }
 
-/// [`CheckReport`] as a dict; `report`: the text `mstar check` prints.
-fn check_dict<'py>(py: Python<'py>, r: &CheckReport) -> PyResult<Bound<'py, PyDict>> {
+/// [`CheckReport`] as a dict; `report`: the text `mstar check` prints;
+/// `error`: the refusal of redundant constraints, else `config_refusal`
+/// (a KKT solver that does not fit the model, placed at its key).
+fn check_dict<'py>(
+    py: Python<'py>,
+    r: &CheckReport,
+    config_refusal: Option<String>,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("coordinates", r.coordinates)?;
     d.set_item("constraints", r.constraints)?;
@@ -555,7 +571,7 @@ fn check_dict<'py>(py: Python<'py>, r: &CheckReport) -> PyResult<Bound<'py, PyDi
     let refused = (!r.redundant.is_empty() && !r.minimum_norm).then(|| {
         RunError::redundant(r.redundant.clone(), r.coordinates, r.constraints).to_string()
     });
-    d.set_item("error", refused)?;
+    d.set_item("error", refused.or(config_refusal))?;
     d.set_item("report", r.to_string())?;
     Ok(d)
 }

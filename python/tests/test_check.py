@@ -35,3 +35,16 @@ def test_check_refusing_redundant_constraints(check_cli):
         "at start-up (t = 0): the KKT matrix is singular with the redundant constraints of "
         "right-top: their multipliers are undetermined"
     )
+
+
+def test_check_places_a_kkt_solver_that_does_not_fit(check_cli):
+    """A KKT solver the model does not fit (ldlt with a damper): the error
+    at the setting that chose it, as `mstar check` prints it."""
+    path = MODELS / "crank-and-spring.toml"
+    # (A string as Python passes it: a TOML string, quoted.)
+    cli = check_cli(path, "--set", 'simulation.kkt="ldlt"')
+    r = mstar.load(path).check(kkt="ldlt")
+    assert cli.code == 1 and r["can_run"] is False
+    assert r["report"] == cli.stdout
+    assert r["error"] == cli.python_error()
+    assert "kkt" in r["error"] and "needs a symmetric iteration matrix" in r["error"]

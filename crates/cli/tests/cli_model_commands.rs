@@ -522,6 +522,39 @@ fn refused_settings_name_the_override_that_gave_them() {
         let o = mstar(&rerun);
         assert!(o.status.success(), "{advice:?}: {}", text(&o.stderr));
     }
+    // `check` places the refused KKT solver as `run` does: at the override,
+    // or at the file's key.
+    let o = mstar(&["check", crank.as_str(), "--set", "simulation.kkt=ldlt"]);
+    let e = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains("error: ") && e.contains(
+            "crank-and-spring.toml: --set simulation.kkt=ldlt: [simulation]: kkt: invalid configuration: the ldlt KKT backend needs a symmetric iteration matrix"
+        ),
+        "{e}"
+    );
+    let with_key = dir.join("crank-ldlt.toml");
+    let source = std::fs::read_to_string(&crank).expect("the model");
+    std::fs::write(
+        &with_key,
+        source.replacen("[simulation]", "[simulation]\nkkt = \"ldlt\"\n#", 1),
+    )
+    .expect("a scratch model");
+    let key_line = std::fs::read_to_string(&with_key)
+        .expect("the scratch model")
+        .lines()
+        .position(|l| l == "kkt = \"ldlt\"")
+        .expect("the key is in the file")
+        + 1;
+    let o = mstar(&["check", with_key.display().to_string().as_str()]);
+    let e = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{e}");
+    assert!(
+        e.contains(&format!(
+            "crank-ldlt.toml:{key_line}:7: [simulation]: kkt: invalid configuration"
+        )),
+        "{e}"
+    );
     let builtin: [(&[&str], &str); 2] = [
         (
             &["--set", "simulation.tol=2"],

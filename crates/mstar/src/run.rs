@@ -469,6 +469,11 @@ pub struct CheckReport {
     pub projection: Option<[(String, f64); 2]>,
     /// Why the model cannot start, if it cannot.
     pub start_error: Option<String>,
+    /// Whether `start_error` is the integrator's refusal of its
+    /// configuration (a KKT solver that does not fit the model,
+    /// [`IntegrationError::Config`]), which a caller can place at the
+    /// file's `[simulation] kkt`.
+    pub start_refuses_config: bool,
 }
 
 /// Checks `sys` at its initial state with the integrator configuration
@@ -487,7 +492,7 @@ pub fn check<S: ModelLookup + ?Sized>(
     let (phi, w) = initial_violations(sys, &u0, &v0);
     let start = match &rows {
         Ok(rows) if minimum_norm => minimum_norm_fits(sys, rows)
-            .map_err(|e| e.to_string())
+            .map_err(|e| StartFailure::from(e.to_string()))
             .and_then(|()| {
                 let subset = RowSubset::new(sys, rows.kept.clone());
                 let (moved, u) = start_report(&subset, config, &u0, &v0)?;
@@ -497,16 +502,16 @@ pub fn check<S: ModelLookup + ?Sized>(
         // Without minimum-norm multipliers the KKT matrix is singular: the
         // solver's pivot would name a row of the dependent set that need
         // not be the redundant joint.
-        Ok(rows) if !rows.dependent.is_empty() => Err(format!(
+        Ok(rows) if !rows.dependent.is_empty() => Err(StartFailure::from(format!(
             "at start-up (t = 0): the KKT matrix is singular with the redundant constraints of \
              {}: their multipliers are undetermined",
             owners(sys, &rows.dependent).join(", ")
-        )),
+        ))),
         _ => start_report(sys, config, &u0, &v0),
     };
-    let (projection, start_error) = match start {
-        Ok((p, _)) => (Some(p), None),
-        Err(e) => (None, Some(e)),
+    let (projection, start_error, start_refuses_config) = match start {
+        Ok((p, _)) => (Some(p), None, false),
+        Err(e) => (None, Some(e.why), e.config),
     };
     CheckReport {
         coordinates: n,
@@ -519,6 +524,7 @@ pub fn check<S: ModelLookup + ?Sized>(
         velocity_violation: violation(sys, &w),
         projection,
         start_error,
+        start_refuses_config,
     }
 }
 
@@ -565,6 +571,19 @@ fn initial_violations<S: ModelLookup + ?Sized>(
 /// The coordinate the start moves most and by how much: positions, velocities.
 type Moved = [(String, f64); 2];
 
+/// Why a start failed, and whether it is the configuration's refusal
+/// ([`CheckReport::start_refuses_config`]).
+struct StartFailure {
+    why: String,
+    config: bool,
+}
+
+impl From<String> for StartFailure {
+    fn from(why: String) -> Self {
+        Self { why, config: false }
+    }
+}
+
 /// What the initial projection moves most (position, velocity) and the
 /// start state's coordinates, or why the start fails.
 fn start_report<S: System + ?Sized>(
@@ -572,8 +591,11 @@ fn start_report<S: System + ?Sized>(
     config: &Config,
     u0: &[f64],
     v0: &[f64],
-) -> Result<(Moved, Vec<f64>), String> {
-    let integ = Integrator::new(sys, config.clone(), 0.0, u0, v0).map_err(|e| e.to_string())?;
+) -> Result<(Moved, Vec<f64>), StartFailure> {
+    let integ = Integrator::new(sys, config.clone(), 0.0, u0, v0).map_err(|e| StartFailure {
+        config: matches!(e, IntegrationError::Config(_)),
+        why: e.to_string(),
+    })?;
     let report = integ.start_report();
     let largest = |d: &[f64]| {
         let (i, x) = argmax_abs(d);
