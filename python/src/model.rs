@@ -223,16 +223,8 @@ impl NativeModel {
         let redundant = sim.redundant.unwrap_or_default();
         let report =
             py.detach(|| mstar::run::check(mstar::run::lookup(mechanism), &config, redundant));
-        // A KKT solver that does not fit the model, placed as `mstar check`
-        // and `mstar run` place it.
-        let config_refusal = report
-            .start_refuses_config
-            .then_some(report.start_error.as_deref())
-            .flatten()
-            .map(|why| match sim.error_at("kkt", why) {
-                Some(placed) => placed.to_string(),
-                None => format!("{}: {why}", self.origin),
-            });
+        // A KKT solver that does not fit the model, as `mstar check` says.
+        let config_refusal = mstar::placed::kkt_refusal(&report, &sim, &self.origin);
         check_dict(py, &report, config_refusal)
     }
 

@@ -56,6 +56,27 @@ pub fn config(sim: &Simulation) -> Result<(Config, f64), Refusal> {
     })
 }
 
+/// A check's refusal of the KKT solver the model does not fit
+/// ([`crate::run::CheckReport::start_refuses_config`]) as `mstar run`
+/// words it: at `[simulation] kkt` (or the `--set` that gave it), else
+/// after `origin` (the file's name); `None` when the start was not refused
+/// for its configuration.
+#[must_use]
+pub fn kkt_refusal(
+    report: &crate::run::CheckReport,
+    sim: &Simulation,
+    origin: &str,
+) -> Option<String> {
+    let why = report
+        .start_error
+        .as_deref()
+        .filter(|_| report.start_refuses_config)?;
+    Some(match sim.error_at("kkt", why) {
+        Some(placed) => placed.to_string(),
+        None => format!("{origin}: {why}"),
+    })
+}
+
 /// The keys of `[simulation]` the integrator may refuse after the reader
 /// accepted each alone, the scheme's first (`beta` before `gamma`: the
 /// condition β ≥ γ/2 is about β).

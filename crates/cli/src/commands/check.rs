@@ -49,16 +49,9 @@ pub fn check(args: &CheckArgs) -> ExitCode {
     let refusal = (!report.redundant.is_empty() && !report.minimum_norm).then(|| {
         mstar::run::RunError::redundant_at(report.redundant.clone(), sys, &sys.initial_position())
     });
-    // As `run`'s refusal of a KKT solver that does not fit the model: at
-    // the key (or the `--set`) that chose it, else naming the file.
-    let config_refusal = report
-        .start_refuses_config
-        .then_some(report.start_error.as_deref())
-        .flatten()
-        .map(|why| match file.simulation.error_at("kkt", why) {
-            Some(placed) => placed.to_string(),
-            None => format!("{}: {why}", args.model.display()),
-        });
+    // As `run`'s refusal of a KKT solver that does not fit the model.
+    let config_refusal =
+        mstar::placed::kkt_refusal(&report, &file.simulation, &args.model.display().to_string());
     // As `run`: the process ends next.
     std::mem::forget(file);
     print!("{report}");
