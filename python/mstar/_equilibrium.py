@@ -23,6 +23,13 @@ class Equilibrium:
     - ``iterations`` (Newton steps accepted), ``damped`` (of those, damped
       ones), ``residual`` (‖r‖∞ of the force balance, N or N m) and
       ``constraint`` (‖Φ‖∞);
+    - ``redundant``: the constraint rows left out of the solve because they
+      repeat what the others impose (their multipliers are the
+      minimum-norm ones), by name; empty without redundant constraints;
+    - ``stable``: ``True`` when no mode about it grows, ``False`` for an
+      unstable equilibrium (a maximum or saddle of the potential that the
+      search could not leave for a stable one), ``None`` when not checked
+      (above 600 coordinates);
     - ``result``: the same state as a one-sample :class:`mstar.Result` with
       every column ``mstar equilibrium --out`` writes (velocities and
       accelerations zero, ``energy`` the potential energy).
@@ -39,6 +46,8 @@ class Equilibrium:
     damped: int
     residual: float
     constraint: float
+    redundant: List[str]
+    stable: Optional[bool]
     result: Result
 
     def __init__(self, raw: Dict[str, Any], model: Any, overrides: List[str]) -> None:
@@ -54,6 +63,8 @@ class Equilibrium:
         self.damped = int(found["damped"])
         self.residual = float(found["residual"])
         self.constraint = float(found["constraint"])
+        self.redundant = list(found["redundant"])
+        self.stable = found["stable"]
 
     def __getitem__(self, name: str) -> float:
         """One column's value by name (the names of

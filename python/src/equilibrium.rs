@@ -14,7 +14,9 @@ use crate::{EquilibriumError, ModelError};
 
 /// The equilibrium of `mechanism` from its initial pose, GIL released: a
 /// dict as a run's (one sample at `t = 0`, velocities zero) with
-/// `equilibrium` = `{iterations, damped, residual, constraint}`.
+/// `equilibrium` = `{iterations, damped, residual, constraint, redundant,
+/// stable}` (`redundant`: the constraint rows left out of the solve, by
+/// name; `stable`: `None` when not checked, above 600 coordinates).
 ///
 /// # Errors
 /// `mstar.EquilibriumError` with `kind`
@@ -69,6 +71,18 @@ fn at_rest<'py>(
     found.set_item("damped", eq.damped)?;
     found.set_item("residual", eq.residual)?;
     found.set_item("constraint", eq.constraint)?;
+    let left_out: Vec<String> = eq
+        .left_out
+        .iter()
+        .map(|&k| sys.constraint_name(k))
+        .collect();
+    found.set_item("redundant", left_out)?;
+    let stable = match mstar::equilibrium::stability(sys, eq, 0.0) {
+        mstar::equilibrium::Stability::Stable => Some(true),
+        mstar::equilibrium::Stability::Unstable { .. } => Some(false),
+        mstar::equilibrium::Stability::Unchecked => None,
+    };
+    found.set_item("stable", stable)?;
     d.set_item("equilibrium", found)?;
     Ok(d)
 }

@@ -80,6 +80,35 @@ def test_the_pendulum_hangs_straight_down():
     assert "Equilibrium" in repr(eq)
 
 
+def test_a_duplicated_hinge_is_left_out_and_shares_the_weight():
+    """The pendulum's hinge given twice: solved without the dependent rows,
+    named in `redundant`; the minimum-norm multipliers split m g = 10 N
+    equally; the hanging pendulum is stable."""
+    second = (
+        '\n[[joint]]\nname = "hinge2"\ntype = "revolute"\n'
+        'bodies = ["ground", "bob"]\npoints = [[0.0, 0.0], [0.0, 1.0]]\n'
+    )
+    eq = mstar.load(PENDULUM.read_text() + second).equilibrium()
+    assert eq.redundant == ["hinge2.x", "hinge2.y"]
+    assert eq.stable is True
+    for hinge in ("hinge", "hinge2"):
+        assert abs(eq.reaction(hinge)["fy"] - 5.0) <= 1e-9
+    assert abs(eq["bob.y"] + 1.0) <= 1e-10
+
+
+def test_a_start_near_upright_ends_at_the_stable_equilibrium():
+    """The paper's pendulum started 0.3 rad from upright: the search leaves
+    the unstable upright equilibrium for the hanging one."""
+    text = PENDULUM.read_text().replace(
+        "pose = [1.0, 0.0, 1.5707963267948966]",
+        "pose = [{}, {}, {}]".format(math.sin(0.3), math.cos(0.3), math.pi - 0.3),
+    )
+    assert text != PENDULUM.read_text()
+    eq = mstar.load(text).equilibrium()
+    assert eq.stable is True and eq.redundant == []
+    assert abs(eq["bob.x"]) <= 1e-10 and abs(eq["bob.y"] + 1.0) <= 1e-10
+
+
 def test_overrides_change_the_model():
     eq = mstar.load(PENDULUM).equilibrium(overrides={"gravity": [0.0, -20.0]})
     assert abs(eq.reaction("hinge")["fy"] - 20.0) <= 1e-9

@@ -289,10 +289,30 @@ pub fn rest_state<S: System + ?Sized>(
 /// and these are its `λ`; elsewhere they are the constraint forces at the
 /// instant of release.
 ///
+/// With redundant constraints (dependent rows of `B` at `u`) the problem
+/// is solved on the independent rows and the multipliers are the
+/// minimum-norm ones of all rows ([`crate::redundant::all_multipliers`]).
+///
 /// # Errors
 /// [`ModesError::Multipliers`] when the acceleration problem is singular,
 /// [`ModesError::Structure`] for a malformed model.
 pub fn rest_multipliers<S: System + ?Sized>(
+    sys: &S,
+    u: &[f64],
+    t0: f64,
+) -> Result<Vec<f64>, ModesError> {
+    if let Some(kept) = crate::redundant::kept_if_dependent(sys, t0, u) {
+        let subset = mstar_model::RowSubset::new(sys, kept.clone());
+        let lambda = rest_multipliers_on(&subset, u, t0)?;
+        return Ok(crate::redundant::all_multipliers(
+            sys, &kept, t0, u, &lambda,
+        ));
+    }
+    rest_multipliers_on(sys, u, t0)
+}
+
+/// [`rest_multipliers`] with all rows of `sys`.
+fn rest_multipliers_on<S: System + ?Sized>(
     sys: &S,
     u: &[f64],
     t0: f64,

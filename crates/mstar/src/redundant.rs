@@ -166,6 +166,38 @@ fn dependent_rows(rows: &[Vec<f64>]) -> (Vec<usize>, Vec<usize>) {
     (kept, dependent)
 }
 
+/// The rows of `sys` to solve on at `(t, u0)`: `Some(kept)` when some rows
+/// depend on others, `None` when all are independent or the rows were not
+/// sorted out (past the sparse elimination's budget: all rows, and the
+/// factorization finds out).
+pub fn kept_if_dependent<S: System + ?Sized>(sys: &S, t: f64, u0: &[f64]) -> Option<Vec<usize>> {
+    let rows = rows(sys, t, u0).ok()?;
+    (!rows.dependent.is_empty()).then_some(rows.kept)
+}
+
+/// The multipliers of all rows of `sys` at `(t, u)` from `lambda_kept`, those
+/// of the rows `kept`: the minimum-norm ones with the same `Bᵀλ` up to
+/// `n · m` = [`DENSE_LIMIT`] ([`MinimumNorm`]), above it `λ_kept` with zeros
+/// on the left-out rows (the same `Bᵀλ`, not the least norm).
+pub fn all_multipliers<S: System + ?Sized>(
+    sys: &S,
+    kept: &[usize],
+    t: f64,
+    u: &[f64],
+    lambda_kept: &[f64],
+) -> Vec<f64> {
+    if sys.n_coords() * sys.n_constraints() <= DENSE_LIMIT {
+        return MinimumNorm::new(sys, kept.to_vec())
+            .lambda(t, u, lambda_kept)
+            .to_vec();
+    }
+    let mut lambda = vec![0.0; sys.n_constraints()];
+    for (&k, &l) in kept.iter().zip(lambda_kept) {
+        lambda[k] = l;
+    }
+    lambda
+}
+
 /// The minimum-norm multipliers of all rows from those of the kept rows.
 #[derive(Debug)]
 pub struct MinimumNorm<'a, S: System + ?Sized> {

@@ -68,6 +68,23 @@ pub fn equilibrium(args: &EquilibriumArgs) -> ExitCode {
         }
     };
     report(sys, &eq);
+    if let mstar::equilibrium::Stability::Unstable {
+        direction, rate, ..
+    } = mstar::equilibrium::stability(sys, &eq, 0.0)
+    {
+        note!("{}", unstable_note(&direction, rate));
+    }
+    if !eq.left_out.is_empty() {
+        let rows: Vec<String> = eq
+            .left_out
+            .iter()
+            .map(|&k| sys.constraint_name(k))
+            .collect();
+        note!(
+            "note: the constraint rows {} repeat what the others impose (redundant): the equilibrium was solved without them, and the multipliers of all rows are the minimum-norm ones that give the same constraint forces",
+            rows.join(", ")
+        );
+    }
     let written = write_csv(args.out.as_deref(), sys, &file.output, &eq)
         .and_then(|()| write_model(args, sys, &eq));
     match written {
@@ -101,6 +118,19 @@ fn report(sys: &dyn ModelLookup, eq: &Equilibrium) {
     if eq.u.len() > LISTED {
         say!("  … ({} coordinates in all)", eq.u.len());
     }
+}
+
+/// The warning for an unstable equilibrium: the direction it runs away
+/// along, and what finds a stable one.
+fn unstable_note(direction: &[(String, f64)], rate: f64) -> String {
+    let along: Vec<String> = direction
+        .iter()
+        .map(|(name, x)| format!("{name} ({x:.3})"))
+        .collect();
+    format!(
+        "warning: this equilibrium is unstable: a small displacement along {} grows as e^(st), s = {rate:.4e} 1/s (a maximum or saddle of the potential, as an inverted pendulum). The search converges to the equilibrium nearest its path from the initial pose; to find a stable one, start the model from a pose nearer it (for a pendulum, below its pivot)",
+        along.join(", ")
+    )
 }
 
 /// The one CSV row of the equilibrium: the state at rest at t = 0, the

@@ -36,8 +36,11 @@
 //! inverse iteration, and reported as such.
 
 mod rewrite;
+mod rows;
+mod stability;
 
 pub use rewrite::{RewriteError, model_text};
+pub use stability::{Stability, stability};
 
 use mstar_kkt::{KktError, KktOptions, KktSolver};
 use mstar_linearize::{Coefficients, Linearization, LinearizeError};
@@ -81,6 +84,10 @@ pub struct Equilibrium {
     pub residual: f64,
     /// `‖Φ‖∞` at the solution.
     pub constraint: f64,
+    /// The constraint rows left out of the solve because they depend on the
+    /// others at the initial pose (redundant constraints; their multipliers
+    /// are the minimum-norm ones), ascending; empty without.
+    pub left_out: Vec<usize>,
 }
 
 impl Equilibrium {
@@ -134,6 +141,19 @@ pub enum EquilibriumError {
         /// = 0`), largest first, with its value.
         unbalanced: Vec<(String, f64)>,
     },
+    /// Constraints that depend on the others at the initial pose (left out
+    /// of the solve) do not hold at the pose found: they contradict the
+    /// others.
+    #[error(
+        "the constraints {} are redundant at the initial pose (their equations depend on the others'), so the equilibrium was solved without them, but they do not hold at the pose found (‖Φ‖∞ = {violation:.3e}): a redundant joint must repeat what the others impose in every position (check its points); if the initial pose is a singular position of the mechanism (a parallelogram lying flat), start it away from there",
+        .rows.join(", ")
+    )]
+    Contradicting {
+        /// The violated rows, by name.
+        rows: Vec<String>,
+        /// `‖Φ‖∞` of all rows at the pose found.
+        violation: f64,
+    },
     /// A solution was found, but the tangent is singular there.
     #[error(
         "the equilibrium is neutral: the static tangent [K_T Bᵀ; B 0] is singular at the pose found, so it may move freely along the direction {} (nothing resists that motion: add a spring, a stop or a driver)",
@@ -174,6 +194,8 @@ struct Statics<'a, S: System + ?Sized> {
     length: f64,
     /// `ω²_ref = F / (L m_max)`, 1/s², the unit of `μ`.
     omega2: f64,
+    /// Every accepted step lowers the potential energy (up to round-off).
+    descend: bool,
 }
 
 impl<'a, S: System + ?Sized> Statics<'a, S> {
@@ -210,6 +232,7 @@ impl<'a, S: System + ?Sized> Statics<'a, S> {
             force_seen: force,
             length,
             omega2,
+            descend: false,
         })
     }
 
@@ -336,6 +359,12 @@ fn statics(mu: f64) -> Coefficients {
 /// generalized forces; [`EquilibriumError::Neutral`] when the tangent is
 /// singular at the solution; `Structure`/`Kkt` for a malformed model.
 ///
+/// With redundant constraints (rows of `B` at `u0` that depend on the
+/// others) it is solved on the independent rows, and the multipliers are
+/// the minimum-norm ones of all rows (`rows.rs`);
+/// [`EquilibriumError::Contradicting`] when a left-out row does not hold
+/// at the pose found.
+///
 /// # Panics
 /// If `u0` does not have one value per coordinate.
 pub fn solve<S: System + ?Sized>(
@@ -343,7 +372,34 @@ pub fn solve<S: System + ?Sized>(
     u0: &[f64],
     options: &EquilibriumOptions,
 ) -> Result<Equilibrium, EquilibriumError> {
+    let found = solve_from(sys, u0, options, false);
+    stability::stable_or_as_found(sys, found, options)
+}
+
+/// The search from `u0`, on the independent rows when some depend on the
+/// others; with `descend`, every step lowers the potential energy (the
+/// search away from an unstable equilibrium, `stability.rs`).
+fn solve_from<S: System + ?Sized>(
+    sys: &S,
+    u0: &[f64],
+    options: &EquilibriumOptions,
+    descend: bool,
+) -> Result<Equilibrium, EquilibriumError> {
+    match crate::redundant::kept_if_dependent(sys, options.t0, u0) {
+        Some(kept) => rows::solve_on_rows(sys, kept, u0, options, descend),
+        None => solve_on(sys, u0, options, descend),
+    }
+}
+
+/// [`solve_from`] with all rows of `sys`, which are independent.
+fn solve_on<S: System + ?Sized>(
+    sys: &S,
+    u0: &[f64],
+    options: &EquilibriumOptions,
+    descend: bool,
+) -> Result<Equilibrium, EquilibriumError> {
     let mut st = Statics::new(sys, u0, options.t0)?;
+    st.descend = descend;
     let mut u = u0.to_vec();
     let mut lambda = st
         .acceleration_multipliers(&u)
@@ -435,8 +491,16 @@ fn line_search<S: System + ?Sized>(
             newton
         };
         let f1 = st.merit(&u1, &l1);
-        let descends = damped && st.sys.potential_energy(st.t0, &u1) < energy;
-        if f1.is_finite() && (f1 < merit || descends) {
+        let e1 = st.sys.potential_energy(st.t0, &u1);
+        let accepted = if st.descend {
+            // Away from an unstable equilibrium: no step back up towards
+            // it; near a minimum the energy changes at round-off only.
+            let round_off = 1e-12 * energy.abs().max(st.force * st.length);
+            e1 < energy || (f1 < merit && e1 <= energy + round_off)
+        } else {
+            f1 < merit || (damped && e1 < energy)
+        };
+        if f1.is_finite() && accepted {
             return Some((u1, l1, f1));
         }
         alpha *= 0.5;
@@ -462,6 +526,7 @@ fn finish<S: System + ?Sized>(
         damped,
         residual,
         constraint,
+        left_out: Vec::new(),
     };
     if regular {
         return Ok(eq);
