@@ -483,6 +483,24 @@ fn malformed_sensors_and_columns_are_placed_errors() {
         err.contains("--columns: 'reaction:O3.*' names no column (did you mean reaction:O2.fx"),
         "{err}"
     );
+    // The same in the file's `[output] columns`: placed at the key.
+    let file = dir.join("bad-columns.toml");
+    std::fs::write(
+        &file,
+        format!("{base}\n[output]\ncolumns = [\"t\", \"reaction:O3.*\"]\n"),
+    )
+    .expect("written");
+    let f = file.display().to_string();
+    let out = dir.join("o.csv").display().to_string();
+    let r = mstar(&["run", &f, "--t-end", "0.01", "--out", &out]);
+    let err = text(&r.stderr);
+    assert_eq!(r.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!(
+            "{f}:60:11: [output]: columns: 'reaction:O3.*' names no column (did you mean reaction:O2.fx"
+        )),
+        "{err}"
+    );
 }
 
 /// A sweep's runs write the chosen columns, and its summary has each

@@ -146,6 +146,8 @@ pub struct Output {
     pub columns: Option<Vec<String>>,
     /// The `[[sensor]]`s, in file order.
     pub sensors: Vec<mstar_model::sensor::Sensor>,
+    /// Where `columns` is in the file (an error with an empty message).
+    columns_at: Option<FileError>,
 }
 
 impl Default for Output {
@@ -155,7 +157,23 @@ impl Default for Output {
             every_time: None,
             columns: None,
             sensors: Vec::new(),
+            columns_at: None,
         }
+    }
+}
+
+impl Output {
+    /// An error about `[output] columns` found after reading (an entry names
+    /// no column of the model): `FILE:LINE:COLUMN: [output]: columns: why`
+    /// (or the override that gave it); `None` when the file does not give
+    /// `columns`.
+    #[must_use]
+    pub fn columns_error(&self, why: impl std::fmt::Display) -> Option<FileError> {
+        let at = self.columns_at.as_ref()?;
+        Some(FileError {
+            message: format!("{}[output]: columns: {why}", at.message),
+            ..at.clone()
+        })
     }
 }
 
@@ -209,12 +227,17 @@ pub(crate) fn read(
                 return Err(f.bad(entry, "give either every (steps) or every_time (seconds)"));
             }
             let columns = f.optional("columns", column_patterns)?;
+            let columns_at = f
+                .places()
+                .into_iter()
+                .find_map(|(key, at)| (key == "columns").then_some(at));
             f.finish(&["every", "every_time", "columns"])?;
             Output {
                 every: every.unwrap_or(1),
                 every_time,
                 columns,
                 sensors: Vec::new(),
+                columns_at,
             }
         }
         None => Output::default(),

@@ -152,7 +152,7 @@ pub enum RunError {
     /// rod stretched in line towards a point they cannot reach), so the
     /// violation comes first, then what to do if the pose is right.
     #[error(
-        "the initial pose violates '{owner}' by {violation:.3e} (row {row}), and at that pose the constraints of {} are linearly dependent on the others: the joints cannot all hold in the pose given. Fix the initial pose of the bodies that '{owner}' joins ([[body]] pose, [[point_mass]] position) or the points of '{owner}' so that it holds at t = 0 (mstar check shows the violation); {}",
+        "the initial pose violates '{owner}' by {violation:.3e} (row {row}), and at that pose the constraints of {} are linearly dependent on the others: the joints cannot all hold in the pose given. Fix the initial pose of the bodies that '{owner}' joins ({pose_keys}) or the points of '{owner}' so that it holds at t = 0 (mstar check shows the violation); {}",
         .joints.join(", "),
         redundant_advice(*.large)
     )]
@@ -167,6 +167,9 @@ pub enum RunError {
         violation: f64,
         /// Above the size minimum-norm multipliers take (their advice left out).
         large: bool,
+        /// The keys of the model's format that give the pose
+        /// ([`ModelLookup::pose_keys`]).
+        pose_keys: &'static str,
     },
     /// Rows left out of a minimum-norm solve that the others do not imply:
     /// the joints contradict each other.
@@ -269,6 +272,7 @@ impl RunError {
                 row,
                 violation: value.abs(),
                 large: n * m > crate::redundant::DENSE_LIMIT,
+                pose_keys: sys.pose_keys(),
             },
             _ => Self::redundant(joints, n, m),
         }

@@ -62,7 +62,7 @@ pub fn check(args: &CheckArgs) -> ExitCode {
             note!("error: the redundant constraints were not computed: {why}");
         }
         if let Some(e) = refusal {
-            note!("error: {e}");
+            note!("error: {}: {e}", args.model.display());
         }
         if let Some(e) = config_refusal {
             note!("error: {e}");

@@ -151,8 +151,13 @@ fn write_csv(
         Some(patterns) => {
             let mut names = mstar::csv::header(sys);
             names.extend_from_slice(&extra);
-            let chosen = mstar::columns::Selection::new(&names, patterns)
-                .map_err(|e| crate::output::usage(format!("[output] columns: {e}")))?;
+            let chosen =
+                mstar::columns::Selection::new(&names, patterns).map_err(|e| {
+                    match output.columns_error(&e) {
+                        Some(at) => anyhow::Error::new(at),
+                        None => crate::output::usage(format!("[output] columns: {e}")),
+                    }
+                })?;
             Some(chosen)
         }
         None => None,

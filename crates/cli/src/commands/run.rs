@@ -122,6 +122,9 @@ struct Loaded {
     sensors: Vec<mstar::model::sensor::Sensor>,
     /// `[output] columns`.
     columns: Option<Vec<String>>,
+    /// Where `[output] columns` is (an error with the key's place and an
+    /// empty reason), for an entry that names no column.
+    columns_error: Option<mstar::file::FileError>,
 }
 
 /// A model file's mechanism, planar or spatial (whose CSV has reaction
@@ -323,8 +326,20 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
             } else {
                 "--columns"
             };
-            let chosen = Selection::new(&names, patterns)
-                .map_err(|e| crate::output::usage(format!("{source}: {e}")))?;
+            let chosen = Selection::new(&names, patterns).map_err(|e| {
+                match model
+                    .columns_error
+                    .clone()
+                    .filter(|_| args.columns.is_empty())
+                {
+                    // `FILE:LINE:COLUMN: [output]: columns: why`.
+                    Some(mut at) => {
+                        at.message.push_str(&e.to_string());
+                        anyhow::Error::new(at)
+                    }
+                    None => crate::output::usage(format!("{source}: {e}")),
+                }
+            })?;
             Some(chosen)
         }
         _ => None,
@@ -462,7 +477,9 @@ fn independent_rows(model: &Loaded) -> Result<Option<mstar::redundant::Rows>> {
         return Ok(None);
     };
     let choice = model.simulation.redundant.unwrap_or_default();
-    let Some(rows) = mstar::run::solve_rows(sys, &model.u0, choice)? else {
+    let rows =
+        mstar::run::solve_rows(sys, &model.u0, choice).with_context(|| model.label.clone())?;
+    let Some(rows) = rows else {
         return Ok(None);
     };
     say!(
@@ -547,7 +564,13 @@ fn load(args: &RunArgs) -> Result<Loaded> {
         note!("warning: {w}");
     }
     let sys = mstar::run::lookup(&file.mechanism);
+    let columns_error = file
+        .output
+        .columns
+        .as_ref()
+        .and(file.output.columns_error(""));
     Ok(Loaded {
+        columns_error,
         label: path.display().to_string(),
         u0: sys.initial_position(),
         v0: sys.initial_velocity(),
@@ -881,6 +904,7 @@ fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
                 every_time: None,
                 sensors: Vec::new(),
                 columns: None,
+                columns_error: None,
             }
         }
         Builtin::Chain => {
@@ -895,6 +919,7 @@ fn builtin_model(builtin: Builtin, set: &[String]) -> Result<Loaded> {
                 every_time: None,
                 sensors: Vec::new(),
                 columns: None,
+                columns_error: None,
             }
         }
     })

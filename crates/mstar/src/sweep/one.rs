@@ -105,7 +105,13 @@ fn integrate(plan: &Plan, dir: &Dir, index: usize, stop: &dyn Fn() -> bool) -> O
             names.extend_from_slice(&extra);
             match Selection::new(&names, patterns) {
                 Ok(s) => Some(s),
-                Err(e) => return Some(Figures::failed(format!("[output] columns: {e}"))),
+                Err(e) => {
+                    let why = file
+                        .output
+                        .columns_error(&e)
+                        .map_or_else(|| format!("[output] columns: {e}"), |at| at.to_string());
+                    return Some(Figures::failed(why));
+                }
             }
         }
         None => None,
