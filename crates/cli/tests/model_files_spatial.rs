@@ -190,6 +190,13 @@ fn malformed_files_are_errors_at_the_key() {
         e,
         "m.toml:7:1: body 'top': unknown key 'inertai' (did you mean 'inertia'?)"
     );
+    // A misspelt joint key: the typo named where it is written, not the
+    // key it stands for reported missing at the table's header.
+    let e = error(&TOP.replace("points =", "point ="));
+    assert!(
+        e.contains("unknown key 'point' (did you mean 'points'?)"),
+        "{e}"
+    );
     let e = error(&TOP.replace("[1.0, 0.0, 0.0, 0.0]", "[1.0, 0.0, 0.0]"));
     assert_eq!(
         e,

@@ -409,10 +409,12 @@ impl<'a, P: Copy> Reader<'a, P> {
                 f.span(),
                 format!("{}: give 'points' or 'at', not both", f.what),
             )),
-            (None, None) => Err(self.doc.error(
-                f.span(),
-                format!("{}: the key 'points' (or 'at') is missing", f.what),
-            )),
+            (None, None) => Err(f.typo_of(&["points", "at"]).unwrap_or_else(|| {
+                self.doc.error(
+                    f.span(),
+                    format!("{}: the key 'points' (or 'at') is missing", f.what),
+                )
+            })),
         }
     }
 

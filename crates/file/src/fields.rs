@@ -155,22 +155,29 @@ impl<'a> Fields<'a> {
         self.optional(key, parse)?.ok_or_else(|| self.missing(key))
     }
 
-    /// The error for a missing key; when an unread key is a likely typo of
-    /// it, the error is about that one, where it is written.
-    pub(crate) fn missing(&self, key: &str) -> FileError {
-        let typo = self
+    /// When a missing key (one of `keys`) is likely misspelt as an unread
+    /// key of the table: the error about that key, where it is written.
+    pub(crate) fn typo_of(&self, keys: &[&str]) -> Option<FileError> {
+        let (e, key) = self
             .entries
             .iter()
             .zip(&self.used)
-            .find(|(e, used)| !**used && closest(&e.key, &[key]).is_some());
-        if let Some((e, _)) = typo {
-            return self.doc.error(
-                e.key_span.as_ref().or(e.node.span.as_ref()),
-                format!(
-                    "{}: unknown key '{}' (did you mean '{key}'?)",
-                    self.what, e.key
-                ),
-            );
+            .filter(|(_, used)| !**used)
+            .find_map(|(e, _)| Some((e, closest(&e.key, keys)?)))?;
+        Some(self.doc.error(
+            e.key_span.as_ref().or(e.node.span.as_ref()),
+            format!(
+                "{}: unknown key '{}' (did you mean '{key}'?)",
+                self.what, e.key
+            ),
+        ))
+    }
+
+    /// The error for a missing key; when an unread key is a likely typo of
+    /// it, the error is about that one, where it is written.
+    pub(crate) fn missing(&self, key: &str) -> FileError {
+        if let Some(typo) = self.typo_of(&[key]) {
+            return typo;
         }
         self.doc.error(
             self.span.as_ref(),

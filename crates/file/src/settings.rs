@@ -177,7 +177,8 @@ impl Output {
     }
 }
 
-/// The keys of `[simulation]`.
+/// The keys of `[simulation]` (the last, `rotational_mass`, for spatial
+/// files only).
 const SIMULATION_KEYS: [&str; 18] = [
     "t_end",
     "h",
@@ -330,7 +331,13 @@ fn simulation(mut f: Fields<'_>, spatial: bool) -> Result<Simulation, FileError>
         ));
     }
     consistent(&mut f, &s)?;
-    f.finish(&SIMULATION_KEYS)?;
+    // (A planar file's list of keys leaves out the spatial one.)
+    let keys = if spatial {
+        &SIMULATION_KEYS[..]
+    } else {
+        &SIMULATION_KEYS[..SIMULATION_KEYS.len() - 1]
+    };
+    f.finish(keys)?;
     Ok(s)
 }
 

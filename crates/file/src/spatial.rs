@@ -369,6 +369,9 @@ impl<'a> Model<'a> {
                 ));
             }
             (None, None) => {
+                if let Some(typo) = f.typo_of(&["axes", "axis"]) {
+                    return Err(typo);
+                }
                 return Err(self.r.doc.error(
                     f.span(),
                     format!(

@@ -125,7 +125,12 @@ fn a_valid_model_is_the_base_of_the_error_cases() {
 
 #[test]
 fn each_bad_input_names_the_place_the_element_and_the_key() {
-    let cases: [(&str, &str, &[&str]); 12] = [
+    let cases: [(&str, &str, &[&str]); 13] = [
+        (
+            "at = [0.0, 0.0]",
+            "att = [0.0, 0.0]",
+            &["m.toml:", "unknown key 'att'", "did you mean 'at'"],
+        ),
         (
             "mass = 1.0",
             "mas = 1.0",
