@@ -27,10 +27,31 @@ pub(crate) fn number(root: &Node, key: &str) -> Result<f64, String> {
             other.kind(),
             suggestions(root, key)
         )),
-        None => Err(format!(
+        None => Err(not_given(root, key, &parts)),
+    }
+}
+
+/// The message for a path that names nothing: when its element is there
+/// but does not give the last key (a default: a joint's `length` from the
+/// initial pose), what to write in the file; the closest keys.
+fn not_given(root: &Node, key: &str, parts: &[&str]) -> String {
+    let element = match parts.split_last() {
+        Some((last, parent)) if !parent.is_empty() && !last.is_empty() => parent
+            .iter()
+            .try_fold(root, |node, part| child(node, part))
+            .filter(|n| matches!(n.value, Value::Table(_)))
+            .map(|_| (parent.join("."), *last)),
+        _ => None,
+    };
+    match element {
+        Some((parent, last)) => format!(
+            "the model has no numeric key '{key}': '{parent}' does not give '{last}' (its value is a default, such as a length taken from the initial pose); write '{last} = <value>' in the file to make it a key; {}",
+            suggestions(root, key)
+        ),
+        None => format!(
             "the model has no numeric key '{key}'; {}",
             suggestions(root, key)
-        )),
+        ),
     }
 }
 
@@ -114,6 +135,18 @@ mod tests {
             "t.toml",
         )
         .expect("the document parses")
+    }
+
+    /// An element that does not give the key: what to write in the file.
+    #[test]
+    fn a_key_left_to_its_default_says_to_write_it() {
+        let e = number(&doc(), "body.crank.inertia").expect_err("not given");
+        assert!(
+            e.starts_with(
+                "the model has no numeric key 'body.crank.inertia': 'body.crank' does not give 'inertia'"
+            ) && e.contains("write 'inertia = <value>' in the file"),
+            "{e}"
+        );
     }
 
     #[test]
