@@ -80,10 +80,18 @@ const ROWS_LISTED: usize = 40;
 /// (the first [`ROWS_LISTED`]).
 fn constraint_rows(sys: &dyn mstar::run::ModelLookup) -> String {
     let m = sys.n_constraints();
-    let mut names: Vec<String> = (0..m.min(ROWS_LISTED)).map(|k| sys.constraint_name(k)).collect();
+    let mut names: Vec<String> = (0..m.min(ROWS_LISTED))
+        .map(|k| sys.constraint_name(k))
+        .collect();
     if m > ROWS_LISTED {
-        names.push(format!("… ({m} in all: the header of `mstar run --out` has every one)"));
+        names.push(format!(
+            "… ({m} in all: the header of `mstar run --out` has every one)"
+        ));
     }
-    let listed = if names.is_empty() { "none".to_string() } else { names.join(", ") };
+    let listed = if names.is_empty() {
+        "none".to_string()
+    } else {
+        names.join(", ")
+    };
     format!("constraint rows (CSV columns lambda:<row>): {listed}")
 }
