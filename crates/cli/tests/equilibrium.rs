@@ -134,10 +134,26 @@ stiffness = {k}
     let err = text(&o.stderr);
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(
-        err.contains("bar.theta") && err.contains("initial pose"),
+        err.contains("bar.theta") && err.contains("initial pose") && err.contains("rest_angle"),
         "{err}"
     );
     assert!(!eq.exists());
+    // The advice: the rest angle written out (0, the file's initial
+    // angle). The written model starts at the equilibrium: solved again, it
+    // takes no Newton step, and the spring is the same (the same angle).
+    let given = dir.join("bar-rest.toml");
+    let text_of = std::fs::read_to_string(&file).expect("written");
+    std::fs::write(&given, format!("{text_of}rest_angle = 0.0\n")).expect("written");
+    let o = mstar(&[
+        "equilibrium",
+        &given.display().to_string(),
+        "--write-model",
+        &eq.display().to_string(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let again = solve(&dir, &eq);
+    close("u:bar.theta (again)", again["u:bar.theta"], -phi, 1e-9);
+    assert_eq!(again["iterations"], 0.0, "{again:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -258,23 +258,34 @@ impl<'a> Model<'a> {
     fn rotational_spring(&mut self, f: &mut Fields<'a>, name: &str) -> Result<(), FileError> {
         let sides = self.r.bodies.sides(f)?;
         let (stiffness, damping) = bodies::stiffness_damping(f, Spring::Rotational)?;
-        f.finish(&["name", "type", "bodies", "stiffness", "damping"])?;
+        let rest = f.optional("rest_angle", number_in(f64::is_finite, "finite, in rad"))?;
+        f.finish(&[
+            "name",
+            "type",
+            "bodies",
+            "stiffness",
+            "damping",
+            "rest_angle",
+        ])?;
         let rigid = |s: Side| match s {
             Side::Ground => Ok(None),
             Side::Body(b) if b.rigid => Ok(Some(b.id)),
             Side::Body(_) => Err(()),
         };
-        match (rigid(sides[0]), rigid(sides[1])) {
+        let why = match (rigid(sides[0]), rigid(sides[1])) {
             (Ok(a), Ok(Some(b))) => {
                 let spring = RotationalSpringDamper { stiffness, damping };
-                self.builder.rotational_spring(name, a, b, spring);
-                Ok(())
+                self.builder.rotational_spring_at(name, a, b, spring, rest);
+                return Ok(());
             }
-            _ => Err(self.r.doc.error(
-                f.span(),
-                format!("{}: a rotational spring joins two rigid bodies (the first may be 'ground'); point masses have no angle", f.what),
-            )),
-        }
+            (_, Ok(None)) => {
+                "the second body must be a rigid body: give the ground first (bodies = [\"ground\", \"<body>\"])"
+            }
+            _ => {
+                "a rotational spring joins two rigid bodies (the first may be 'ground'); point masses have no angle"
+            }
+        };
+        Err(f.bad_key("bodies", why))
     }
 
     /// The attachment points from `points` (local) or `at` (one global point

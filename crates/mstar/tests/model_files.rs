@@ -669,3 +669,34 @@ fn atol_zero_on_a_coordinate_held_at_zero_advises_an_absolute_tolerance_that_wor
     let advised = slider_crank_warning(&["simulation.atol=1e-6", "simulation.t_end=0.2"]);
     assert_eq!(advised, None, "the advised atol passes");
 }
+
+/// A planar rotational spring: its `rest_angle` sets the relative angle at
+/// which it is relaxed (a torque `−k (θ − rest_angle)` at the initial
+/// angle 0: `k · 0.3` for `rest_angle = 0.3`, against none without it);
+/// the ground given second is refused at `bodies`, saying to give it first.
+#[test]
+fn a_rotational_spring_s_rest_angle_and_its_bodies() {
+    let spring = "\n[[force]]\nname = \"s\"\ntype = \"rotational-spring-damper\"\nbodies = [\"ground\", \"bar\"]\nstiffness = 10.0\n";
+    let gravity_free = BAR.replace(
+        "format = \"mstar.planar/1\"",
+        "format = \"mstar.planar/1\"\ngravity = [0.0, 0.0]",
+    );
+    let torque = |text: &str| {
+        let m = ModelFile::parse(text, "m.toml", Format::Toml).expect("valid");
+        let u = m.system.initial_position();
+        let mut g = vec![0.0; 3];
+        m.system.forces_into(0.0, &u, &[0.0; 3], &mut g);
+        g[2]
+    };
+    assert_eq!(torque(&format!("{gravity_free}{spring}")), 0.0);
+    let rested = format!("{gravity_free}{spring}rest_angle = 0.3\n");
+    assert!((torque(&rested) - 3.0).abs() < 1e-12, "{}", torque(&rested));
+    let e = error(&format!(
+        "{BAR}{}",
+        spring.replace("[\"ground\", \"bar\"]", "[\"bar\", \"ground\"]")
+    ));
+    assert!(
+        e.contains("m.toml:18:10: force 's': bodies: the second body must be a rigid body: give the ground first"),
+        "{e}"
+    );
+}

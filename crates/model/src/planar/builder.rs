@@ -250,12 +250,26 @@ impl PlanarBuilder {
         b: BodyId,
         spring: RotationalSpringDamper,
     ) -> &mut Self {
+        self.rotational_spring_at(name, a, b, spring, None)
+    }
+
+    /// [`rotational_spring`](Self::rotational_spring) at rest at the
+    /// relative angle `rest` (`θ_b − θ_a`, rad) when given, else at the
+    /// initial one.
+    pub fn rotational_spring_at(
+        &mut self,
+        name: &str,
+        a: Option<BodyId>,
+        b: BodyId,
+        spring: RotationalSpringDamper,
+        rest: Option<f64>,
+    ) -> &mut Self {
         let at_a = a.map_or(At::Ground([0.0; 2]), |id| At::Body(id, [0.0; 2]));
         let at_b = At::Body(b, [0.0; 2]);
         let element = RotationalSpring {
             k: spring.stiffness,
             c: spring.damping,
-            angle: self.angle(at_b) - self.angle(at_a),
+            angle: rest.unwrap_or_else(|| self.angle(at_b) - self.angle(at_a)),
         };
         self.forces
             .push((name.into(), Arc::new(element), [at_a, at_b]));

@@ -27,7 +27,7 @@ pub enum RewriteError {
     /// An element is defined from the initial pose, so moving the pose
     /// changed the mechanism.
     #[error(
-        "{what} is not the same in the written model: an element is defined from the initial pose (a joint's `at` or `axis`, a default `length` or `rest_length`, a rotational spring's rest angle); give it explicitly in the file and run again"
+        "{what} is not the same in the written model: an element is defined from the initial pose; give it explicitly in the file and run again: a joint's local `points` instead of `at`, its local `axes` instead of `axis` (spatial), a `length` or `rest_length` instead of the default, a planar rotational spring's `rest_angle` (a spatial one is measured from the initial pose: a model with one cannot be rewritten)"
     )]
     PoseDependent {
         /// `the constraint <row>` or `the force on <coordinate>`.
