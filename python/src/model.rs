@@ -225,7 +225,7 @@ impl NativeModel {
             py.detach(|| mstar::run::check(mstar::run::lookup(mechanism), &config, redundant));
         // A KKT solver that does not fit the model, as `mstar check` says.
         let config_refusal = mstar::placed::kkt_refusal(&report, &sim, &self.origin);
-        check_dict(py, &report, config_refusal)
+        check_dict(py, &report, config_refusal, &self.origin)
     }
 
     /// Runs the model with the settings `overrides`, GIL released: a dict of
@@ -303,6 +303,13 @@ impl NativeModel {
             Err(RunError::Stopped { .. }) => raised.unwrap_or_else(|| {
                 pyo3::exceptions::PyKeyboardInterrupt::new_err("the run was stopped")
             }),
+            // The refusal of redundant constraints names the file, as
+            // `mstar run`'s.
+            Err(
+                e @ (RunError::Redundant(_)
+                | RunError::RedundantLarge(_)
+                | RunError::RedundantAtViolatedPose { .. }),
+            ) => IntegrationError::new_err(format!("{}: {}", self.origin, crate::message(&e))),
             Err(e) => IntegrationError::new_err(crate::message(&e)),
         };
         samples.set_item("stats", stats_dict(py, None, wall)?)?;
@@ -541,6 +548,7 @@ fn check_dict<'py>(
     py: Python<'py>,
     r: &CheckReport,
     config_refusal: Option<String>,
+    origin: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("coordinates", r.coordinates)?;
@@ -561,7 +569,8 @@ fn check_dict<'py>(
     d.set_item("start_error", r.start_error.clone())?;
     d.set_item("can_run", r.can_run())?;
     let refused = (!r.redundant.is_empty() && !r.minimum_norm).then(|| {
-        RunError::redundant(r.redundant.clone(), r.coordinates, r.constraints).to_string()
+        let e = RunError::redundant(r.redundant.clone(), r.coordinates, r.constraints);
+        format!("{origin}: {e}")
     });
     d.set_item("error", refused.or(config_refusal))?;
     d.set_item("report", r.to_string())?;

@@ -518,7 +518,9 @@ fn revolute_axes_that_are_not_parallel_at_the_start_are_named() {
         "{e}"
     );
     assert!(
-        e.contains("[0.0000, 1.0000, 0.0000] and [0.0000, 0.0000, 1.0000], 90.0000°"),
+        e.contains(
+            "[0.000000000, 1.000000000, 0.000000000] and [0.000000000, 0.000000000, 1.000000000], 1.571e0 rad apart"
+        ),
         "{e}"
     );
     assert!(!e.contains("redundant"), "{e}");

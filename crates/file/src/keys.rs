@@ -40,6 +40,9 @@ fn not_given(root: &Node, key: &str, parts: &[&str]) -> String {
             .iter()
             .try_fold(root, |node, part| child(node, part))
             .filter(|n| matches!(n.value, Value::Table(_)))
+            // (A key of the element one edit or a third away is a typo of
+            // it, not a default: the closest keys say so.)
+            .filter(|n| !has_close_key(n, last))
             .map(|_| (parent.join("."), *last)),
         _ => None,
     };
@@ -53,6 +56,17 @@ fn not_given(root: &Node, key: &str, parts: &[&str]) -> String {
             suggestions(root, key)
         ),
     }
+}
+
+/// Whether the table `node` has a key within a typo of `key` (one edit for
+/// a short key, a third of a longer one).
+fn has_close_key(node: &Node, key: &str) -> bool {
+    let Value::Table(entries) = &node.value else {
+        return false;
+    };
+    entries
+        .iter()
+        .any(|e| strsim::levenshtein(&e.key, key) <= 1.max(e.key.len() / 3))
 }
 
 /// The node `part` names inside `node`: a key of a table, or the element of

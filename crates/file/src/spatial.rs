@@ -396,7 +396,16 @@ impl<'a> Model<'a> {
             if a.iter().all(|x| *x == 0.0) {
                 let key = if axis.is_some() { "axis" } else { "axes" };
                 let e = f.read_entry(key)?;
-                return Err(f.bad(e, format!("axis {} must not be zero", k + 1)));
+                let which = if axis.is_some() {
+                    "the axis".to_string()
+                } else {
+                    format!(
+                        "axis {} (the {} body's)",
+                        k + 1,
+                        if k == 0 { "first" } else { "second" }
+                    )
+                };
+                return Err(f.bad(e, format!("{which} must not be zero")));
             }
         }
         let g = [sides[0].global(axes[0]), sides[1].global(axes[1])];
@@ -419,12 +428,13 @@ impl<'a> Model<'a> {
             return Err(f.bad(
                 e,
                 format!(
-                    "the two axes must be parallel at the initial pose: in global axes they are \
-                     [{}] and [{}], {:.4}° apart; give each body's axis so that both point along the \
-                     joint axis at the start, or write 'axis = [x, y, z]' (global) instead",
+                    "the two axes must be parallel at the initial pose (to 1e-6 rad): in global axes \
+                     they are [{}] and [{}], {:.3e} rad apart; give each body's axis so that both \
+                     point along the joint axis at the start, or write 'axis = [x, y, z]' (global) \
+                     instead",
                     global_text(g[0]),
                     global_text(g[1]),
-                    apart.to_degrees()
+                    apart
                 ),
             ));
         }
@@ -433,7 +443,9 @@ impl<'a> Model<'a> {
             return Err(f.bad(
                 e,
                 format!(
-                    "the two cross axes must be perpendicular at the initial pose (the cosine of their angle is {c:.3e})"
+                    "the two cross axes must be perpendicular at the initial pose (to 1e-6): in global axes they are [{}] and [{}], the cosine of their angle {c:.3e}; give each body's cross axis so that they are perpendicular at the start",
+                    global_text(g[0]),
+                    global_text(g[1])
                 ),
             ));
         }
@@ -642,7 +654,7 @@ fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 /// A direction for a message, unit length, 4 decimals.
 fn global_text(a: [f64; 3]) -> String {
     let n = dot(a, a).sqrt();
-    a.map(|x| format!("{:.4}", x / n)).join(", ")
+    a.map(|x| format!("{:.9}", x / n)).join(", ")
 }
 
 fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

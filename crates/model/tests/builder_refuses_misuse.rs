@@ -94,3 +94,73 @@ fn a_rotational_spring_on_a_point_mass_is_an_error_naming_it() {
     b.rotational_spring("coil", None, bar, spring);
     assert!(b.build().is_ok());
 }
+
+/// A spatial joint's axes are checked at the initial pose as a model file's
+/// are: a revolute joint whose two axes are not parallel there (a bar
+/// rotated 90° about z, the same local axis on both sides) and a universal
+/// joint whose cross axes are not perpendicular are refused, naming the
+/// joint; parallel (and opposite) and perpendicular axes are taken.
+#[test]
+fn spatial_joint_axes_are_checked_at_the_initial_pose() {
+    use mstar_model::spatial::{
+        Attach, JointSpec, JointType, SpatialBody, SpatialBuilder, SpatialInertia,
+    };
+    let build = |kind: JointType, axes: [[f64; 3]; 2], turned: bool| {
+        let mut b = SpatialBuilder::new();
+        let (s, c) = (
+            std::f64::consts::FRAC_PI_4.sin(),
+            std::f64::consts::FRAC_PI_4.cos(),
+        );
+        let bar = b.body(
+            "bar",
+            SpatialBody {
+                mass: 1.0,
+                inertia: SpatialInertia::Principal([0.08, 0.08, 0.002]),
+                position: [0.0, 0.0, -0.5],
+                // 90° about z when `turned`.
+                orientation: if turned {
+                    [c, 0.0, 0.0, s]
+                } else {
+                    [1.0, 0.0, 0.0, 0.0]
+                },
+                velocity: [0.0; 3],
+                angular_velocity: [0.0; 3],
+            },
+        );
+        b.joint(
+            "h",
+            JointSpec {
+                kind,
+                bodies: [Attach::Ground, Attach::Body(bar)],
+                points: [[0.0; 3], [0.0, 0.0, 0.5]],
+                axes,
+                length: None,
+            },
+        );
+        b.build().map(|_| ()).map_err(|e| e.to_string())
+    };
+    let x = [1.0, 0.0, 0.0];
+    assert_eq!(build(JointType::Revolute, [x, x], false), Ok(()));
+    assert_eq!(
+        build(JointType::Revolute, [x, [-1.0, 0.0, 0.0]], false),
+        Ok(())
+    );
+    // Turned 90° about z, the bar's local x is the global y.
+    assert_eq!(
+        build(JointType::Revolute, [[0.0, 1.0, 0.0], x], true),
+        Ok(())
+    );
+    let e = build(JointType::Revolute, [x, x], true).expect_err("not parallel");
+    assert!(
+        e.contains("h") && e.contains("must be parallel at the initial pose"),
+        "{e}"
+    );
+    let y = [0.0, 1.0, 0.0];
+    assert_eq!(build(JointType::Universal, [x, y], false), Ok(()));
+    let e =
+        build(JointType::Universal, [x, [0.1, 1.0, 0.0]], false).expect_err("not perpendicular");
+    assert!(
+        e.contains("must be perpendicular at the initial pose"),
+        "{e}"
+    );
+}

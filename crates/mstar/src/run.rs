@@ -478,7 +478,13 @@ pub struct CheckReport {
     /// [`IntegrationError::Config`]), which a caller can place at the
     /// file's `[simulation] kkt`.
     pub start_refuses_config: bool,
+    /// The first [`ROWS_LISTED`] constraint rows by name (the CSV's
+    /// `lambda:<row>` columns).
+    pub rows: Vec<String>,
 }
+
+/// How many constraint rows a [`CheckReport`] names.
+pub const ROWS_LISTED: usize = 40;
 
 /// Checks `sys` at its initial state with the integrator configuration
 /// `config`, redundant constraints handled as `redundant` says.
@@ -529,6 +535,9 @@ pub fn check<S: ModelLookup + ?Sized>(
         projection,
         start_error,
         start_refuses_config,
+        rows: (0..m.min(ROWS_LISTED))
+            .map(|k| sys.constraint_name(k))
+            .collect(),
     }
 }
 
@@ -679,11 +688,28 @@ impl std::fmt::Display for CheckReport {
                         )?;
                     }
                 }
-                Ok(())
             }
-            (None, Some(e)) => writeln!(f, "start: fails: {e}"),
-            (None, None) => Ok(()),
+            (None, Some(e)) => writeln!(f, "start: fails: {e}")?,
+            (None, None) => {}
         }
+        self.fmt_rows(f)
+    }
+}
+
+impl CheckReport {
+    /// The line naming the constraint rows (the first [`ROWS_LISTED`]).
+    fn fmt_rows(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut listed = self.rows.join(", ");
+        if self.constraints > self.rows.len() {
+            listed.push_str(&format!(
+                ", … ({} in all: the header of `mstar run --out` has every one)",
+                self.constraints
+            ));
+        }
+        if listed.is_empty() {
+            listed = "none".into();
+        }
+        writeln!(f, "constraint rows (CSV columns lambda:<row>): {listed}")
     }
 }
 

@@ -52,11 +52,9 @@ pub fn check(args: &CheckArgs) -> ExitCode {
     // As `run`'s refusal of a KKT solver that does not fit the model.
     let config_refusal =
         mstar::placed::kkt_refusal(&report, &file.simulation, &args.model.display().to_string());
-    let rows = constraint_rows(sys);
     // As `run`: the process ends next.
     std::mem::forget(file);
     print!("{report}");
-    say!("{rows}");
     if report.can_run() {
         ExitCode::SUCCESS
     } else {
@@ -71,27 +69,4 @@ pub fn check(args: &CheckArgs) -> ExitCode {
         }
         ExitCode::from(1)
     }
-}
-
-/// How many constraint rows `mstar check` names before "…".
-const ROWS_LISTED: usize = 40;
-
-/// The constraint rows by name, the columns `lambda:<row>` of a run's CSV
-/// (the first [`ROWS_LISTED`]).
-fn constraint_rows(sys: &dyn mstar::run::ModelLookup) -> String {
-    let m = sys.n_constraints();
-    let mut names: Vec<String> = (0..m.min(ROWS_LISTED))
-        .map(|k| sys.constraint_name(k))
-        .collect();
-    if m > ROWS_LISTED {
-        names.push(format!(
-            "… ({m} in all: the header of `mstar run --out` has every one)"
-        ));
-    }
-    let listed = if names.is_empty() {
-        "none".to_string()
-    } else {
-        names.join(", ")
-    };
-    format!("constraint rows (CSV columns lambda:<row>): {listed}")
 }

@@ -246,6 +246,10 @@ pub struct SpatialBuilder {
     joints: Vec<(String, Pending)>,
     loads: Vec<(String, [Attach; 2], Arc<dyn SpatialLoad>)>,
     errors: Vec<ModelError>,
+    /// Whether joint axes are checked at the initial pose
+    /// ([`check_axes`](Self::check_axes); off for the derivative checks'
+    /// examples, whose axes are arbitrary).
+    axes_checked: bool,
 }
 
 impl Default for SpatialBuilder {
@@ -265,6 +269,7 @@ impl SpatialBuilder {
             joints: Vec::new(),
             loads: Vec::new(),
             errors: Vec::new(),
+            axes_checked: true,
         }
     }
 
@@ -623,11 +628,70 @@ impl SpatialBuilder {
         Ok(JointData::new(name.to_string(), sides, element))
     }
 
+    /// Joints whose axes are not parallel (or perpendicular) at the start
+    /// are taken as given: for the derivative checks' examples
+    /// (`examples.rs`), whose constraints need not hold.
+    pub(crate) fn unchecked_axes(&mut self) -> &mut Self {
+        self.axes_checked = false;
+        self
+    }
+
+    /// A joint's axes at the initial pose, as a model file's are checked:
+    /// parallel (or opposite) for a revolute, prismatic or cylindrical joint,
+    /// perpendicular for a universal one, to 1e-6 rad. The joint keeps its
+    /// axes as they are at the start: axes that are not so there would make
+    /// its rows contradict the start.
+    fn check_axes(&self, name: &str, spec: &JointSpec) -> Result<(), ModelError> {
+        if !self.axes_checked {
+            return Ok(());
+        }
+        let global = |k: usize| {
+            let h = unit(spec.axes[k])?;
+            Some(super::rotation::rotate(
+                &self.initial_orientation(spec.bodies[k]),
+                h,
+            ))
+        };
+        // (A zero axis is `geometry`'s error.)
+        let (Some(a), Some(b)) = (global(0), global(1)) else {
+            return Ok(());
+        };
+        let c = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+        let text = |v: [f64; 3]| format!("[{:.9}, {:.9}, {:.9}]", v[0], v[1], v[2]);
+        let why = match spec.kind {
+            JointType::Revolute | JointType::Prismatic | JointType::Cylindrical => {
+                let apart = (1.0 - c * c).max(0.0).sqrt().asin();
+                if apart.is_nan() || apart > 1e-6 {
+                    Some(format!(
+                        "the two axes must be parallel at the initial pose: in global axes they are {} and {}, {apart:.3e} rad apart; give each body's axis so that both point along the joint axis at the start",
+                        text(a),
+                        text(b)
+                    ))
+                } else {
+                    None
+                }
+            }
+            JointType::Universal if c.is_nan() || c.abs() > 1e-6 => Some(format!(
+                "the two cross axes must be perpendicular at the initial pose: in global axes they are {} and {} (the cosine of their angle is {c:.3e}); give each body's cross axis so that they are perpendicular at the start",
+                text(a),
+                text(b)
+            )),
+            _ => None,
+        };
+        why.map_or(Ok(()), |what| {
+            Err(ModelError::Invalid {
+                element: name.to_string(),
+                what,
+            })
+        })
+    }
+
     fn joint_element(
         &self,
         name: &str,
         spec: &JointSpec,
     ) -> Result<Arc<dyn SpatialJoint>, ModelError> {
+        self.check_axes(name, spec)?;
         let (g, a_in_b) = self.geometry(name, spec.bodies, spec.points, spec.axes)?;
         Ok(match spec.kind {
             JointType::Spherical => Arc::new(Spherical(g)),

@@ -22,7 +22,7 @@ pub fn element_examples(params: &[f64]) -> Vec<(String, SpatialSystem)> {
         for pair in 0..3 {
             let add = |what: &str, f: &dyn Fn(&mut SpatialBuilder, [Attach; 2])| {
                 let mut b = SpatialBuilder::new();
-                b.rotational_mass(mode);
+                b.rotational_mass(mode).unchecked_axes();
                 let a = b.body("a", body(&v3(0), p(3), 0.0));
                 let second = match pair {
                     0 => Attach::Body(b.body("b", body(&v3(4), p(7), 1.0))),
