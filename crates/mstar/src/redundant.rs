@@ -264,6 +264,8 @@ pub struct Expanded<'a, 'o, S: System + ?Sized> {
     left_out: Vec<usize>,
     phi: Vec<f64>,
     drift: Option<Drift>,
+    /// The largest `|Φ|` of a left-out row over the samples watched.
+    largest: f64,
 }
 
 /// The first sample where a left-out row is violated.
@@ -291,7 +293,16 @@ impl<'a, 'o, S: System + ?Sized> Expanded<'a, 'o, S> {
             left_out,
             phi: vec![0.0; m],
             drift: None,
+            largest: 0.0,
         }
+    }
+
+    /// The largest violation of a left-out row over the samples (until the
+    /// first [`drifted`](Self::drifted) one, included), m or rad: the run's
+    /// own `max ‖Φ‖∞` is of the rows it solves.
+    #[must_use]
+    pub fn largest_violation(&self) -> f64 {
+        self.largest
     }
 
     /// The first sample where a left-out row was violated by more than
@@ -314,6 +325,7 @@ impl<'a, 'o, S: System + ?Sized> Expanded<'a, 'o, S> {
                 .map(|&r| self.phi[r])
                 .collect::<Vec<_>>(),
         );
+        self.largest = self.largest.max(violation);
         if violation > 1e-8 * scale || violation.is_nan() {
             self.drift = Some(Drift {
                 t: s.t,

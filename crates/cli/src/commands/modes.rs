@@ -231,6 +231,8 @@ fn write_csv(out: Option<&Path>, sys: &dyn ModelLookup, found: &Modes) -> Result
     }
     mstar::csv::write_atomically(path, text.as_bytes())
         .with_context(|| format!("cannot write {}", path.display()))?;
-    say!("wrote {} ({} modes)", path.display(), found.modes.len());
+    let count = found.modes.len();
+    let noun = if count == 1 { "mode" } else { "modes" };
+    say!("wrote {} ({count} {noun})", path.display());
     Ok(())
 }

@@ -360,6 +360,8 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     let mut output = RunOutput::new(stream, columns, (every, grid), t_end);
     let config_used = config.clone();
     let start = (config, &model.u0[..], &model.v0[..], t_end);
+    // The largest violation of the rows left out (redundant constraints).
+    let mut left_out = None;
     let (outcome, drift) = match (model.system.named(), rows) {
         (Some(named), Some(rows)) => {
             let subset = RowSubset::new(sys, rows.kept.clone());
@@ -375,6 +377,7 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
             let drift = expanded
                 .drifted()
                 .map(|d| mstar::run::redundancy_changed(named, d));
+            left_out = Some(expanded.largest_violation());
             (outcome, drift)
         }
         _ => {
@@ -395,6 +398,11 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
     output.recorder.finish_rows();
     let (stats, t, wall, ended) = outcome?;
     print_summary(stats, t, &output, wall);
+    if let Some(largest) = left_out {
+        say!(
+            "rows left out of the solve (redundant): max |Φ| = {largest:.3e} (the max ‖Φ‖∞ above is of the rows solved)"
+        );
+    }
     let warned = super::warn_accuracy(&stats, &config_used, sys, true);
     crate::output::conclude(output.recorder.into_stream(), args.out.as_deref(), ended, t)?;
     // The samples are written; they are wrong from the drift on.

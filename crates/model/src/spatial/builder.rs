@@ -812,8 +812,10 @@ fn checked_inertia(j: [[f64; 3]; 3], mode: RotationalMass) -> Result<Inertia, St
     }
     let minors = [j[0][0], j[0][0] * j[1][1] - j[0][1] * j[1][0], det3(&j)];
     if minors.iter().any(|&d| d <= 0.0) {
+        let m = principal_moments(&j);
         return Err(format!(
-            "inertia must be positive definite (principal moments > 0), got {j:?}"
+            "inertia must be positive definite: its principal moments (eigenvalues) are [{:.6e}, {:.6e}, {:.6e}], and each must be > 0; got {j:?}",
+            m[0], m[1], m[2]
         ));
     }
     let (jxx, jyy, jzz) = (j[0][0], j[1][1], j[2][2]);
@@ -831,8 +833,50 @@ fn checked_inertia(j: [[f64; 3]; 3], mode: RotationalMass) -> Result<Inertia, St
     Ok(Inertia { j, kappa })
 }
 
+/// The eigenvalues of the symmetric `j`, ascending, in closed form (the
+/// trigonometric solution of the characteristic cubic; O. K. Smith,
+/// "Eigenvalues of a symmetric 3 × 3 matrix", Comm. ACM 4 (1961) 168).
+fn principal_moments(j: &[[f64; 3]; 3]) -> [f64; 3] {
+    let off = j[0][1] * j[0][1] + j[0][2] * j[0][2] + j[1][2] * j[1][2];
+    let mut e = if off == 0.0 {
+        [j[0][0], j[1][1], j[2][2]]
+    } else {
+        let q = (j[0][0] + j[1][1] + j[2][2]) / 3.0;
+        let d = [j[0][0] - q, j[1][1] - q, j[2][2] - q];
+        let p = ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2] + 2.0 * off) / 6.0).sqrt();
+        let mut b = *j;
+        for (k, row) in b.iter_mut().enumerate() {
+            row[k] -= q;
+            row.iter_mut().for_each(|x| *x /= p);
+        }
+        let phi = (det3(&b) / 2.0).clamp(-1.0, 1.0).acos() / 3.0;
+        let largest = q + 2.0 * p * phi.cos();
+        let smallest = q + 2.0 * p * (phi + 2.0 * std::f64::consts::FRAC_PI_3).cos();
+        [smallest, 3.0 * q - largest - smallest, largest]
+    };
+    e.sort_by(f64::total_cmp);
+    e
+}
+
 fn det3(j: &[[f64; 3]; 3]) -> f64 {
     j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1])
         - j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0])
         + j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0])
+}
+
+#[cfg(test)]
+mod inertia_tests {
+    use super::principal_moments;
+
+    /// Against eigenvalues known in closed form: a diagonal matrix, and
+    /// `[[a, b, 0], [b, a, 0], [0, 0, c]]` with `a ± b` and `c`.
+    #[test]
+    fn principal_moments_are_the_eigenvalues() {
+        let d = principal_moments(&[[0.3, 0.0, 0.0], [0.0, 0.1, 0.0], [0.0, 0.0, 0.2]]);
+        assert_eq!(d, [0.1, 0.2, 0.3]);
+        let e = principal_moments(&[[0.1, 0.2, 0.0], [0.2, 0.1, 0.0], [0.0, 0.0, 0.1]]);
+        for (got, want) in e.iter().zip([-0.1, 0.1, 0.3]) {
+            assert!((got - want).abs() < 1e-15, "{e:?}");
+        }
+    }
 }
