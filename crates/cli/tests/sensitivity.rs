@@ -343,3 +343,36 @@ fn the_every_time_refusal_advises_what_runs() {
     assert_eq!(rows, 1 + 3, "a header and t = 0, 0.005, 0.01");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A key the file leaves to its default (a distance joint's `length`, taken
+/// from the initial pose) is refused with what to write; written out (the
+/// model file as shipped gives it), the same key runs.
+#[test]
+fn a_default_key_is_refused_with_what_to_write_and_the_advice_runs() {
+    let dir = scratch("sens-default-key");
+    let given = model("double-pendulum-modes.toml");
+    let text_of = std::fs::read_to_string(&given).expect("the model");
+    let defaulted = text_of.replace("length = 1.0\n", "");
+    assert_ne!(defaulted, text_of, "the model gives its rods' lengths");
+    let path = dir.join("defaulted.toml");
+    std::fs::write(&path, defaulted).expect("written");
+    let key = "joint.upper-rod.length";
+    let o = mstar(&[
+        "run",
+        &path.display().to_string(),
+        "--t-end",
+        "0.01",
+        "--sensitivity",
+        key,
+    ]);
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("'joint.upper-rod' does not give 'length'")
+            && err.contains("write 'length = <value>' in the file"),
+        "{err}"
+    );
+    let o = mstar(&["run", &given, "--t-end", "0.01", "--sensitivity", key]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -121,14 +121,14 @@ fn report(sys: &dyn ModelLookup, eq: &Equilibrium) {
 }
 
 /// The warning for an unstable equilibrium: the direction it runs away
-/// along, and what finds a stable one.
+/// along, and its rate.
 fn unstable_note(direction: &[(String, f64)], rate: f64) -> String {
     let along: Vec<String> = direction
         .iter()
         .map(|(name, x)| format!("{name} ({x:.3})"))
         .collect();
     format!(
-        "warning: this equilibrium is unstable: a small displacement along {} grows as e^(st), s = {rate:.4e} 1/s (a maximum or saddle of the potential, as an inverted pendulum). The search converges to the equilibrium nearest its path from the initial pose; to find a stable one, start the model from a pose nearer it (for a pendulum, below its pivot)",
+        "warning: this equilibrium is unstable: a small displacement along {} grows as e^(st), s = {rate:.4e} 1/s (a maximum or saddle of the potential, as an inverted pendulum), and the search from beside it, lowering the potential energy, reached no stable equilibrium (the model's potential energy does not hold every force, or it has none)",
         along.join(", ")
     )
 }
