@@ -225,7 +225,14 @@ impl NativeModel {
             py.detach(|| mstar::run::check(mstar::run::lookup(mechanism), &config, redundant));
         // A KKT solver that does not fit the model, as `mstar check` says.
         let config_refusal = mstar::placed::kkt_refusal(&report, &sim, &self.origin);
-        check_dict(py, &report, config_refusal, &self.origin)
+        // As `mstar check`'s refusal (the violation first when the pose is
+        // far from a joint; drivers that contradict the others).
+        let sys = mstar::run::lookup(mechanism);
+        let refused = (!report.redundant.is_empty() && !report.minimum_norm).then(|| {
+            let e = RunError::redundant_at(report.redundant.clone(), sys, &sys.initial_position());
+            format!("{}: {e}", self.origin)
+        });
+        check_dict(py, &report, refused.or(config_refusal))
     }
 
     /// Runs the model with the settings `overrides`, GIL released: a dict of
@@ -308,6 +315,7 @@ impl NativeModel {
             Err(
                 e @ (RunError::Redundant(_)
                 | RunError::RedundantLarge(_)
+                | RunError::RedundantDrivers(_)
                 | RunError::RedundantAtViolatedPose { .. }),
             ) => IntegrationError::new_err(format!("{}: {}", self.origin, crate::message(&e))),
             Err(e) => IntegrationError::new_err(crate::message(&e)),
@@ -542,13 +550,12 @@ fn expected_rows(sim: &Simulation) -> Option<usize> {
 }
 
 /// [`CheckReport`] as a dict; `report`: the text `mstar check` prints;
-/// `error`: the refusal of redundant constraints, else `config_refusal`
-/// (a KKT solver that does not fit the model, placed at its key).
+/// `error`: the refusal of redundant constraints, else of a KKT solver
+/// that does not fit the model (placed at its key), as `mstar check` says.
 fn check_dict<'py>(
     py: Python<'py>,
     r: &CheckReport,
-    config_refusal: Option<String>,
-    origin: &str,
+    error: Option<String>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("coordinates", r.coordinates)?;
@@ -568,11 +575,7 @@ fn check_dict<'py>(
     d.set_item("projection", projection.transpose()?)?;
     d.set_item("start_error", r.start_error.clone())?;
     d.set_item("can_run", r.can_run())?;
-    let refused = (!r.redundant.is_empty() && !r.minimum_norm).then(|| {
-        let e = RunError::redundant(r.redundant.clone(), r.coordinates, r.constraints);
-        format!("{origin}: {e}")
-    });
-    d.set_item("error", refused.or(config_refusal))?;
+    d.set_item("error", error)?;
     d.set_item("report", r.to_string())?;
     Ok(d)
 }

@@ -643,3 +643,55 @@ fn a_built_in_model_lists_what_it_takes_and_each_works() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A bar on a hinge, its angle driven, with a second driver holding its
+/// centre's x: at the start the two drivers and the hinge fix x twice (the
+/// rows depend on each other), and as soon as the bar turns they contradict.
+/// `run` and `check` name the driver and say to remove it, without offering
+/// minimum-norm multipliers (which would run until it stops holding); the
+/// advice (the driver removed) runs.
+#[test]
+fn a_driver_that_repeats_the_joints_is_named_and_removing_it_runs() {
+    let dir = scratch("redundant-driver");
+    let base = r#"format = "mstar.planar/1"
+
+[[body]]
+name = "bar"
+mass = 2.0
+inertia = 0.16666666666666666
+pose = [0.4330127018922193, -0.25, -0.5235987755982988]
+
+[[joint]]
+name = "hinge"
+type = "revolute"
+bodies = ["ground", "bar"]
+points = [[0.0, 0.0], [-0.5, 0.0]]
+
+[[driver]]
+name = "spin"
+body = "bar"
+coordinate = "theta"
+function = { linear = { value = -0.5235987755982988, rate = 1.0 } }
+"#;
+    let hold = "\n[[driver]]\nname = \"holdx\"\nbody = \"bar\"\ncoordinate = \"x\"\nfunction = 0.4330127018922193\n";
+    let path = dir.join("held.toml");
+    std::fs::write(&path, format!("{base}{hold}")).expect("written");
+    let path = path.display().to_string();
+    for command in ["run", "check"] {
+        let o = mstar(&[command, &path]);
+        let err = text(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{command}: {err}");
+        assert!(
+            err.contains(
+                "the drivers holdx prescribe what the joints and the other drivers already fix"
+            ) && err.contains("remove it"),
+            "{command}: {err}"
+        );
+        assert!(!err.contains("minimum-norm"), "{command}: {err}");
+    }
+    let removed = dir.join("spun.toml");
+    std::fs::write(&removed, base).expect("written");
+    let o = mstar(&["run", &removed.display().to_string(), "--t-end", "0.1"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -147,6 +147,16 @@ pub enum RunError {
         .0.join(", ")
     )]
     RedundantLarge(Vec<String>),
+    /// Redundant rows that are all drivers': a driver prescribing a motion
+    /// the joints and the other drivers already fix at the start (a driven
+    /// crank angle and a held slider position). Such a driver contradicts
+    /// them as soon as they move, so minimum-norm multipliers (which would
+    /// run until it stops holding) are not offered.
+    #[error(
+        "the drivers {} prescribe what the joints and the other drivers already fix at the start (their equations are linearly dependent on the others'): such a driver contradicts them as soon as the mechanism moves; remove it, or drive another coordinate",
+        .0.join(", ")
+    )]
+    RedundantDrivers(Vec<String>),
     /// Dependent rows at an initial pose that violates a constraint by more
     /// than [`FAR_POSE`]: the dependence may be the pose's (a crank and a
     /// rod stretched in line towards a point they cannot reach), so the
@@ -274,6 +284,9 @@ impl RunError {
                 large: n * m > crate::redundant::DENSE_LIMIT,
                 pose_keys: sys.pose_keys(),
             },
+            _ if joints.iter().all(|j| sys.is_driver(j) == Some(true)) => {
+                Self::RedundantDrivers(joints)
+            }
             _ => Self::redundant(joints, n, m),
         }
     }
