@@ -189,6 +189,10 @@ class Model:
             KeyboardInterrupt: Ctrl-C; ``e.partial`` as above.
 
         Warns:
+            ModelWarning: the start's notes about the state given, as ``mstar
+                run`` prints them: an initial pose far from a joint, given
+                positions or velocities that the start changed to satisfy
+                the joints.
             AccuracyWarning: the run went beyond the error tolerance (``mstar
                 run``'s warning, in ``result.stats.warning`` too).
         """
@@ -200,8 +204,10 @@ class Model:
         except (IntegrationError, KeyboardInterrupt) as e:
             partial = getattr(e, "partial", None)
             if isinstance(partial, dict):
+                _warn_start_notes(partial.pop("notes", []))
                 e.partial = Result(partial)  # type: ignore[union-attr]
             raise
+        _warn_start_notes(raw.pop("notes", []))
         stats = raw["stats"]
         if isinstance(stats.get("warning"), str):
             lines = [python_message(l.removeprefix("warning: "), RUN_RULES) for l in stats["warning"].splitlines()]
@@ -355,6 +361,16 @@ def _is_path(source: Union[str, "os.PathLike[str]"]) -> bool:
     # that the error says the file cannot be read (as `mstar run` does).
     one_line = "\n" not in source and "=" not in source
     return one_line and source.endswith((".toml", ".json", ".urdf"))
+
+
+def _warn_start_notes(notes: List[str]) -> None:
+    """The start's notes about the state given, as ``mstar run`` prints them
+    before its first step (``mstar check`` is ``Model.check()`` here), as
+    :class:`ModelWarning`."""
+    for note in notes:
+        text = note.removeprefix("note: ").removeprefix("warning: ")
+        text = text.replace("mstar check", "Model.check()")
+        warnings.warn(python_message(text, RUN_RULES), ModelWarning, stacklevel=3)
 
 
 def load(source: Union[str, "os.PathLike[str]"]) -> Model:

@@ -259,6 +259,8 @@ impl NativeModel {
         extra_columns(mechanism, &self.sensors)
             .map_err(|e| ModelError::new_err(format!("{}: {e}", self.origin)))?;
         let sensors = &self.sensors;
+        // The start's notes about the state given (`mstar run` prints them).
+        let mut notes = Vec::new();
         let (outcome, extra_names) = py.detach(|| {
             let mut poll = Poll {
                 last: Instant::now(),
@@ -275,7 +277,13 @@ impl NativeModel {
                 columns: &chained,
             };
             let outcome = if params.is_empty() {
-                mstar::run::simulate_until(sys, &sim, &mut observer, &mut || poll.stop())
+                mstar::run::simulate_noting(
+                    sys,
+                    &sim,
+                    &mut observer,
+                    &mut || poll.stop(),
+                    &mut notes,
+                )
             } else {
                 let refs: Vec<&dyn Parameterized> =
                     params.iter().map(|p| p as &dyn Parameterized).collect();
@@ -286,6 +294,7 @@ impl NativeModel {
                     &sens_columns,
                     &mut observer,
                     &mut || poll.stop(),
+                    &mut notes,
                 )
             };
             (outcome, chained.names())
@@ -299,6 +308,7 @@ impl NativeModel {
         };
         let samples = collect.into_dict(py, extra_names)?;
         names(&samples)?;
+        samples.set_item("notes", notes)?;
         let error = match outcome {
             Ok(stats) => {
                 let stats_py = stats_dict(py, Some(&stats), wall)?;

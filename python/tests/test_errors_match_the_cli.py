@@ -100,3 +100,23 @@ def test_a_builder_error_is_a_model_error():
         b.build()
     with pytest.raises(ValueError, match="coordinate: expected 'x', 'y' or 'theta', got 'z'"):
         planar.Builder().driver("d", b.point_mass("q", mass=1.0, position=(0, 0)), "z", 0.0)
+
+
+def test_start_notes_are_model_warnings_with_the_cli_s_text(run_cli, tmp_path):
+    """A pendulum given a radial velocity: the start changes it to satisfy
+    the rod, and says so as `mstar run` does (`warning: …` there, a
+    ModelWarning here, `mstar check` read as `Model.check()`)."""
+    path = tmp_path / "radial.toml"
+    text = (MODELS / "pendulum.toml").read_text().replace(
+        "pose = [1.0, 0.0, 1.5707963267948966]",
+        "pose = [1.0, 0.0, 1.5707963267948966]\nvelocity = [1.0, 0.5, 0.0]",
+    )
+    assert "velocity = " in text
+    path.write_text(text)
+    cli = run_cli(path, "--t-end", "0.01")
+    said = [l.removeprefix("warning: ") for l in cli.stderr.splitlines() if "the start changed" in l]
+    assert len(said) == 1, cli.stderr
+    with pytest.warns(mstar.ModelWarning) as caught:
+        mstar.load(path).run(t_end=0.01)
+    notes = [str(w.message) for w in caught if "the start changed" in str(w.message)]
+    assert notes == [said[0].replace("mstar check", "Model.check()")]

@@ -5,7 +5,7 @@
 
 use mstar_file::Mechanism;
 use mstar_file::{ErrorControlChoice, IntegratorChoice, NewtonChoice, RedundantChoice, Simulation};
-use mstar_kkt::{Backend, MaxAbs, argmax_abs};
+use mstar_kkt::{Backend, MaxAbs, argmax_abs, max_abs};
 use mstar_model::planar::PlanarSystem;
 use mstar_model::spatial::SpatialSystem;
 use mstar_model::{RowSubset, System};
@@ -393,12 +393,31 @@ pub fn simulate_until<S: ModelLookup + ?Sized>(
     observer: &mut dyn Observer,
     stop: &mut dyn FnMut() -> bool,
 ) -> Result<RunStats, RunError> {
+    simulate_noting(sys, sim, observer, stop, &mut Vec::new())
+}
+
+/// [`simulate_until`], with the start's notes about the state given
+/// ([`far_start_note`], [`projection_notes`]: what `mstar run` prints
+/// before its first step) pushed to `notes`.
+///
+/// # Errors
+/// As [`simulate_until`].
+pub fn simulate_noting<S: ModelLookup + ?Sized>(
+    sys: &S,
+    sim: &Simulation,
+    observer: &mut dyn Observer,
+    stop: &mut dyn FnMut() -> bool,
+    notes: &mut Vec<String>,
+) -> Result<RunStats, RunError> {
     let (config, t_end) = config(sim)?;
     let (u0, v0) = (sys.initial_position(), sys.initial_velocity());
-    match solve_rows(sys, &u0, sim.redundant.unwrap_or_default())? {
+    let rows = solve_rows(sys, &u0, sim.redundant.unwrap_or_default())?;
+    notes.extend(far_start_note(sys));
+    match rows {
         Some(rows) => {
             let subset = RowSubset::new(sys, rows.kept.clone());
             let mut integ = Integrator::new(&subset, config, 0.0, &u0, &v0)?;
+            notes.extend(projection_notes(sys, integ.start_report(), &u0, &v0));
             left_out_rows_hold(sys, &rows, integ.view().u)?;
             let mut expanded = Expanded::new(&subset, observer);
             let stats = drive(&mut integ, t_end, &mut expanded, stop)?;
@@ -409,9 +428,67 @@ pub fn simulate_until<S: ModelLookup + ?Sized>(
         }
         None => {
             let mut integ = Integrator::new(sys, config, 0.0, &u0, &v0)?;
+            notes.extend(projection_notes(sys, integ.start_report(), &u0, &v0));
             drive(&mut integ, t_end, observer, stop)
         }
     }
+}
+
+/// An initial violation worth a note, m or rad.
+const FAR_NOTE: f64 = 1e-6;
+
+/// The note of an initial pose far from a joint (by more than `1e-6`), which
+/// the start moves onto the constraints: `note: the initial pose violates
+/// '…' by … (row …); …`.
+#[must_use]
+pub fn far_start_note<S: ModelLookup + ?Sized>(sys: &S) -> Option<String> {
+    let (owner, row, value) = initial_violation(sys)?;
+    (value > FAR_NOTE).then(|| {
+        format!(
+            "note: the initial pose violates '{owner}' by {value:.3e} (row {row}); the start moves the coordinates onto the constraints (mstar check shows what it moves)"
+        )
+    })
+}
+
+/// The warnings of a start whose projection changed a given (non-zero)
+/// position or velocity by more than round-off (`1e-9` of their scale):
+/// the state integrated is not the one written, and the projection, the
+/// smallest change in the coordinates' Euclidean norm, weighs metres,
+/// radians and Euler parameters alike, so a given angular velocity is
+/// shared with the centre of mass's velocity (docs/model-format.md).
+/// Values left at zero (not given) are filled in without a warning.
+#[must_use]
+pub fn projection_notes<S: System + ?Sized>(
+    sys: &S,
+    report: &mstar_newmark::StartReport,
+    u0: &[f64],
+    v0: &[f64],
+) -> Vec<String> {
+    let mut notes = Vec::new();
+    for (level, change, given) in [
+        ("positions", &report.position_correction, u0),
+        ("velocities", &report.velocity_correction, v0),
+    ] {
+        let scale = max_abs(given).max(1.0);
+        let of_given: Vec<f64> = change
+            .iter()
+            .zip(given)
+            .map(|(&d, &x)| if x == 0.0 { 0.0 } else { d })
+            .collect();
+        let (i, by) = argmax_abs(&of_given);
+        if by.abs() > 1e-9 * scale {
+            notes.push(format!(
+                "warning: the start changed the given {level} to satisfy the joints: '{}' from {} \
+                 to {} (the largest change), the smallest change in the coordinates' Euclidean \
+                 norm (every coordinate weighted alike); give {level} that satisfy the joints to \
+                 have them kept (mstar check lists what it moves)",
+                sys.coord_name(i),
+                mstar_newmark::Short(given[i]),
+                mstar_newmark::Short(given[i] + change[i])
+            ));
+        }
+    }
+    notes
 }
 
 /// Integrates to `t_end` as [`Integrator::run`] does, the initial state and

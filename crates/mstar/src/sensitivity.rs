@@ -267,7 +267,8 @@ impl Columns for Chained<'_> {
 /// (`docs/analysis.md`, "Parameter sensitivities"): after every step
 /// `columns` holds them, so an observer that reads `columns` (e.g. through
 /// [`Chained`]) sees each sample's own. What `mstar run --sensitivity` and
-/// Python's `model.run(sensitivities=…)` do.
+/// Python's `model.run(sensitivities=…)` do. The start's notes about the
+/// state given go to `notes`, as [`crate::run::simulate_noting`]'s.
 ///
 /// # Errors
 /// [`crate::run::RunError::Settings`] for adaptive steps (the step sizes would depend
@@ -280,6 +281,7 @@ pub fn simulate_until<S: crate::run::ModelLookup + ?Sized>(
     columns: &SensitivityColumns,
     observer: &mut dyn mstar_newmark::Observer,
     stop: &mut dyn FnMut() -> bool,
+    notes: &mut Vec<String>,
 ) -> Result<mstar_newmark::RunStats, crate::run::RunError> {
     use crate::run::{RunError, SettingsError};
     let refuse = |why: &str| {
@@ -301,7 +303,14 @@ pub fn simulate_until<S: crate::run::ModelLookup + ?Sized>(
              redundant joints",
         ));
     }
+    notes.extend(crate::run::far_start_note(sys));
     let mut integ = mstar_newmark::Integrator::new(sys, config, 0.0, &u0, &v0)?;
+    notes.extend(crate::run::projection_notes(
+        sys,
+        integ.start_report(),
+        &u0,
+        &v0,
+    ));
     let mut sens = integ.sensitivities(params)?;
     columns.set(&sens);
     observer.observe(&integ.view());

@@ -422,55 +422,23 @@ fn run_model(args: &RunArgs, model: &Loaded) -> Result<()> {
 }
 
 /// Names the joint an initial pose is far from, before the start projects
-/// the state onto the constraints (and, if that fails, explains why).
+/// the state onto the constraints ([`mstar::run::far_start_note`]).
 fn warn_far_start(sys: &dyn ModelLookup) {
-    if let Some((owner, row, value)) = mstar::run::initial_violation(sys)
-        && value > FAR
-    {
-        note!(
-            "note: the initial pose violates '{owner}' by {value:.3e} (row {row}); the start moves the coordinates onto the constraints (mstar check shows what it moves)"
-        );
+    if let Some(n) = mstar::run::far_start_note(sys) {
+        note!("{n}");
     }
 }
 
-/// An initial violation worth a note, m or rad.
-const FAR: f64 = 1e-6;
-
-/// Warns when the start's projection changed a given (non-zero) position or
-/// velocity by more than round-off (`1e-9` of their scale): the state
-/// integrated is not the one written, and the projection, the smallest
-/// change in the coordinates' Euclidean norm, weighs metres, radians and
-/// Euler parameters alike, so a given angular velocity is shared with the
-/// centre of mass's velocity (docs/model-format.md). Values left at zero
-/// (not given) are filled in without a warning.
+/// Warns when the start's projection changed a given position or velocity
+/// ([`mstar::run::projection_notes`]).
 fn warn_projection<S: System + ?Sized>(
     sys: &S,
     report: &mstar::StartReport,
     u0: &[f64],
     v0: &[f64],
 ) {
-    for (level, change, given) in [
-        ("positions", &report.position_correction, u0),
-        ("velocities", &report.velocity_correction, v0),
-    ] {
-        let scale = mstar::kkt::max_abs(given).max(1.0);
-        let of_given: Vec<f64> = change
-            .iter()
-            .zip(given)
-            .map(|(&d, &x)| if x == 0.0 { 0.0 } else { d })
-            .collect();
-        let (i, by) = mstar::kkt::argmax_abs(&of_given);
-        if by.abs() > 1e-9 * scale {
-            note!(
-                "warning: the start changed the given {level} to satisfy the joints: '{}' from {} \
-                 to {} (the largest change), the smallest change in the coordinates' Euclidean \
-                 norm (every coordinate weighted alike); give {level} that satisfy the joints to \
-                 have them kept (mstar check lists what it moves)",
-                sys.coord_name(i),
-                Short(given[i]),
-                Short(given[i] + change[i])
-            );
-        }
+    for n in mstar::run::projection_notes(sys, report, u0, v0) {
+        note!("{n}");
     }
 }
 
