@@ -36,10 +36,10 @@ pub fn hint(e: &IntegrationError, files: bool) -> Option<&'static str> {
             "the step size is --h, adaptive steps --adaptive, the smallest step size --h-min, the Newton tolerance --tol, the scheme --integrator",
         ),
         (IntegrationError::ErrorTooLarge { .. }, true) => Some(
-            "adaptive steps are --adaptive (or [simulation] error_control = \"adaptive\"), the step size --h, the tolerances --rtol and --atol",
+            "the step size is --h, the tolerances --rtol and --atol, adaptive steps --adaptive (or [simulation] error_control = \"adaptive\")",
         ),
         (IntegrationError::ErrorTooLarge { .. }, false) => Some(
-            "adaptive steps are --adaptive, the step size --h, the tolerances --rtol and --atol, the smallest step size --h-min",
+            "the step size is --h, the tolerances --rtol and --atol, adaptive steps --adaptive, the smallest step size --h-min",
         ),
         _ => None,
     }

@@ -500,3 +500,33 @@ at = [0.8414709848078965, -0.5403023058681398]
 t_end = 2.0
 h = 5e-4
 "#;
+
+/// `--strict` on the pendulum (which conserves energy) at a coarse step:
+/// the error says to reduce h, not to let the step size adapt (adaptive
+/// steps drift in energy: `adaptive_runs_that_lose_energy_say_so…`); the
+/// step the run's own warning advises then passes `--strict`. A damped
+/// model is still told that adaptive steps are an option.
+#[test]
+fn strict_advises_a_smaller_h_not_adaptive_steps_for_a_conservative_model() {
+    let dir = scratch("strict-conservative");
+    let o = dir.join("p.csv").to_string_lossy().to_string();
+    let pendulum = model("pendulum.toml");
+    let (code, stderr) = run(&["run", &pendulum, "--h", "0.03", "--strict", "--out", &o]);
+    assert_eq!(code, Some(1), "{stderr}");
+    let error = stderr
+        .lines()
+        .find(|l| l.starts_with("error: "))
+        .unwrap_or_default();
+    assert!(
+        error.contains("Reduce h") && !error.contains("Let the step size adapt"),
+        "{error}"
+    );
+    let h = advised(&stderr, "--h").unwrap_or_else(|| panic!("no --h advice: {stderr}"));
+    let (code, stderr) = run(&["run", &pendulum, "--h", &h, "--strict", "--out", &o]);
+    assert_eq!(code, Some(0), "--h {h}: {stderr}");
+    let damped = model("damped-mode.toml");
+    let (code, stderr) = run(&["run", &damped, "--h", "0.2", "--strict", "--out", &o]);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.contains("Let the step size adapt"), "{stderr}");
+    let _ = std::fs::remove_dir_all(dir);
+}

@@ -768,3 +768,57 @@ fn an_out_naming_an_existing_file_is_refused() {
     assert!(r.status.success(), "{}", text(&r.stderr));
     assert!(dir.join("fb/summary.csv").is_file());
 }
+
+/// A run resumed after an interrupt (its row and file gone, the samples
+/// the interrupt kept in `runs/<i>.partial.csv`): once it completes, the
+/// stale partial file is removed, as `mstar run` removes its own.
+#[test]
+fn a_resumed_run_removes_the_partial_file_the_interrupt_left() {
+    let dir = scratch("sweep-resume-partial");
+    let out = dir.join("s");
+    let args = ["--set", "simulation.h=1e-2,5e-3"];
+    let done = pendulum_sweep(&out, &args);
+    assert_eq!(done.status.code(), Some(0), "{}", text(&done.stderr));
+    let runs = out.join("runs");
+    let (row, csv, partial) = (
+        runs.join("1.row"),
+        runs.join("1.csv"),
+        runs.join("1.partial.csv"),
+    );
+    let kept = std::fs::read_to_string(&csv).expect("run 1's file");
+    std::fs::remove_file(&row).expect("row removed");
+    std::fs::remove_file(&csv).expect("file removed");
+    let cut: String = kept.lines().take(5).map(|l| format!("{l}\n")).collect();
+    std::fs::write(&partial, cut).expect("partial written");
+    let again = pendulum_sweep(&out, &args);
+    assert_eq!(again.status.code(), Some(0), "{}", text(&again.stderr));
+    assert!(csv.is_file() && row.is_file(), "run 1 complete again");
+    assert!(
+        !partial.exists(),
+        "the stale partial file is left beside the complete one"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A run beyond the tolerance is told what to set in the sweep's own
+/// options (`--set simulation.h=…`), not `mstar run`'s `--h`.
+#[test]
+fn a_sweep_s_accuracy_advice_names_its_settings() {
+    let dir = scratch("sweep-advice");
+    let out = dir.join("s");
+    let done = pendulum_sweep(&out, &["--set", "simulation.h=0.03,0.02"]);
+    let e = text(&done.stderr);
+    let (h, rows) = summary(&out.join("summary.csv"));
+    let status = column(&h, &rows, "status");
+    assert!(
+        status.iter().all(|s| s.starts_with("beyond tolerance")),
+        "{status:?} {e}"
+    );
+    for s in &status {
+        assert!(
+            s.contains("--set simulation.h=") && !s.contains("--h "),
+            "{s}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

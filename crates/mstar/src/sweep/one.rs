@@ -156,7 +156,11 @@ fn integrate(plan: &Plan, dir: &Dir, index: usize, stop: &dyn Fn() -> bool) -> O
                 // The verdict of `mstar run` (its exit 3), from the same
                 // statistics and configuration.
                 figures.beyond =
-                    crate::accuracy::warning(&stats, &config, &|i| sys.coord_name(i), true);
+                    crate::accuracy::warning(&stats, &config, &|i| sys.coord_name(i), true)
+                        .map(|w| as_sweep_options(&w));
+                // A run resumed after an interrupt: its complete file
+                // replaces the samples the interrupt kept.
+                let _ = std::fs::remove_file(dir.partial(index));
             }
             Err(e) => figures.error = Some(e.to_string()),
         },
@@ -225,6 +229,66 @@ mod tests {
         assert_eq!(
             status(None, Some(two)),
             "beyond tolerance: the local error | the energy"
+        );
+    }
+}
+
+/// `mstar run`'s advice in the options of a sweep: `--h X`, `--tol X`,
+/// `--rtol X`, `--atol X`, `--h-max X` as `--set simulation.<key>=X`,
+/// `--adaptive` and `--strict` as `--set simulation.error_control=…`.
+fn as_sweep_options(advice: &str) -> String {
+    const VALUED: [(&str, &str); 5] = [
+        ("--h-max", "h_max"),
+        ("--h", "h"),
+        ("--tol", "tol"),
+        ("--rtol", "rtol"),
+        ("--atol", "atol"),
+    ];
+    let words: Vec<&str> = advice.split(' ').collect();
+    let mut out: Vec<String> = Vec::with_capacity(words.len());
+    let mut k = 0;
+    while k < words.len() {
+        let word = words[k];
+        let valued = VALUED.iter().find(|(option, _)| *option == word);
+        match (valued, words.get(k + 1)) {
+            (Some((_, key)), Some(value)) => {
+                // (A trailing `)` or `,` stays after the value.)
+                let cut = value.find([')', ',', ';']).unwrap_or(value.len());
+                out.push(format!(
+                    "--set simulation.{key}={}{}",
+                    &value[..cut],
+                    &value[cut..]
+                ));
+                k += 2;
+                continue;
+            }
+            _ => out.push(match word {
+                "--adaptive" => "--set simulation.error_control=adaptive".to_string(),
+                "(--strict" => "(--set simulation.error_control=strict".to_string(),
+                "--strict" => "--set simulation.error_control=strict".to_string(),
+                w => w.to_string(),
+            }),
+        }
+        k += 1;
+    }
+    out.join(" ")
+}
+
+#[cfg(test)]
+mod sweep_options_tests {
+    use super::as_sweep_options;
+
+    #[test]
+    fn run_options_become_the_sweep_s_settings() {
+        assert_eq!(
+            as_sweep_options(
+                "the results are not accurate; rerun with --h 0.0079 (estimated to bring every step within it) or with --adaptive (--strict stops at the first such step)"
+            ),
+            "the results are not accurate; rerun with --set simulation.h=0.0079 (estimated to bring every step within it) or with --set simulation.error_control=adaptive (--set simulation.error_control=strict stops at the first such step)"
+        );
+        assert_eq!(
+            as_sweep_options("rerun with --tol 1e-12, then"),
+            "rerun with --set simulation.tol=1e-12, then"
         );
     }
 }

@@ -253,6 +253,13 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 self.config.tol,
                 0.01 * (atol + rtol)
             ),
+            // A model that conserves energy is not advised adaptive steps:
+            // their local errors add up in its energy over the run
+            // (docs/reliability.md, "Energy drift").
+            (Some(_), None) if self.sys.conserves_energy() => "Reduce h: the local error \
+                 falls like h³ (halving h divides it by about 8); adaptive steps are not advised \
+                 for a model that conserves energy (their errors add up in its energy)"
+                .to_string(),
             (Some(_), None) => "Let the step size adapt (adaptive stepping), or reduce h: \
                  the local error falls like h³ (halving h divides it by about 8)"
                 .to_string(),
