@@ -77,7 +77,7 @@ fn at_rest<'py>(
         .map(|&k| sys.constraint_name(k))
         .collect();
     found.set_item("redundant", left_out)?;
-    let stable = match mstar::equilibrium::stability(sys, eq, 0.0) {
+    let stable = match eq.stability {
         mstar::equilibrium::Stability::Stable => Some(true),
         mstar::equilibrium::Stability::Unstable { .. } => Some(false),
         mstar::equilibrium::Stability::Unchecked => None,

@@ -70,9 +70,9 @@ pub fn equilibrium(args: &EquilibriumArgs) -> ExitCode {
     report(sys, &eq);
     if let mstar::equilibrium::Stability::Unstable {
         direction, rate, ..
-    } = mstar::equilibrium::stability(sys, &eq, 0.0)
+    } = &eq.stability
     {
-        note!("{}", unstable_note(&direction, rate));
+        note!("{}", unstable_note(direction, *rate));
     }
     if !eq.left_out.is_empty() {
         let rows: Vec<String> = eq

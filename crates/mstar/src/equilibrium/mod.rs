@@ -88,6 +88,8 @@ pub struct Equilibrium {
     /// others at the initial pose (redundant constraints; their multipliers
     /// are the minimum-norm ones), ascending; empty without.
     pub left_out: Vec<usize>,
+    /// Whether it is stable, as [`solve`] checked it ([`stability()`]).
+    pub stability: Stability,
 }
 
 impl Equilibrium {
@@ -527,6 +529,7 @@ fn finish<S: System + ?Sized>(
         residual,
         constraint,
         left_out: Vec::new(),
+        stability: Stability::Unchecked,
     };
     if regular {
         return Ok(eq);

@@ -80,39 +80,39 @@ pub fn stability<S: System + ?Sized>(sys: &S, eq: &Equilibrium, t0: f64) -> Stab
 /// its stability is not checked.
 pub(super) fn stable_or_as_found<S: System + ?Sized>(
     sys: &S,
-    found: Result<Equilibrium, EquilibriumError>,
+    mut found: Result<Equilibrium, EquilibriumError>,
     options: &EquilibriumOptions,
 ) -> Result<Equilibrium, EquilibriumError> {
-    let Some(eq) = pose_of(&found) else {
+    let Some(eq) = pose_of(&mut found) else {
         return found;
     };
-    let Stability::Unstable { shape, .. } = stability(sys, eq, options.t0) else {
+    eq.stability = stability(sys, eq, options.t0);
+    let Stability::Unstable { shape, .. } = &eq.stability else {
         return found;
     };
     let length = eq.u.iter().fold(1.0_f64, |l, x| l.max(x.abs()));
     let energy = sys.potential_energy(options.t0, &eq.u);
-    let (iterations, damped) = (eq.iterations, eq.damped);
-    for sign in [1.0, -1.0] {
-        let start: Vec<f64> =
+    let starts: Vec<Vec<f64>> = [1.0, -1.0]
+        .iter()
+        .map(|sign| {
             eq.u.iter()
-                .zip(&shape)
+                .zip(shape)
                 .map(|(u, p)| u + sign * 0.05 * length * p)
-                .collect();
+                .collect()
+        })
+        .collect();
+    let (iterations, damped) = (eq.iterations, eq.damped);
+    for start in starts {
         let mut candidate = super::solve_from(sys, &start, options, true);
-        let better = pose_of(&candidate).is_some_and(|c| {
-            sys.potential_energy(options.t0, &c.u) < energy
-                && !matches!(stability(sys, c, options.t0), Stability::Unstable { .. })
-        });
+        let Some(c) = pose_of(&mut candidate) else {
+            continue;
+        };
+        c.stability = stability(sys, c, options.t0);
+        let better = sys.potential_energy(options.t0, &c.u) < energy
+            && !matches!(c.stability, Stability::Unstable { .. });
         if better {
-            let c = match &mut candidate {
-                Ok(c) => Some(c),
-                Err(EquilibriumError::Neutral { equilibrium, .. }) => Some(&mut **equilibrium),
-                Err(_) => None,
-            };
-            if let Some(c) = c {
-                c.iterations += iterations;
-                c.damped += damped;
-            }
+            c.iterations += iterations;
+            c.damped += damped;
             return candidate;
         }
     }
@@ -120,10 +120,10 @@ pub(super) fn stable_or_as_found<S: System + ?Sized>(
 }
 
 /// The pose a search ended at: an equilibrium, or a neutral one.
-fn pose_of(found: &Result<Equilibrium, EquilibriumError>) -> Option<&Equilibrium> {
+fn pose_of(found: &mut Result<Equilibrium, EquilibriumError>) -> Option<&mut Equilibrium> {
     match found {
         Ok(eq) => Some(eq),
-        Err(EquilibriumError::Neutral { equilibrium, .. }) => Some(equilibrium),
+        Err(EquilibriumError::Neutral { equilibrium, .. }) => Some(&mut **equilibrium),
         Err(_) => None,
     }
 }
@@ -151,6 +151,7 @@ mod tests {
                 residual: 0.0,
                 constraint: 0.0,
                 left_out: Vec::new(),
+                stability: Stability::Unchecked,
             }
         };
         assert_eq!(stability(&sys, &at(0.0), 0.0), Stability::Stable);
@@ -187,5 +188,6 @@ mod tests {
         assert!(eq.u[0].abs() < 1e-10, "x = {}", eq.u[0]);
         assert!((eq.u[1] + 1.0).abs() < 1e-10, "y = {}", eq.u[1]);
         assert_eq!(stability(&sys, &eq, 0.0), Stability::Stable);
+        assert_eq!(eq.stability, Stability::Stable, "as solve found it");
     }
 }
