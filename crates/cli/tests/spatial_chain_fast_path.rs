@@ -88,7 +88,7 @@ fn iterations(sys: &SpatialSystem, t_end: f64) -> (usize, usize, mstar::kkt::Bac
 
 /// With the exact (unsymmetric) iteration matrix the chain takes the
 /// `schur-lu` backend and Newton converges in one iteration a step at the
-/// default tolerance; the symmetrized matrix takes two.
+/// default tolerance; the symmetrized matrix takes two at most steps.
 #[test]
 fn exact_tangent_takes_one_newton_iteration_a_step() {
     let exact = spatial_bar_chain(50, RotationalMass::Regularized);
@@ -99,7 +99,7 @@ fn exact_tangent_takes_one_newton_iteration_a_step() {
     let (it, steps, backend) = iterations(&symmetric, 0.3);
     assert_eq!(backend, mstar::kkt::Backend::SCHUR);
     assert!(
-        it >= 2 * steps - 5,
+        it * 10 >= 18 * steps,
         "symmetrized: {it} iterations, {steps} steps"
     );
 }

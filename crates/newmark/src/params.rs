@@ -187,8 +187,14 @@ pub enum Predictor {
     ZeroAcceleration,
     /// `ü_{n+1}⁰ = ü_n`, `λ⁰ = λ_n`.
     ConstantAcceleration,
-    /// `ü_{n+1}⁰` and `λ⁰` extrapolated linearly from the last two steps
-    /// (default): the predictor's error drops from `O(h)` to `O(h²)`.
+    /// `ü_{n+1}⁰` and `λ⁰` extrapolated linearly from the last two steps:
+    /// the predictor's error drops from `O(h)` to `O(h²)`.
+    Linear,
+    /// `ü_{n+1}⁰` and `λ⁰` extrapolated from the last five steps when they
+    /// have this step's size, exactly for quadratic motion and for the
+    /// step-to-step alternation the scheme's root `−ρ∞` rings with; linearly
+    /// after a change of step size (default; `integrator/history.rs`,
+    /// `docs/theory.md`, "The predictor").
     #[default]
     Extrapolated,
 }

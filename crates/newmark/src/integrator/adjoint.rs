@@ -153,8 +153,7 @@ struct Record {
 struct Snapshot {
     t: f64,
     state: State,
-    previous: State,
-    previous_h: Option<f64>,
+    history: super::history::History,
     h: f64,
     h_last: f64,
     error: Vec<f64>,
@@ -621,8 +620,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         Snapshot {
             t: self.t,
             state: self.state.clone(),
-            previous: self.previous.clone(),
-            previous_h: self.previous_h,
+            history: self.history.clone(),
             h: self.h,
             h_last: self.h_last,
             error: self.error.clone(),
@@ -645,8 +643,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         self.factored_h = None;
         self.t = s.t;
         self.state.clone_from(&s.state);
-        self.previous.clone_from(&s.previous);
-        self.previous_h = s.previous_h;
+        self.history.clone_from(&s.history);
         self.h = s.h;
         self.h_last = s.h_last;
         self.error.clone_from(&s.error);

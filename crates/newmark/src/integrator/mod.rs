@@ -4,6 +4,7 @@
 
 mod adjoint;
 mod control;
+mod history;
 mod initial;
 mod newton;
 mod sensitivity;
@@ -117,10 +118,9 @@ pub struct Integrator<'s, S: System + ?Sized> {
     t: f64,
     state: State,
     trial: State,
-    /// The state before the last accepted step and that step's size (for the
-    /// extrapolating predictor).
-    previous: State,
-    previous_h: Option<f64>,
+    /// The states before the last accepted step and the steps' sizes (for
+    /// the extrapolating predictor).
+    history: history::History,
     rhs: Vec<f64>,
     /// Current nominal step size (≤ config.h unless adaptive).
     h: f64,
@@ -259,8 +259,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             t: t0,
             state: State::zeros(n, m),
             trial: State::zeros(n, m),
-            previous: State::zeros(n, m),
-            previous_h: None,
+            history: history::History::new(n, m, config.predictor),
             rhs: vec![0.0; n + m],
             h,
             h_last: h,
@@ -591,9 +590,12 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     fn accept(&mut self, h: f64, iterations: usize, estimate: control::Estimate) {
         // Buffers change roles instead of being copied: the predictor rewrites
         // every field of `trial` before it is read again.
-        if self.config.predictor == Predictor::Extrapolated {
-            std::mem::swap(&mut self.previous, &mut self.state);
-            self.previous_h = Some(h);
+        if matches!(
+            self.config.predictor,
+            Predictor::Extrapolated | Predictor::Linear
+        ) {
+            let resolved = estimate.truncation <= 1.0;
+            self.history.push(&mut self.state, h, resolved);
         }
         std::mem::swap(&mut self.state, &mut self.trial);
         if h == self.h_anchor {

@@ -5,8 +5,9 @@
 use mstar_linearize::{Coefficients, max_abs};
 use mstar_model::System;
 
-use super::{Failure, Integrator};
-use crate::{AlphaParams, Newton, Predictor};
+use super::history::{Misses, Past, Rule, five_step};
+use super::{Failure, Integrator, State};
+use crate::{AlphaParams, Newton};
 
 /// What stays fixed over one attempt's iterations.
 struct Corrector {
@@ -255,37 +256,77 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         (step, u_max)
     }
 
-    /// Predictor: eq. (14) generalized (Arnold & Brüls 2007, Algorithm 1).
+    /// Predictor: eq. (14) generalized (Arnold & Brüls 2007, Algorithm 1),
+    /// with `ü_{n+1}⁰` and `λ⁰` by the history's rules, which are judged
+    /// for the next step on the state this one starts from (`history.rs`).
     pub(super) fn predict(&mut self, h: f64) {
-        let AlphaParams {
-            alpha_m,
-            alpha_f,
-            beta,
-            gamma,
-        } = self.p;
-        let (s, t) = (&self.state, &mut self.trial);
-        // Linear extrapolation needs the previous step (of any size).
-        let ratio = match (self.config.predictor, self.previous_h) {
-            (Predictor::Extrapolated, Some(h_prev)) => h / h_prev,
-            _ => 0.0,
-        };
+        let predictor = self.config.predictor;
+        let [rule_a, rule_lambda] = self.history.rules(predictor, h);
+        let (s, past) = (&self.state, &self.history);
+        let (eligible, judging) = (past.eligible(predictor, h), past.judging(predictor, h));
+        let misses = judging.then(|| {
+            [
+                Misses::of(&s.a, past.a()),
+                Misses::of(&s.lambda, past.lambda()),
+            ]
+        });
         // a_n belongs to the last step's size; rescaled to this one's.
-        let rescale = h / self.h_last;
-        for i in 0..s.u.len() {
-            let a_n = s.a[i] + rescale * (s.a_alpha[i] - s.a[i]);
-            let a1 = match self.config.predictor {
-                Predictor::ZeroAcceleration => 0.0,
-                Predictor::ConstantAcceleration => s.a[i],
-                Predictor::Extrapolated => s.a[i] + ratio * (s.a[i] - self.previous.a[i]),
-            };
-            let aa1 = (alpha_f * s.a[i] - alpha_m * a_n + (1.0 - alpha_f) * a1) / (1.0 - alpha_m);
-            t.a[i] = a1;
-            t.a_alpha[i] = aa1;
-            t.v[i] = s.v[i] + h * ((1.0 - gamma) * a_n + gamma * aa1);
-            t.u[i] = s.u[i] + h * s.v[i] + h * h * ((0.5 - beta) * a_n + beta * aa1);
+        let coefficients = (self.p, h, h / self.h_last);
+        predict_positions(coefficients, s, &mut self.trial, rule_a, past.a());
+        rule_lambda.extrapolate_into(&s.lambda, past.lambda(), &mut self.trial.lambda);
+        self.history.judge(misses, eligible);
+    }
+}
+
+/// `u, u̇, ü, a` of the predictor (14) from the state `s` into `t`, with
+/// `ü_{n+1}⁰` by `rule` from `s.a` and `past` (one loop per rule, so that
+/// each is a plain loop); `(p, h, rescale)`: the scheme, the step and the
+/// ratio of `h` to the last step's size.
+fn predict_positions(
+    coefficients: (AlphaParams, f64, f64),
+    s: &State,
+    t: &mut State,
+    rule: Rule,
+    past: Past<'_>,
+) {
+    let x = &s.a;
+    match rule {
+        Rule::Zero => positions_with(coefficients, s, t, |_| 0.0),
+        Rule::Constant => positions_with(coefficients, s, t, |i| x[i]),
+        Rule::Linear { ratio } => {
+            let p1 = past[0];
+            positions_with(coefficients, s, t, |i| x[i] + ratio * (x[i] - p1[i]));
         }
-        for (i, l) in t.lambda.iter_mut().enumerate() {
-            *l = s.lambda[i] + ratio * (s.lambda[i] - self.previous.lambda[i]);
+        Rule::FiveStep => {
+            let [p1, p2, p3, p4, _] = past;
+            positions_with(coefficients, s, t, |i| {
+                five_step(x[i], p1[i], p2[i], p3[i], p4[i])
+            });
         }
+    }
+}
+
+/// [`predict_positions`] with `ü_{n+1}⁰ = a1(i)`.
+#[inline(always)]
+fn positions_with(
+    (p, h, rescale): (AlphaParams, f64, f64),
+    s: &State,
+    t: &mut State,
+    a1: impl Fn(usize) -> f64,
+) {
+    let AlphaParams {
+        alpha_m,
+        alpha_f,
+        beta,
+        gamma,
+    } = p;
+    for i in 0..s.u.len() {
+        let a_n = s.a[i] + rescale * (s.a_alpha[i] - s.a[i]);
+        let a1 = a1(i);
+        let aa1 = (alpha_f * s.a[i] - alpha_m * a_n + (1.0 - alpha_f) * a1) / (1.0 - alpha_m);
+        t.a[i] = a1;
+        t.a_alpha[i] = aa1;
+        t.v[i] = s.v[i] + h * ((1.0 - gamma) * a_n + gamma * aa1);
+        t.u[i] = s.u[i] + h * s.v[i] + h * h * ((0.5 - beta) * a_n + beta * aa1);
     }
 }
