@@ -85,6 +85,15 @@ pub trait KktBackend: Send {
         None
     }
 
+    /// [`solve_with_residual`](Self::solve_with_residual) without the
+    /// backend's own refinement step (as
+    /// [`solve_in_place_unrefined`](Self::solve_in_place_unrefined)), the
+    /// residual being that of the unrefined solution. The default: as
+    /// `solve_with_residual`.
+    fn solve_unrefined_with_residual(&mut self, rhs: &mut [f64]) -> Option<(f64, f64)> {
+        self.solve_with_residual(rhs)
+    }
+
     /// Whether the factorization is perturbed (regularized), so that every
     /// solution must be refined iteratively against [`mul`](Self::mul)
     /// (default: no).

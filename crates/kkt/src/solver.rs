@@ -177,11 +177,12 @@ impl KktSolver {
         self.solve_in_place_with_norm(rhs, rhs_norm)
     }
 
-    /// [`solve_in_place_with_norm`](Self::solve_in_place_with_norm) for a
-    /// right-hand side whose solution is a small correction (a later Newton
-    /// iteration with the factorization of an earlier one): once the
-    /// factorization has been checked by a solve, without the backend's own
-    /// refinement step ([`KktBackend::solve_in_place_unrefined`]).
+    /// [`solve_in_place_with_norm`](Self::solve_in_place_with_norm) without
+    /// the backend's own refinement step
+    /// ([`KktBackend::solve_in_place_unrefined`]), for a solve whose error
+    /// the caller corrects (a Newton iteration, whose residual is checked
+    /// again; a refinement against another matrix). The first solve after a
+    /// factorization checks it by the residual of the unrefined solution.
     ///
     /// # Errors
     /// As [`solve_in_place`](Self::solve_in_place).
@@ -250,16 +251,20 @@ impl KktSolver {
     /// verified yet, `‖A x − b‖∞`.
     fn solve(&mut self, rhs: &mut [f64], bn: f64) -> (f64, Option<f64>) {
         let refine = self.inner.is_regularized();
-        if !self.verified
-            && !refine
-            && let Some((xn, res)) = self.inner.solve_with_residual(rhs)
-        {
-            return (xn, Some(res));
+        if !self.verified && !refine {
+            let checked = if self.unrefined {
+                self.inner.solve_unrefined_with_residual(rhs)
+            } else {
+                self.inner.solve_with_residual(rhs)
+            };
+            if let Some((xn, res)) = checked {
+                return (xn, Some(res));
+            }
         }
         if !self.verified || refine {
             self.rhs.copy_from_slice(rhs);
         }
-        let mut xn = if self.unrefined && self.verified {
+        let mut xn = if self.unrefined {
             self.inner.solve_in_place_unrefined(rhs)
         } else {
             self.inner.solve_in_place(rhs)

@@ -236,10 +236,9 @@ pub enum Newton {
     /// step's later iterations while each contracts by `max_rate` or better
     /// ([`Newton::PER_STEP`]: 0.5). A step that converges in one iteration
     /// costs what full Newton's does; a second iteration costs a residual and
-    /// a solve instead of a factorization too, and its solve skips the
-    /// backend's refinement step ([`mstar_kkt::KktSolver::solve_correction`];
-    /// the spatial chain at 10⁵ bodies takes two a step: docs/performance.md,
-    /// "The second Newton iteration at 10⁵ bodies").
+    /// a solve instead of a factorization too (Newton's solves skip the
+    /// backend's refinement step: [`mstar_kkt::KktSolver::solve_correction`];
+    /// docs/performance.md, "The second Newton iteration at 10⁵ bodies").
     PerStep {
         /// Largest accepted contraction rate before a refactorization within
         /// the step (in (0, 1)).

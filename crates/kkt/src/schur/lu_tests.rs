@@ -247,10 +247,11 @@ fn a_zero_row_of_one_body_is_named() {
     );
 }
 
-/// `KktSolver::solve_correction` (a later Newton iteration's solve): once
-/// the factorization is checked, `schur-lu` solves without its refinement
-/// step, still to a backward-stable residual and close to dense LU; the
-/// other Schur backend, which does not refine, solves as before to the bit.
+/// `KktSolver::solve_correction` (a Newton iteration's solve): `schur-lu`
+/// solves without its refinement step, the first solve after the
+/// factorization included (checked by the unrefined solution's residual),
+/// still to a backward-stable residual and close to dense LU; the other
+/// Schur backend, which does not refine, solves as before to the bit.
 #[test]
 fn a_correction_solves_without_the_refinement_step() {
     let chain = Chain {
@@ -262,12 +263,15 @@ fn a_correction_solves_without_the_refinement_step() {
     let b = vector(whole.n, 7);
     let dense = solve(&chain, Backend::DENSE, &b).expect("dense LU");
     let mut s = factored(&chain, Backend::SCHUR_LU).expect("analysis and factorization");
-    let mut refined = b.clone();
-    s.solve_in_place(&mut refined)
+    let norm = crate::max_abs(&b);
+    let mut first = b.clone();
+    s.solve_correction(&mut first, norm)
         .expect("the first solve checks it");
+    let mut refined = b.clone();
+    s.solve_in_place(&mut refined).expect("solve");
     let mut correction = b.clone();
-    let norm = crate::max_abs(&correction);
     s.solve_correction(&mut correction, norm).expect("solve");
+    assert_eq!(first, correction, "checked or not, the same solve");
     assert_ne!(correction, refined, "the refinement step was skipped");
     let (diff, res) = (
         relative_difference(&correction, &dense),

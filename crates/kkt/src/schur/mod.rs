@@ -753,6 +753,15 @@ impl KktBackend for Schur {
         self.checks_in_solve().then(|| self.solve_checked(rhs))
     }
 
+    /// `schur-lu` without its refinement step has no residual on the way
+    /// (the caller multiplies); the others as `solve_with_residual`.
+    fn solve_unrefined_with_residual(&mut self, rhs: &mut [f64]) -> Option<(f64, f64)> {
+        if self.refine {
+            return None;
+        }
+        self.solve_with_residual(rhs)
+    }
+
     fn fork(&self) -> Option<Box<dyn KktBackend>> {
         Some(Box::new(self.clone()))
     }

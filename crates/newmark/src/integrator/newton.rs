@@ -108,18 +108,11 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 force_refactor = false;
                 previous_step = f64::INFINITY;
             }
-            // A later iteration of a step with the step's own factorization
-            // solves for a small correction: the refinement that keeps the
-            // first correction's multipliers accurate (`schur-lu`) is not
-            // needed for it (docs/performance.md, "The second Newton
-            // iteration at 10⁵ bodies").
-            let small = !refactor && self.per_step();
-            let solved = if small {
-                self.solver.solve_correction(&mut self.rhs, norms.rhs)
-            } else {
-                self.solver
-                    .solve_in_place_with_norm(&mut self.rhs, norms.rhs)
-            };
+            // Without the backend's refinement step (`schur-lu`'s): the
+            // next iteration's residual corrects what it would, and it no
+            // longer saves iterations (docs/performance.md, "Newton's solves
+            // without `schur-lu`'s refinement").
+            let solved = self.solver.solve_correction(&mut self.rhs, norms.rhs);
             solved.map_err(|source| Failure::Kkt {
                 context: "solving with the iteration matrix",
                 source,
