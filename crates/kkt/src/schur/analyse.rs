@@ -154,6 +154,11 @@ impl Schur {
                 if banded { Vec::new() } else { pairs },
             ),
         };
+        let s_global = if diagonal {
+            Vec::new()
+        } else {
+            global_s(&parts.blocks, &parts.coords, &parts.s_entries)?
+        };
         Ok(Self {
             banded,
             norm: None,
@@ -193,6 +198,7 @@ impl Schur {
             refine_r: Vec::new(),
             blocks: parts.blocks,
             coords: parts.coords,
+            s_global,
             s_entries: parts.s_entries,
             b_entries: parts.b_entries,
         })
@@ -703,6 +709,29 @@ pub(super) fn csc_of(n: usize, pairs: &mut Vec<(usize, usize)>) -> Csc {
     pairs.clear();
     pairs.extend((0..n).flat_map(|j| c.column(j).iter().map(move |&i| (j, i))));
     c
+}
+
+/// Every block's `S` entries as global `(row, column)`, in `s_entries`'
+/// order ([`Schur`]'s `s_global`).
+///
+/// # Errors
+/// [`KktError::Structure`] for an unknown beyond `u32` (not reached by a
+/// matrix whose pattern fits in memory).
+fn global_s(
+    blocks: &[Block],
+    coords: &[usize],
+    s_entries: &[(usize, usize, usize)],
+) -> Result<Vec<(u32, u32)>, KktError> {
+    let wide = || KktError::Structure("more than 2³² unknowns".to_string());
+    let mut out = Vec::with_capacity(s_entries.len());
+    for b in blocks {
+        let local = &coords[b.coords.clone()];
+        for &(_, i, j) in &s_entries[b.s_entries.clone()] {
+            let (i, j) = (u32::try_from(local[i]), u32::try_from(local[j]));
+            out.push((i.map_err(|_| wide())?, j.map_err(|_| wide())?));
+        }
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -138,6 +138,10 @@ pub(crate) struct Schur {
     coords: Vec<usize>,
     /// `(KKT value position, local i, local j)` of every block's `S` entries.
     s_entries: Vec<(usize, usize, usize)>,
+    /// The same entries' global `(row, column)` (empty when `diagonal`):
+    /// products and norms with `S` read them in one pass, without the
+    /// blocks' lists.
+    s_global: Vec<(u32, u32)>,
     /// `(KKT value position, local row, local column)` of every block's `B`.
     b_entries: Vec<(usize, usize, usize)>,
     /// `(local row r, local row s, position of C[r, s] in c.values)` for the
@@ -430,19 +434,6 @@ impl Schur {
         Ok(())
     }
 
-    /// `f(row, column, value)` for every entry of `S` of the last
-    /// factorization in global unknowns (it runs in every
-    /// residual check: plain loops, no iterator adaptors).
-    fn for_each_s(&self, f: impl FnMut(usize, usize, f64)) {
-        for_each_s(
-            &self.blocks,
-            &self.coords,
-            &self.s_entries,
-            &self.s_values,
-            f,
-        );
-    }
-
     /// `y = A x` for the last factored matrix, from the compact copies of
     /// `S`, `B` and `D` (`A = [[S, Bᵀ], [B, D]]`).
     fn product(&self, x: &[f64], y: &mut [f64]) {
@@ -455,7 +446,9 @@ impl Schur {
                 *yj = s * xj;
             }
         } else {
-            self.for_each_s(|i, j, v| yp[i] += v * xp[j]);
+            for (&(i, j), &v) in self.s_global.iter().zip(&self.s_values) {
+                yp[i as usize] += v * xp[j as usize];
+            }
         }
         let rows = if self.natural {
             &self.b_rows
@@ -489,9 +482,9 @@ impl Schur {
                 *w += s.abs();
             }
         } else {
-            let (blocks, coords) = (&self.blocks, &self.coords);
-            let (entries, values) = (&self.s_entries, &self.s_values);
-            for_each_s(blocks, coords, entries, values, |i, _, v| wp[i] += v.abs());
+            for (&(i, _), &v) in self.s_global.iter().zip(&self.s_values) {
+                wp[i as usize] += v.abs();
+            }
         }
         for (&(_, r, _), &v) in self.d_all.iter().zip(&self.d_values) {
             wm[r] += v.abs();
@@ -772,24 +765,6 @@ impl KktBackend for Schur {
 #[inline]
 fn range(ptr: &[u32], j: usize) -> std::ops::Range<usize> {
     ptr[j] as usize..ptr[j + 1] as usize
-}
-
-/// The entries of block-diagonal `S` as `(row, column, value)` in global
-/// unknowns (free function so that callers may hold other fields mutably).
-fn for_each_s(
-    blocks: &[Block],
-    coords: &[usize],
-    s_entries: &[(usize, usize, usize)],
-    s_values: &[f64],
-    mut f: impl FnMut(usize, usize, f64),
-) {
-    for b in blocks {
-        let local = &coords[b.coords.clone()];
-        let entries = &s_entries[b.s_entries.clone()];
-        for (&(_, i, j), &v) in entries.iter().zip(&s_values[b.s_entries.clone()]) {
-            f(local[i], local[j], v);
-        }
-    }
 }
 
 /// `C` and how it is factored.

@@ -52,6 +52,18 @@ pub(crate) struct Inertia {
 }
 
 impl Inertia {
+    /// Whether `J'` is diagonal (body axes along the principal axes).
+    #[inline]
+    fn diagonal(&self) -> bool {
+        let j = &self.j;
+        j[0][1] == 0.0
+            && j[0][2] == 0.0
+            && j[1][0] == 0.0
+            && j[1][2] == 0.0
+            && j[2][0] == 0.0
+            && j[2][1] == 0.0
+    }
+
     fn j_times(&self, w: [f64; 3]) -> [f64; 3] {
         let r = |i: usize| self.j[i][0] * w[0] + self.j[i][1] * w[1] + self.j[i][2] * w[2];
         [r(0), r(1), r(2)]
@@ -68,9 +80,16 @@ impl Inertia {
             unreachable!("a 4 × 4 block has 16 values");
         };
         let j = &self.j;
-        let jb: [[f64; 4]; 3] = std::array::from_fn(|i| {
-            std::array::from_fn(|c| j[i][0] * b[0][c] + j[i][1] * b[1][c] + j[i][2] * b[2][c])
-        });
+        // Bodies given by their principal moments (the usual case) have a
+        // diagonal `J'`: its products with zero are left out (the same
+        // values, but for the sign of a zero).
+        let jb: [[f64; 4]; 3] = if self.diagonal() {
+            std::array::from_fn(|i| b[i].map(|x| j[i][i] * x))
+        } else {
+            std::array::from_fn(|i| {
+                std::array::from_fn(|c| j[i][0] * b[0][c] + j[i][1] * b[1][c] + j[i][2] * b[2][c])
+            })
+        };
         for r in 0..4 {
             for c in 0..4 {
                 out[4 * r + c] +=

@@ -7,12 +7,13 @@
 //! The values are those of the generic path (`spherical.rs` through the
 //! joint's local tables), computed by the same functions in the same order:
 //! `Φ = x_A − x_B` with `x = r + A(p) s`, row `k` of `∂(A s)/∂p` is
-//! `point_jt(p, s, e_k)`, the contracted Hessian on a rigid side is
+//! `point_jt(p, s, e_k)` (as `point_jacobian`, the same values), the
+//! contracted Hessian on a rigid side is
 //! `±H(μ, s)` (see `spherical.rs`), and `c = −2 A(ṗ_A) s_A + 2 A(ṗ_B) s_B`
 //! (algorithm.md, the acceleration-level constraint `B ü = c`).
 
 use super::evaluate::SIDE;
-use super::rotation::{point_jt, rotate};
+use super::rotation::{point_jacobian, rotate};
 
 /// One side of a spherical joint in the kernel.
 #[derive(Clone, Copy, Debug)]
@@ -30,6 +31,10 @@ struct KernelSide {
     /// The entries `(i, j)` of the side's 4 × 4 Euler-parameter block in the
     /// Hessian, bit `4 i + j`, in value order (row-major).
     h_mask: u16,
+    /// The set bits of `h_mask`, ascending (the first `h_count`): the
+    /// Hessian is written by this list, without walking the mask.
+    h_order: [u8; 16],
+    h_count: u8,
 }
 
 /// A spherical joint's evaluations on precomputed offsets (see the module
@@ -42,6 +47,9 @@ pub(crate) struct SphericalKernel {
     /// Offsets of its entries in the `B` and Hessian value buffers.
     b_off: usize,
     h_off: usize,
+    /// Whether every side's `B` entries are the usual ones ([`standard`]):
+    /// then `B` is written without walking the masks.
+    standard: bool,
 }
 
 /// What [`SphericalKernel::new`] needs of a joint: its sides (first
@@ -67,6 +75,8 @@ impl SphericalKernel {
             s: j.points[s],
             b_mask: [0; 3],
             h_mask: 0,
+            h_order: [0; 16],
+            h_count: 0,
         });
         for &(r, a) in j.b_local {
             let side = sides.get_mut(a / SIDE)?;
@@ -77,15 +87,29 @@ impl SphericalKernel {
             let side = sides.get_mut(a / SIDE).filter(|_| a / SIDE == b / SIDE)?;
             side.h_mask |= 1 << (4 * i + k);
         }
+        for side in &mut sides {
+            for (slot, bit) in side.h_order.iter_mut().zip(bits(side.h_mask)) {
+                // (`bit` < 16.)
+                *slot = bit as u8;
+                side.h_count += 1;
+            }
+        }
         let kernel = Self {
             sides,
             row0: j.row0,
             b_off: j.b_off,
             h_off: j.h_off,
+            standard: sides.iter().all(standard),
         };
         // The masks give the entries in this order; any other order (or a
         // bit outside a side) keeps the joint on the generic path.
         (kernel.b_entries() == j.b_local && kernel.h_entries() == j.h_local).then_some(kernel)
+    }
+
+    /// Whether [`phi_b`](Self::phi_b) writes `B` in the usual layout.
+    #[cfg(test)]
+    pub(crate) fn is_standard(&self) -> bool {
+        self.standard
     }
 
     /// The `B` entries the masks encode, as `(row, local variable)` in the
@@ -114,33 +138,26 @@ impl SphericalKernel {
     /// `base.0` and value `base.1` (a part of the buffers, for rayon).
     #[inline]
     pub(crate) fn phi_b(&self, u: &[f64], phi: &mut [f64], b: &mut [f64], base: (usize, usize)) {
-        // Per side: the point (global) and the 3 × 7 local gradient.
+        // Per side: the point (global) and the rows `±∂(A s)/∂p` (3 × 4).
         let mut point = [[0.0; 3]; 2];
-        let mut grad = [[[0.0; SIDE]; 3]; 2];
+        let mut rot = [[[0.0; 4]; 3]; 2];
         for (side, sign) in [(0, 1.0), (1, -1.0)] {
             let ks = &self.sides[side];
             let Some(x) = ks.x else {
                 point[side] = ks.s;
                 continue;
             };
-            let q = &u[x..x + if ks.rigid { SIDE } else { 3 }];
             if ks.rigid {
+                let q = &u[x..x + SIDE];
                 let p = [q[3], q[4], q[5], q[6]];
                 let a = rotate(&p, ks.s);
                 point[side] = [q[0] + a[0], q[1] + a[1], q[2] + a[2]];
-                for (k, g) in grad[side].iter_mut().enumerate() {
-                    let mut e = [0.0; 3];
-                    e[k] = 1.0;
-                    let row = point_jt(&p, ks.s, e);
-                    for c in 0..4 {
-                        g[3 + c] = sign * row[c];
-                    }
+                let rows = point_jacobian(&p, ks.s);
+                for (g, row) in rot[side].iter_mut().zip(rows) {
+                    *g = row.map(|r| sign * r);
                 }
             } else {
-                point[side] = [q[0], q[1], q[2]];
-            }
-            for (k, g) in grad[side].iter_mut().enumerate() {
-                g[k] = sign;
+                point[side] = [u[x], u[x + 1], u[x + 2]];
             }
         }
         let row = self.row0 - base.0;
@@ -148,11 +165,26 @@ impl SphericalKernel {
             // As the generic path: 0 + x_A − x_B.
             phi[row + k] = 0.0 + point[0][k] - point[1][k];
         }
-        let mut o = self.b_off - base.1;
+        let o = self.b_off - base.1;
+        if self.standard {
+            write_standard(&self.sides, &rot, &mut b[o..]);
+        } else {
+            self.write_masked(&rot, &mut b[o..]);
+        }
+    }
+
+    /// The `B` entries in the masks' order: row `k`, side by side, the
+    /// side's local coordinates ascending (`x_k`: `±1`, `p`: `rot`).
+    fn write_masked(&self, rot: &[[[f64; 4]; 3]; 2], b: &mut [f64]) {
+        let mut o = 0;
         for k in 0..3 {
-            for side in 0..2 {
+            for (side, sign) in [(0, 1.0), (1, -1.0)] {
                 for c in bits(u16::from(self.sides[side].b_mask[k])) {
-                    b[o] = grad[side][k][c];
+                    b[o] = match c {
+                        0..3 if c == k => sign,
+                        0..3 => 0.0,
+                        _ => rot[side][k][c - 3],
+                    };
                     o += 1;
                 }
             }
@@ -171,10 +203,12 @@ impl SphericalKernel {
                 continue;
             }
             let h = h_block(ks.s, m, sign);
-            for bit in bits(ks.h_mask) {
-                out[o] = h[bit / 4][bit % 4];
-                o += 1;
+            let h = h.as_flattened();
+            let order = &ks.h_order[..usize::from(ks.h_count)];
+            for (out, &bit) in out[o..o + order.len()].iter_mut().zip(order) {
+                *out = h[usize::from(bit)];
             }
+            o += order.len();
         }
     }
 
@@ -217,6 +251,39 @@ fn h_block(s: [f64; 3], mu: [f64; 3], sign: f64) -> [[f64; 4]; 4] {
         }
     }
     h
+}
+
+/// Whether a side's `B` entries are the usual ones: none for the ground;
+/// row `k` of a point mass has `x_k`; row `k` of a rigid body has `x_k` and
+/// its four Euler parameters.
+fn standard(side: &KernelSide) -> bool {
+    (0..3).all(|k| {
+        let expected = match side.x {
+            None => 0,
+            Some(_) => (1u8 << k) | if side.rigid { 0b111_1000 } else { 0 },
+        };
+        side.b_mask[k] == expected
+    })
+}
+
+/// [`SphericalKernel::phi_b`]'s `B` entries for [`standard`] sides, in the
+/// masks' order: row `k`, side by side, `±1` then a rigid side's `rot` row.
+#[inline]
+fn write_standard(sides: &[KernelSide; 2], rot: &[[[f64; 4]; 3]; 2], b: &mut [f64]) {
+    let mut o = 0;
+    for k in 0..3 {
+        for (side, sign) in [(0, 1.0), (1, -1.0)] {
+            if sides[side].x.is_none() {
+                continue;
+            }
+            b[o] = sign;
+            o += 1;
+            if sides[side].rigid {
+                b[o..o + 4].copy_from_slice(&rot[side][k]);
+                o += 4;
+            }
+        }
+    }
 }
 
 /// The positions of the set bits of `mask`, ascending.
@@ -297,7 +364,9 @@ mod tests {
 
     #[test]
     fn chain_kernels_equal_the_generic_joints() {
-        assert_same(&spatial_bar_chain(6, RotationalMass::Regularized), 6);
+        let chain = spatial_bar_chain(6, RotationalMass::Regularized);
+        assert_eq!(chain.usual_kernels(), 6, "the usual layout");
+        assert_same(&chain, 6);
         assert_same(&spatial_bar_chain(3, RotationalMass::Singular), 3);
     }
 
@@ -348,6 +417,42 @@ mod tests {
             ),
         );
         let sys = b.build().expect("a valid model");
+        assert_eq!(sys.usual_kernels(), 2, "ground, rigid and point-mass sides");
         assert_same(&sys, 2);
+    }
+
+    /// A joint at a body's centre of mass has no Euler-parameter entries on
+    /// that side (`∂(A s)/∂p = 0` for `s = 0`): its entries are written by
+    /// the masks, not the usual layout.
+    #[test]
+    fn a_joint_at_the_centre_equals_the_generic_joint() {
+        let mut b = SpatialBuilder::new();
+        let body = |position| SpatialBody {
+            mass: 1.5,
+            inertia: SpatialInertia::Principal([0.1, 0.2, 0.3]),
+            position,
+            orientation: [0.9, 0.1, -0.3, 0.2],
+            velocity: [0.0; 3],
+            angular_velocity: [0.0; 3],
+        };
+        let upper = b.body("upper", body([0.0, 0.0, 0.0]));
+        let lower = b.body("lower", body([0.2, -0.1, -0.6]));
+        b.joint(
+            "centre",
+            JointSpec {
+                kind: JointType::Spherical,
+                bodies: [Attach::Body(upper), Attach::Body(lower)],
+                points: [[0.0; 3], [0.1, 0.2, 0.3]],
+                axes: [[0.0, 0.0, 1.0]; 2],
+                length: None,
+            },
+        );
+        let sys = b.build().expect("a valid model");
+        assert_eq!(
+            sys.usual_kernels(),
+            0,
+            "the centre's side is not the usual one"
+        );
+        assert_same(&sys, 1);
     }
 }

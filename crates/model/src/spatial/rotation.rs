@@ -70,6 +70,41 @@ pub(crate) fn point_jt<T: Real>(p: &[T; 4], s: V3<T>, f: V3<T>) -> [T; 4] {
     [c0, r(0), r(1), r(2)]
 }
 
+/// The three rows `J(p, s)ᵀ e_k` of `J = ∂(A(p) s)/∂p` ([`point_jt`] for
+/// the unit vectors `e_k`), with the products by the zeros and ones of `e_k`
+/// left out: the same values (but for the sign of a zero) at a third of the
+/// operations. The spherical kernel's `B` rows.
+pub(crate) fn point_jacobian(p: &[f64; 4], s: V3<f64>) -> [[f64; 4]; 3] {
+    let e = [p[1], p[2], p[3]];
+    let v = add(scale(s, p[0]), cross(e, s));
+    let es = dot(e, s);
+    // `((f_i (eᵀs) + s_i (eᵀf)) − e_i (sᵀf)) + (s × f)_i e0` of `point_jt`
+    // for `f = e_k`, in its order: `t` is the first sum, `x` the `i`-th
+    // entry of `s × e_k` (none on the diagonal, where it is zero).
+    let r = |k: usize, i: usize, t: f64| (t - e[i] * s[k]) * 2.0;
+    let rx = |k: usize, i: usize, t: f64, x: f64| ((t - e[i] * s[k]) + x * p[0]) * 2.0;
+    [
+        [
+            v[0] * 2.0,
+            r(0, 0, es + s[0] * e[0]),
+            rx(0, 1, s[1] * e[0], s[2]),
+            rx(0, 2, s[2] * e[0], -s[1]),
+        ],
+        [
+            v[1] * 2.0,
+            rx(1, 0, s[0] * e[1], -s[2]),
+            r(1, 1, es + s[1] * e[1]),
+            rx(1, 2, s[2] * e[1], s[0]),
+        ],
+        [
+            v[2] * 2.0,
+            rx(2, 0, s[0] * e[2], s[1]),
+            rx(2, 1, s[1] * e[2], -s[0]),
+            r(2, 2, es + s[2] * e[2]),
+        ],
+    ]
+}
+
 /// `2 E(p)ᵀ n`: the generalized force on `p` of a torque `n` in global axes.
 pub(crate) fn torque_global<T: Real>(p: &[T; 4], n: V3<T>) -> [T; 4] {
     let e = [p[1], p[2], p[3]];
@@ -119,6 +154,32 @@ mod tests {
 
     fn along(p: &[f64; 4], d: &[f64; 4], h: f64) -> [f64; 4] {
         std::array::from_fn(|k| p[k] + h * d[k])
+    }
+
+    /// `point_jacobian`'s rows are `point_jt` of the unit vectors: to the bit
+    /// at a general state, and equal (zeros of either sign) at the identity
+    /// with a point on an axis, where most terms vanish.
+    #[test]
+    fn point_jacobian_rows_are_point_jt_of_the_unit_vectors() {
+        for (p, s, bits) in [
+            (P, S, true),
+            ([1.0, 0.0, 0.0, 0.0], [-0.5, 0.0, 0.0], false),
+            ([0.6, 0.0, -0.8, 0.0], [0.0, 0.0, 0.25], false),
+        ] {
+            let rows = point_jacobian(&p, s);
+            for (k, row) in rows.iter().enumerate() {
+                let mut f = [0.0; 3];
+                f[k] = 1.0;
+                let expected = point_jt(&p, s, f);
+                for (a, b) in row.iter().zip(expected) {
+                    assert!(a.is_finite() && a == &b, "row {k}: {row:?} vs {expected:?}");
+                    assert!(
+                        !bits || a.to_bits() == b.to_bits(),
+                        "row {k}: {row:?} vs {expected:?}"
+                    );
+                }
+            }
+        }
     }
 
     /// `J(p, s)ᵀ f · δp = f · δ(A s)`: the force mapping is the transpose of

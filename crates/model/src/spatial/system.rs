@@ -212,6 +212,13 @@ impl SpatialSystem {
         self.spherical.len()
     }
 
+    /// How many kernels write `B` in the usual layout, without their masks
+    /// (tests).
+    #[cfg(test)]
+    pub(crate) fn usual_kernels(&self) -> usize {
+        self.spherical.iter().filter(|k| k.is_standard()).count()
+    }
+
     fn rigid_blocks(&self) -> impl Iterator<Item = (usize, &BodyData)> {
         self.bodies
             .iter()
