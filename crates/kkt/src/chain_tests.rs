@@ -2,7 +2,7 @@
 
 use crate::schur::Schur;
 use crate::testing::{chain, chain_with, relative_difference, relative_residual, vector};
-use crate::{Backend, Csc, KktBackend, KktError, KktOptions, KktSolver};
+use crate::{Backend, Csc, KktBackend, KktError, KktOptions, KktSolver, max_abs};
 use proptest::prelude::*;
 
 fn options(backend: Backend, n_bodies: usize) -> KktOptions {
@@ -703,4 +703,73 @@ fn a_spoiled_factorization_fails_the_check_inside_the_schur_solve() {
     let mut x = b.clone();
     s.solve_in_place(&mut x).expect("accurate");
     assert!(relative_residual(&a, &x, &b) <= 1e-12);
+}
+
+/// Newton's corrections leave the residual check of a backend without a
+/// fused residual to [`KktSolver::verify`], once the first factorization
+/// they meet has passed it on the spot: a spoiled first factorization
+/// fails at once; a later spoiled one passes `solve_unverified_correction`
+/// (its solution is wrong) and `verify` finds it; a sound one verifies.
+#[test]
+fn newton_corrections_leave_the_check_to_verify() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let n_bodies = 50;
+    let a = chain_with(n_bodies, 4, None, false);
+    let b = vector(a.n, 6);
+    /// The Schur backend, its factorizations spoiled while the flag is set,
+    /// without the residual formed in its solve (the caller multiplies).
+    struct Unfused(Schur, Arc<AtomicBool>);
+    impl KktBackend for Unfused {
+        fn factor(&mut self, values: &[f64]) -> Result<f64, KktError> {
+            let norm = self.0.factor(values)?;
+            if self.1.load(Ordering::Relaxed) {
+                self.0.spoil(7, 1.5);
+            }
+            Ok(norm)
+        }
+        fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64 {
+            self.0.solve_in_place(rhs)
+        }
+        fn mul(&self, x: &[f64], y: &mut [f64]) {
+            self.0.mul(x, y);
+        }
+    }
+    let opts = options(Backend::SCHUR, n_bodies);
+    let solver = |spoiled: &Arc<AtomicBool>| {
+        let schur = Unfused(
+            Schur::new(&a, 3 * n_bodies).expect("structure"),
+            spoiled.clone(),
+        );
+        KktSolver::with_backend(Box::new(schur), Backend::SCHUR, a.n, &opts)
+    };
+    let inaccurate = |r: &Result<(), KktError>| matches!(r, Err(KktError::Inaccurate { relative_residual }) if *relative_residual > 1e-6);
+    // A spoiled first factorization fails on the spot.
+    let spoiled = Arc::new(AtomicBool::new(true));
+    let mut s = solver(&spoiled);
+    s.factor(&a.values).expect("regular");
+    let mut x = b.clone();
+    let first = s.solve_unverified_correction(&mut x, max_abs(&b));
+    assert!(inaccurate(&first), "{first:?}");
+    // A sound first factorization passes; a later spoiled one is left to
+    // `verify`, which finds it; a sound one verifies.
+    let spoiled = Arc::new(AtomicBool::new(false));
+    let mut s = solver(&spoiled);
+    for spoil in [false, true, false] {
+        spoiled.store(spoil, Ordering::Relaxed);
+        s.factor(&a.values).expect("regular");
+        let mut x = b.clone();
+        s.solve_unverified_correction(&mut x, max_abs(&b))
+            .expect("not checked on the spot after the first factorization");
+        let residual = relative_residual(&a, &x, &b);
+        let mut probe = b.clone();
+        let verified = s.verify(&mut probe);
+        if spoil {
+            assert!(residual > 1e-6, "a spoiled solution: {residual:e}");
+            assert!(inaccurate(&verified), "{verified:?}");
+        } else {
+            assert!(residual <= 1e-12, "{residual:e}");
+            verified.expect("a sound factorization verifies");
+        }
+    }
 }

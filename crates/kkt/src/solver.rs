@@ -15,9 +15,19 @@ pub struct KktSolver {
     factored: bool,
     /// Whether a solve has checked the current factorization's residual.
     verified: bool,
+    /// Whether a solve of
+    /// [`solve_unverified_correction`](Self::solve_unverified_correction)
+    /// has checked a factorization: the first one it meets is checked on
+    /// the spot (a backend unfit for the iteration matrix fails there, not
+    /// as a slow Newton iteration).
+    corrections_verified: bool,
     /// Whether the solve under way skips the backend's own refinement
     /// ([`solve_correction`](Self::solve_correction)).
     unrefined: bool,
+    /// Whether the solve under way leaves an unverified factorization's
+    /// check to [`verify`](Self::verify) when it would cost a product
+    /// ([`solve_unverified_correction`](Self::solve_unverified_correction)).
+    deferred: bool,
     tol: f64,
     /// `‖A‖∞` of the last factorization.
     a_norm: f64,
@@ -100,7 +110,9 @@ impl KktSolver {
             n,
             factored: false,
             verified: false,
+            corrections_verified: false,
             unrefined: false,
+            deferred: false,
             tol: options.residual_tolerance,
             a_norm: 0.0,
             rhs: vec![0.0; n],
@@ -196,6 +208,58 @@ impl KktSolver {
         solved
     }
 
+    /// [`solve_correction`](Self::solve_correction) for a solve inside an
+    /// iteration whose own residual certifies where it leads (a Newton
+    /// iteration; a refinement against another matrix): the residual
+    /// check of an unverified factorization is made here only when the
+    /// backend forms it in the solve's own sweeps, or for the first
+    /// factorization such a solve meets (a backend unfit for the iteration
+    /// matrix fails at once);
+    /// otherwise (a product with
+    /// the whole matrix: 6 % of a spatial chain's step,
+    /// docs/performance.md, "Newton's checks when Newton fails") it is left
+    /// to [`verify`](Self::verify), which the caller runs when the iteration
+    /// fails. The bound on `‖A‖∞ ‖x‖∞ / ‖rhs‖∞` (a singular matrix) is
+    /// checked at every solve, as always.
+    ///
+    /// # Errors
+    /// As [`solve_in_place`](Self::solve_in_place).
+    ///
+    /// # Panics
+    /// If `rhs.len()` differs from the dimension.
+    pub fn solve_unverified_correction(
+        &mut self,
+        rhs: &mut [f64],
+        rhs_norm: f64,
+    ) -> Result<(), KktError> {
+        self.deferred = true;
+        let solved = self.solve_correction(rhs, rhs_norm);
+        self.deferred = false;
+        solved
+    }
+
+    /// Checks the current factorization by the residual of a solve of `rhs`
+    /// (any right-hand side: Newton's last residual when an iteration
+    /// failed after
+    /// [`solve_unverified_correction`](Self::solve_unverified_correction));
+    /// `rhs` is overwritten. Nothing to do when a solve has verified the
+    /// factorization already, when there is none, or for a zero or
+    /// non-finite `rhs`, which cannot test it.
+    ///
+    /// # Errors
+    /// [`KktError::Inaccurate`] or [`KktError::Singular`], as
+    /// [`solve_in_place`](Self::solve_in_place).
+    ///
+    /// # Panics
+    /// If `rhs.len()` differs from the dimension.
+    pub fn verify(&mut self, rhs: &mut [f64]) -> Result<(), KktError> {
+        let rhs_norm = max_abs(rhs);
+        if self.verified || !self.factored || !rhs_norm.is_finite() || rhs_norm == 0.0 {
+            return Ok(());
+        }
+        self.solve_correction(rhs, rhs_norm)
+    }
+
     /// [`solve_in_place`](Self::solve_in_place) for a caller that knows
     /// `rhs_norm = ‖rhs‖∞` already (NaN or infinite if `rhs` has a NaN or an
     /// infinity), which saves a pass over `rhs`.
@@ -235,6 +299,7 @@ impl KktSolver {
                 return Err(KktError::Inaccurate { relative_residual });
             }
             self.verified = true;
+            self.corrections_verified |= self.deferred;
         }
         // A small relative residual is a small backward error, which a nearly
         // singular matrix also gives, with a huge x (e.g. multipliers of 1e18
@@ -260,6 +325,15 @@ impl KktSolver {
             if let Some((xn, res)) = checked {
                 return (xn, Some(res));
             }
+        }
+        if self.deferred && self.corrections_verified && !refine {
+            // The check is left to `verify` (`solve_unverified_correction`).
+            let xn = if self.unrefined {
+                self.inner.solve_in_place_unrefined(rhs)
+            } else {
+                self.inner.solve_in_place(rhs)
+            };
+            return (xn, None);
         }
         if !self.verified || refine {
             self.rhs.copy_from_slice(rhs);

@@ -76,7 +76,32 @@ impl Norms {
 
 impl<S: System + ?Sized> Integrator<'_, S> {
     /// One Newton attempt at the step `t → t + h`; returns the iterations.
+    /// Its solves leave the residual check of a new factorization to the
+    /// end ([`mstar_kkt::KktSolver::solve_unverified_correction`]): a converged
+    /// iterate is certified by its own residual, and an attempt that fails
+    /// checks the factorization on its last residual, so that an inaccurate
+    /// solve is reported as the solver's.
     pub(super) fn attempt(&mut self, h: f64) -> Result<usize, Failure> {
+        let result = self.iterate(h);
+        if let Err(Failure::NotConverged { .. } | Failure::NonFinite(_)) = result {
+            // The last residual `[scale r; −Φ]` (in `rhs`), or ones where it
+            // is not finite.
+            let mut probe = self.rhs.clone();
+            if !max_abs(&probe).is_finite() {
+                probe.fill(1.0);
+            }
+            if let Err(source) = self.solver.verify(&mut probe) {
+                return Err(Failure::Kkt {
+                    context: "solving with the iteration matrix",
+                    source,
+                });
+            }
+        }
+        result
+    }
+
+    /// The iterations of [`attempt`](Self::attempt).
+    fn iterate(&mut self, h: f64) -> Result<usize, Failure> {
         self.predict(h);
         let k = self.corrector(h);
         let mut force_refactor = false;
@@ -112,7 +137,9 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             // next iteration's residual corrects what it would, and it no
             // longer saves iterations (docs/performance.md, "Newton's solves
             // without `schur-lu`'s refinement").
-            let solved = self.solver.solve_correction(&mut self.rhs, norms.rhs);
+            let solved = self
+                .solver
+                .solve_unverified_correction(&mut self.rhs, norms.rhs);
             solved.map_err(|source| Failure::Kkt {
                 context: "solving with the iteration matrix",
                 source,

@@ -742,8 +742,11 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     /// `y = J⁻¹ f` with the factored (scaled, possibly augmented) KKT
     /// matrix: its right-hand side is `[scale f_u; f_λ]`, and its
     /// multiplier part is `scale (δλ − c_bb f_λ)` when `S` carries `c_bb
-    /// BᵀB`. `unrefined`: without the backend's refinement step
-    /// ([`mstar_kkt::KktSolver::solve_correction`]).
+    /// BᵀB`. `unrefined`: a pass of the refinement against the converged
+    /// matrix, without the backend's refinement step and without the
+    /// residual check of Newton's factorization, which the refinement's own
+    /// residual replaces
+    /// ([`mstar_kkt::KktSolver::solve_unverified_correction`]).
     fn solve_scaled(
         &mut self,
         f: &[f64],
@@ -759,7 +762,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         y.extend_from_slice(&f[n..]);
         let solved = if unrefined {
             let norm = max_abs(y);
-            self.solver.solve_correction(y, norm)
+            self.solver.solve_unverified_correction(y, norm)
         } else {
             self.solver.solve_in_place(y)
         };
