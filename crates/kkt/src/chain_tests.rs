@@ -4,6 +4,8 @@ use crate::schur::Schur;
 use crate::testing::{chain, chain_with, relative_difference, relative_residual, vector};
 use crate::{Backend, Csc, KktBackend, KktError, KktOptions, KktSolver, max_abs};
 use proptest::prelude::*;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 fn options(backend: Backend, n_bodies: usize) -> KktOptions {
     KktOptions {
@@ -661,32 +663,54 @@ fn the_residual_check_inside_the_schur_solve_is_the_residual() {
     }
 }
 
+/// The Schur backend with its factorizations spoiled afterwards while
+/// `spoiled` is set, with its residual formed in the solve (`fused`) or
+/// left to the caller's product.
+struct Spoilable {
+    schur: Schur,
+    spoiled: Arc<AtomicBool>,
+    fused: bool,
+}
+
+impl Spoilable {
+    fn new(a: &Csc, n_primal: usize, spoiled: bool, fused: bool) -> Self {
+        Self {
+            schur: Schur::new(a, n_primal).expect("structure"),
+            spoiled: Arc::new(AtomicBool::new(spoiled)),
+            fused,
+        }
+    }
+}
+
+impl KktBackend for Spoilable {
+    fn factor(&mut self, values: &[f64]) -> Result<f64, KktError> {
+        let norm = self.schur.factor(values)?;
+        if self.spoiled.load(Ordering::Relaxed) {
+            self.schur.spoil(7, 1.5);
+        }
+        Ok(norm)
+    }
+    fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64 {
+        self.schur.solve_in_place(rhs)
+    }
+    fn mul(&self, x: &[f64], y: &mut [f64]) {
+        self.schur.mul(x, y);
+    }
+    fn solve_with_residual(&mut self, rhs: &mut [f64]) -> Option<(f64, f64)> {
+        if self.fused {
+            self.schur.solve_with_residual(rhs)
+        } else {
+            None
+        }
+    }
+}
+
 #[test]
 fn a_spoiled_factorization_fails_the_check_inside_the_schur_solve() {
     let n_bodies = 50;
     let a = chain_with(n_bodies, 4, None, false);
     let b = vector(a.n, 6);
-    /// The Schur backend with every factorization spoiled afterwards.
-    struct Spoiled(Schur, bool);
-    impl KktBackend for Spoiled {
-        fn factor(&mut self, values: &[f64]) -> Result<f64, KktError> {
-            let norm = self.0.factor(values)?;
-            if self.1 {
-                self.0.spoil(7, 1.5);
-            }
-            Ok(norm)
-        }
-        fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64 {
-            self.0.solve_in_place(rhs)
-        }
-        fn mul(&self, x: &[f64], y: &mut [f64]) {
-            self.0.mul(x, y);
-        }
-        fn solve_with_residual(&mut self, rhs: &mut [f64]) -> Option<(f64, f64)> {
-            self.0.solve_with_residual(rhs)
-        }
-    }
-    let schur = Spoiled(Schur::new(&a, 3 * n_bodies).expect("structure"), true);
+    let schur = Spoilable::new(&a, 3 * n_bodies, true, true);
     let opts = options(Backend::SCHUR, n_bodies);
     let mut s = KktSolver::with_backend(Box::new(schur), Backend::SCHUR, a.n, &opts);
     s.factor(&a.values).expect("regular");
@@ -697,7 +721,7 @@ fn a_spoiled_factorization_fails_the_check_inside_the_schur_solve() {
         "{result:?}"
     );
     // Unspoiled, the same solver passes.
-    let schur = Spoiled(Schur::new(&a, 3 * n_bodies).expect("structure"), false);
+    let schur = Spoilable::new(&a, 3 * n_bodies, false, true);
     let mut s = KktSolver::with_backend(Box::new(schur), Backend::SCHUR, a.n, &opts);
     s.factor(&a.values).expect("regular");
     let mut x = b.clone();
@@ -712,35 +736,16 @@ fn a_spoiled_factorization_fails_the_check_inside_the_schur_solve() {
 /// (its solution is wrong) and `verify` finds it; a sound one verifies.
 #[test]
 fn newton_corrections_leave_the_check_to_verify() {
-    use std::sync::Arc;
-    use std::sync::atomic::{AtomicBool, Ordering};
     let n_bodies = 50;
     let a = chain_with(n_bodies, 4, None, false);
     let b = vector(a.n, 6);
-    /// The Schur backend, its factorizations spoiled while the flag is set,
-    /// without the residual formed in its solve (the caller multiplies).
-    struct Unfused(Schur, Arc<AtomicBool>);
-    impl KktBackend for Unfused {
-        fn factor(&mut self, values: &[f64]) -> Result<f64, KktError> {
-            let norm = self.0.factor(values)?;
-            if self.1.load(Ordering::Relaxed) {
-                self.0.spoil(7, 1.5);
-            }
-            Ok(norm)
-        }
-        fn solve_in_place(&mut self, rhs: &mut [f64]) -> f64 {
-            self.0.solve_in_place(rhs)
-        }
-        fn mul(&self, x: &[f64], y: &mut [f64]) {
-            self.0.mul(x, y);
-        }
-    }
     let opts = options(Backend::SCHUR, n_bodies);
     let solver = |spoiled: &Arc<AtomicBool>| {
-        let schur = Unfused(
-            Schur::new(&a, 3 * n_bodies).expect("structure"),
-            spoiled.clone(),
-        );
+        let schur = Spoilable {
+            schur: Schur::new(&a, 3 * n_bodies).expect("structure"),
+            spoiled: spoiled.clone(),
+            fused: false,
+        };
         KktSolver::with_backend(Box::new(schur), Backend::SCHUR, a.n, &opts)
     };
     let inaccurate = |r: &Result<(), KktError>| matches!(r, Err(KktError::Inaccurate { relative_residual }) if *relative_residual > 1e-6);
