@@ -220,6 +220,17 @@ fn malformed_files_are_errors_at_the_key() {
         e.starts_with("m.toml:16:8: joint 'tip': axes: a spherical joint has no axis"),
         "{e}"
     );
+    // The global form is named as written.
+    let e = error(&TOP.replace(
+        "type = \"spherical\"",
+        "type = \"spherical\"\naxis = [0, 0, 1]",
+    ));
+    assert!(
+        e.starts_with(
+            "m.toml:16:8: joint 'tip': axis: a spherical joint has no axis: 'axis' belongs to"
+        ),
+        "{e}"
+    );
     let e = error(&TOP.replace("\"spherical\"", "\"ball\""));
     assert!(
         e.starts_with("m.toml:15:8: joint 'tip': type: 'ball' is not one of: spherical, revolute"),

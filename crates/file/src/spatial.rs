@@ -237,7 +237,7 @@ impl<'a> bodies::Elements<'a> for Model<'a> {
                     return Err(f.bad(
                         e,
                         format!(
-                            "a {} joint has no axis: 'axes' belongs to revolute, prismatic, cylindrical and universal joints",
+                            "a {} joint has no axis: '{key}' belongs to revolute, prismatic, cylindrical and universal joints",
                             kind.name()
                         ),
                     ));
