@@ -554,8 +554,8 @@ fn revolute_axes_that_are_not_parallel_at_the_start_are_named() {
 /// Issue 21 (also found): a bar on a ball joint given only an angular
 /// velocity had its rates shared with its centre's velocity by the start's
 /// projection (ė₃ from 0.5 to 0.25), shown as a note only. `mstar run`
-/// warns, naming the value; with the centre's velocity `ω × r` given too,
-/// nothing is changed and nothing is said.
+/// warns, naming the value and the fix; with the centre's velocity `ω × r`
+/// given too (the fix), nothing is changed and nothing is said.
 #[test]
 fn a_start_that_changes_given_velocities_warns() {
     let text = |velocity: &str| {
@@ -587,6 +587,11 @@ fn a_start_that_changes_given_velocities_warns() {
     );
     // ė₃ = ω/2 = 0.5 given, 0.25 after the projection (and ẏ = 0.25 m/s).
     assert!(e.contains("'bar.e3' from 0.5 to 0.25"), "{e}");
+    // The advice names the fix, which the next run follows.
+    assert!(
+        e.contains("its centre's velocity ω × r is given as well"),
+        "{e}"
+    );
     let e = stderr("velocity = [0.0, 0.5, 0.0]\n");
     assert!(!e.contains("warning"), "{e}");
     std::fs::remove_dir_all(&dir).ok();

@@ -477,12 +477,24 @@ pub fn projection_notes<S: System + ?Sized>(
             .collect();
         let (i, by) = argmax_abs(&of_given);
         if by.abs() > 1e-9 * scale {
+            let name = sys.coord_name(i);
+            // An Euler-parameter rate: the angular velocity of a body whose
+            // centre must move with it (docs/model-format.md).
+            let turning = level == "velocities"
+                && ["e0", "e1", "e2", "e3"]
+                    .iter()
+                    .any(|e| name.rsplit_once('.').is_some_and(|(_, c)| c == *e));
+            let hint = if turning {
+                "; a body turning about a joint keeps its angular velocity when its centre's \
+                 velocity ω × r is given as well"
+            } else {
+                ""
+            };
             notes.push(format!(
-                "warning: the start changed the given {level} to satisfy the joints: '{}' from {} \
-                 to {} (the largest change), the smallest change in the coordinates' Euclidean \
-                 norm (every coordinate weighted alike); give {level} that satisfy the joints to \
-                 have them kept (mstar check lists what it moves)",
-                sys.coord_name(i),
+                "warning: the start changed the given {level} to satisfy the joints: '{name}' \
+                 from {} to {} (the largest change), the smallest change in the coordinates' \
+                 Euclidean norm (every coordinate weighted alike); give {level} that satisfy the \
+                 joints to have them kept (mstar check lists what it moves){hint}",
                 mstar_newmark::Short(given[i]),
                 mstar_newmark::Short(given[i] + change[i])
             ));
