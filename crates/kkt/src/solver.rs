@@ -326,16 +326,9 @@ impl KktSolver {
                 return (xn, Some(res));
             }
         }
-        if self.deferred && self.corrections_verified && !refine {
-            // The check is left to `verify` (`solve_unverified_correction`).
-            let xn = if self.unrefined {
-                self.inner.solve_in_place_unrefined(rhs)
-            } else {
-                self.inner.solve_in_place(rhs)
-            };
-            return (xn, None);
-        }
-        if !self.verified || refine {
+        // With `solve_unverified_correction` the product is left to `verify`.
+        let check = !self.verified && (refine || !(self.deferred && self.corrections_verified));
+        if check || refine {
             self.rhs.copy_from_slice(rhs);
         }
         let mut xn = if self.unrefined {
@@ -347,7 +340,7 @@ impl KktSolver {
             self.refine(rhs, bn);
             xn = max_abs(rhs);
         }
-        let residual = (!self.verified).then(|| {
+        let residual = check.then(|| {
             self.inner.mul(rhs, &mut self.ax);
             let mut res = MaxAbs::new();
             for (ax, b) in self.ax.iter().zip(&self.rhs) {

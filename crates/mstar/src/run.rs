@@ -481,9 +481,9 @@ pub fn projection_notes<S: System + ?Sized>(
             // An Euler-parameter rate: the angular velocity of a body whose
             // centre must move with it (docs/model-format.md).
             let turning = level == "velocities"
-                && ["e0", "e1", "e2", "e3"]
-                    .iter()
-                    .any(|e| name.rsplit_once('.').is_some_and(|(_, c)| c == *e));
+                && name
+                    .rsplit_once('.')
+                    .is_some_and(|(_, c)| matches!(c, "e0" | "e1" | "e2" | "e3"));
             let hint = if turning {
                 "; a body turning about a joint keeps its angular velocity when its centre's \
                  velocity ω × r is given as well"

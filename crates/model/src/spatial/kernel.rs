@@ -29,10 +29,8 @@ struct KernelSide {
     /// `B`, in value order.
     b_mask: [u8; 3],
     /// The entries `(i, j)` of the side's 4 × 4 Euler-parameter block in the
-    /// Hessian, bit `4 i + j`, in value order (row-major).
-    h_mask: u16,
-    /// The set bits of `h_mask`, ascending (the first `h_count`): the
-    /// Hessian is written by this list, without walking the mask.
+    /// Hessian, `4 i + j` ascending (the first `h_count`), in value order
+    /// (row-major): the Hessian is written by this list.
     h_order: [u8; 16],
     h_count: u8,
 }
@@ -74,7 +72,6 @@ impl SphericalKernel {
             rigid: j.sides[s].is_some_and(|(_, count)| count == SIDE),
             s: j.points[s],
             b_mask: [0; 3],
-            h_mask: 0,
             h_order: [0; 16],
             h_count: 0,
         });
@@ -82,13 +79,15 @@ impl SphericalKernel {
             let side = sides.get_mut(a / SIDE)?;
             *side.b_mask.get_mut(r)? |= 1 << (a % SIDE);
         }
+        // Per side, bit `4 i + j` for the Hessian entry `(i, j)`.
+        let mut h_masks = [0u16; 2];
         for &(a, b) in j.h_local {
             let (i, k) = ((a % SIDE).checked_sub(3)?, (b % SIDE).checked_sub(3)?);
-            let side = sides.get_mut(a / SIDE).filter(|_| a / SIDE == b / SIDE)?;
-            side.h_mask |= 1 << (4 * i + k);
+            let side = h_masks.get_mut(a / SIDE).filter(|_| a / SIDE == b / SIDE)?;
+            *side |= 1 << (4 * i + k);
         }
-        for side in &mut sides {
-            for (slot, bit) in side.h_order.iter_mut().zip(bits(side.h_mask)) {
+        for (side, &mask) in sides.iter_mut().zip(&h_masks) {
+            for (slot, bit) in side.h_order.iter_mut().zip(bits(mask)) {
                 // (`bit` < 16.)
                 *slot = bit as u8;
                 side.h_count += 1;
@@ -129,7 +128,12 @@ impl SphericalKernel {
         let mut out = Vec::new();
         for (s, side) in self.sides.iter().enumerate() {
             let o = SIDE * s + 3;
-            out.extend(bits(side.h_mask).map(|b| (o + b / 4, o + b % 4)));
+            let order = &side.h_order[..usize::from(side.h_count)];
+            out.extend(
+                order
+                    .iter()
+                    .map(|&b| (o + usize::from(b) / 4, o + usize::from(b) % 4)),
+            );
         }
         out
     }
@@ -199,7 +203,7 @@ impl SphericalKernel {
         let mut o = self.h_off - base;
         for (side, sign) in [(0, 1.0), (1, -1.0)] {
             let ks = &self.sides[side];
-            if ks.h_mask == 0 {
+            if ks.h_count == 0 {
                 continue;
             }
             let h = h_block(ks.s, m, sign);
