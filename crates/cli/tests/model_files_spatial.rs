@@ -172,7 +172,7 @@ fn every_spatial_model_checks_and_runs_with_its_constraints_held() {
         assert!((last - 0.1).abs() < 1e-12);
         count += 1;
     }
-    assert_eq!(count, 7);
+    assert_eq!(count, 8);
 }
 
 /// The error of `text` read as `m.toml`.

@@ -37,12 +37,14 @@ fn gravity_joints_and_undamped_springs_conserve_energy() {
 #[test]
 fn drivers_dampers_and_torques_do_not() {
     // four-bar, slider-crank: a driver; andrews: a motor torque;
-    // crank-and-spring: a damped spring and a torque.
+    // crank-and-spring: a damped spring and a torque; the flyball
+    // governor: two spatial spring-dampers.
     for file in [
         "four-bar.toml",
         "slider-crank.toml",
         "andrews.toml",
         "crank-and-spring.toml",
+        "spatial/iftomm-a05-flyball.toml",
     ] {
         assert!(!conserves(file), "{file}");
     }

@@ -17,6 +17,7 @@ pub mod andrews;
 mod crank_and_spring;
 mod elliptic;
 mod iftomm_a01;
+mod iftomm_a05;
 mod kinematics;
 mod modes;
 mod n_four_bar;
@@ -101,6 +102,7 @@ pub const CASES: &[Case] = &[
     modes::SPRING_CHAIN,
     modes::DAMPED,
     iftomm_a01::CASE,
+    iftomm_a05::CASE,
     torsion_bar::CASE,
     sensitivity::PENDULUM,
     sensitivity::SLIDER_CRANK,
