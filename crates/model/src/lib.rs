@@ -30,6 +30,7 @@ pub mod planar;
 mod sample;
 pub mod sensor;
 pub mod spatial;
+pub mod subnormal;
 mod subset;
 mod system;
 
@@ -38,5 +39,6 @@ pub use fn_system::{FnSystem, NamesError};
 pub use pattern::Pattern;
 pub use pendulum::{Link, PendulumChain};
 pub use sample::{Sample, SampleRef, StateRef};
+pub use subnormal::FlushSubnormals;
 pub use subset::RowSubset;
 pub use system::{System, constraint_names, coord_names, kinetic_energy};

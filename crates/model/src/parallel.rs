@@ -7,6 +7,8 @@ pub(crate) const PARALLEL_CHUNK: usize = 2048;
 
 use rayon::prelude::*;
 
+use crate::subnormal::{self, FlushSubnormals};
+
 /// A kernel that knows where its output starts.
 pub(crate) trait KernelOffsets {
     /// The global row, `B` value and Hessian value at which its output starts.
@@ -67,11 +69,14 @@ pub(crate) fn phi_b_in_parts<K: KernelOffsets + Sync>(
     }
     let phi_parts = split_at_bases(phi, parts.iter().map(|p| p.1.0));
     let b_parts = split_at_bases(b, parts.iter().map(|p| p.1.1));
+    let flush = subnormal::flushing();
     parts
         .into_par_iter()
         .zip(phi_parts)
         .zip(b_parts)
         .for_each(|(((ks, base), phi), b)| {
+            // The calling thread's treatment of subnormals.
+            let _flush = flush.then(FlushSubnormals::new);
             for k in ks {
                 each(k, phi, b, (base.0, base.1));
             }
@@ -94,10 +99,12 @@ pub(crate) fn hessian_in_parts<K: KernelOffsets + Sync>(
         return;
     }
     let out_parts = split_at_bases(out, parts.iter().map(|p| p.1.2));
+    let flush = subnormal::flushing();
     parts
         .into_par_iter()
         .zip(out_parts)
         .for_each(|((ks, base), out)| {
+            let _flush = flush.then(FlushSubnormals::new);
             for k in ks {
                 each(k, out, base.2);
             }

@@ -3,6 +3,7 @@
 //! how `C` is factored (envelope or AMD), the slots every block writes in `C`,
 //! and `B` by primal column.
 
+use super::blocks::Entry;
 use super::{Block, CFactor, FILL_SLACK, MAX_BLOCK, Schur, Symmetry};
 use crate::envelope::EnvelopeLdlt;
 use crate::envelope_lu::EnvelopeLu;
@@ -14,10 +15,10 @@ pub(super) struct Parts {
     pub(super) blocks: Vec<Block>,
     /// Unknowns of all blocks, block after block.
     pub(super) coords: Vec<usize>,
-    /// `(KKT value position, local i, local j)` of every block's `S` entries.
-    pub(super) s_entries: Vec<(usize, usize, usize)>,
-    /// `(KKT value position, local row, local column)` of every block's `B`.
-    pub(super) b_entries: Vec<(usize, usize, usize)>,
+    /// Every block's `S` entries (local `i`, `j`).
+    pub(super) s_entries: Vec<Entry>,
+    /// Every block's `B` entries (local row, local column).
+    pub(super) b_entries: Vec<Entry>,
     /// Each block's rows (original constraint indices), block after block:
     /// the rows that stay in `C` (those of other blocks too).
     pub(super) rows: Vec<usize>,
@@ -142,7 +143,7 @@ impl Schur {
                 parts
                     .blocks
                     .iter()
-                    .map(|b| parts.s_entries[b.s_entries.start].0)
+                    .map(|b| parts.s_entries[b.s_entries.start].pos())
                     .collect(),
                 if banded {
                     Vec::new()
@@ -315,7 +316,7 @@ impl Parts {
             for (l, &i) in group.iter().enumerate() {
                 local[i] = l;
             }
-            this.push_block(a, n, group, &local, candidates, &mut scratch);
+            this.push_block(a, n, group, &local, candidates, &mut scratch)?;
         }
         if this.max_rows > usize::from(u16::MAX) {
             return Err(KktError::Structure(format!(
@@ -341,7 +342,7 @@ impl Parts {
         local: &[usize],
         candidates: &[bool],
         scratch: &mut Scratch,
-    ) {
+    ) -> Result<(), KktError> {
         let Scratch { row_local, own } = scratch;
         own.clear();
         let (c0, s0, b0, r0) = (
@@ -355,7 +356,7 @@ impl Parts {
             for p in a.col_ptr[j]..a.col_ptr[j + 1] {
                 let i = a.row_idx[p];
                 if i < n {
-                    self.s_entries.push((p, local[i], local[j]));
+                    self.s_entries.push(entry(p, local[i], local[j])?);
                 } else if row_local[i - n] == usize::MAX {
                     row_local[i - n] = 0;
                     if candidates[i - n] {
@@ -390,7 +391,7 @@ impl Parts {
             for p in a.col_ptr[j]..a.col_ptr[j + 1] {
                 let i = a.row_idx[p];
                 if i >= n {
-                    self.b_entries.push((p, row_local[i - n], local[j]));
+                    self.b_entries.push(entry(p, row_local[i - n], local[j])?);
                 }
             }
         }
@@ -411,6 +412,7 @@ impl Parts {
         self.inverse_len += size * size;
         self.max_k = self.max_k.max(size);
         self.max_rows = self.max_rows.max(n_rows);
+        Ok(())
     }
 }
 
@@ -702,6 +704,18 @@ impl BColumns {
     }
 }
 
+/// A block's entry (KKT value position, local row, local column), or the
+/// error of a structure beyond the 32-bit positions and 16-bit local rows
+/// the lists keep.
+fn entry(pos: usize, i: usize, j: usize) -> Result<Entry, KktError> {
+    Entry::new(pos, i, j).ok_or_else(|| {
+        KktError::Structure(format!(
+            "a block of S has an entry at KKT position {pos}, local row {i}: the Schur backend takes at most 2³² positions and {} rows a block",
+            u16::MAX
+        ))
+    })
+}
+
 /// The `n × n` CSC pattern of the `(column, row)` pairs (sorted and
 /// deduplicated in place), values zero.
 pub(super) fn csc_of(n: usize, pairs: &mut Vec<(usize, usize)>) -> Csc {
@@ -720,14 +734,14 @@ pub(super) fn csc_of(n: usize, pairs: &mut Vec<(usize, usize)>) -> Csc {
 fn global_s(
     blocks: &[Block],
     coords: &[usize],
-    s_entries: &[(usize, usize, usize)],
+    s_entries: &[Entry],
 ) -> Result<Vec<(u32, u32)>, KktError> {
     let wide = || KktError::Structure("more than 2³² unknowns".to_string());
     let mut out = Vec::with_capacity(s_entries.len());
     for b in blocks {
         let local = &coords[b.coords.clone()];
-        for &(_, i, j) in &s_entries[b.s_entries.clone()] {
-            let (i, j) = (u32::try_from(local[i]), u32::try_from(local[j]));
+        for e in &s_entries[b.s_entries.clone()] {
+            let (i, j) = (u32::try_from(local[e.i()]), u32::try_from(local[e.j()]));
             out.push((i.map_err(|_| wide())?, j.map_err(|_| wide())?));
         }
     }

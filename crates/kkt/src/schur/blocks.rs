@@ -12,12 +12,53 @@
 #[cfg(test)]
 const MAX_FIXED: usize = 4;
 
+/// One entry of a block's `S` or `B`: its position in the KKT values and
+/// its local row and column (for `B`, the local row of `B_K` and the local
+/// unknown), in 8 bytes: a factorization reads every entry of every block,
+/// and at 10³ bodies the lists are a large share of what it reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct Entry {
+    pos: u32,
+    i: u16,
+    j: u16,
+}
+
+impl Entry {
+    /// The entry at KKT value position `pos`, local `(i, j)`; `None` when
+    /// they do not fit in 32 and 16 bits.
+    pub(super) fn new(pos: usize, i: usize, j: usize) -> Option<Self> {
+        Some(Self {
+            pos: u32::try_from(pos).ok()?,
+            i: u16::try_from(i).ok()?,
+            j: u16::try_from(j).ok()?,
+        })
+    }
+
+    /// The position in the KKT values.
+    #[inline]
+    pub(super) fn pos(self) -> usize {
+        self.pos as usize
+    }
+
+    /// The local row.
+    #[inline]
+    pub(super) fn i(self) -> usize {
+        usize::from(self.i)
+    }
+
+    /// The local column.
+    #[inline]
+    pub(super) fn j(self) -> usize {
+        usize::from(self.j)
+    }
+}
+
 /// A block's analysed entry lists, each already cut to the block.
 pub(super) struct Lists<'a> {
-    /// `(KKT value position, local i, local j)` of its `S` entries.
-    pub(super) s_entries: &'a [(usize, usize, usize)],
-    /// `(KKT value position, local row, local column)` of its `B` entries.
-    pub(super) b_entries: &'a [(usize, usize, usize)],
+    /// Its `S` entries (local `i`, `j`).
+    pub(super) s_entries: &'a [Entry],
+    /// Its `B` entries (local row, local column).
+    pub(super) b_entries: &'a [Entry],
     /// `(local row r, local row s, slot of C[r, s])`.
     pub(super) pairs: &'a [(u16, u16, u32)],
     /// Number of rows of `B` touching the block.
@@ -77,8 +118,8 @@ fn factor_scalar(
     c_values: &mut [f64],
 ) -> Result<(), usize> {
     let mut s = 0.0;
-    for &(p, _, _) in lists.s_entries {
-        s += values[p];
+    for e in lists.s_entries {
+        s += values[e.pos()];
     }
     // Gauss-Jordan's test for one unknown (`invert_fixed`).
     if s.abs() <= f64::EPSILON * s.abs() || s == 0.0 {
@@ -95,8 +136,8 @@ fn factor_scalar(
         b.fill(0.0);
         b
     };
-    for &(p, r, _) in lists.b_entries {
-        b[r] += values[p];
+    for e in lists.b_entries {
+        b[e.i()] += values[e.pos()];
     }
     for &(r, s, slot) in lists.pairs {
         c_values[slot as usize] += b[usize::from(r)] * inv * b[usize::from(s)];
@@ -114,8 +155,8 @@ fn factor_fixed<const K: usize, const A: usize>(
 ) -> Result<(), usize> {
     let nr = lists.n_rows;
     let mut a = [[0.0; A]; A];
-    for &(p, i, j) in lists.s_entries {
-        a[i][j] += values[p];
+    for e in lists.s_entries {
+        a[e.i()][e.j()] += values[e.pos()];
     }
     // B_K and W on the stack when they fit (a body's blocks: 2 and 6 rows),
     // else in the scratch: no call to zero a few values.
@@ -130,14 +171,15 @@ fn factor_fixed<const K: usize, const A: usize>(
         bk.fill(0.0);
         (bk, &mut scratch.w[..nr * K])
     };
-    for &(p, r, j) in lists.b_entries {
+    for e in lists.b_entries {
+        let (r, j, v) = (e.i(), e.j(), values[e.pos()]);
         if r < nr {
-            bk[r * K + j] += values[p];
+            bk[r * K + j] += v;
         } else {
             // A local row: B_l below S_K and its mirror Bᵀ beside it.
             let l = K + r - nr;
-            a[l][j] += values[p];
-            a[j][l] += values[p];
+            a[l][j] += v;
+            a[j][l] += v;
         }
     }
     let mut inv = [[0.0; A]; A];
@@ -179,18 +221,19 @@ fn factor_dynamic(
     let nr = lists.n_rows;
     let blk = &mut scratch.block[..size * size];
     blk.fill(0.0);
-    for &(p, i, j) in lists.s_entries {
-        blk[i * size + j] += values[p];
+    for e in lists.s_entries {
+        blk[e.i() * size + e.j()] += values[e.pos()];
     }
     let bk = &mut scratch.bk[..nr * k];
     bk.fill(0.0);
-    for &(p, r, j) in lists.b_entries {
+    for e in lists.b_entries {
+        let (r, j, v) = (e.i(), e.j(), values[e.pos()]);
         if r < nr {
-            bk[r * k + j] += values[p];
+            bk[r * k + j] += v;
         } else {
             let l = k + r - nr;
-            blk[l * size + j] += values[p];
-            blk[j * size + l] += values[p];
+            blk[l * size + j] += v;
+            blk[j * size + l] += v;
         }
     }
     invert(blk, inverse, size)?;
@@ -331,6 +374,19 @@ pub(super) fn invert(a: &mut [f64], inv: &mut [f64], k: usize) -> Result<(), usi
 mod tests {
     use super::*;
 
+    fn entry(pos: usize, i: usize, j: usize) -> Entry {
+        Entry::new(pos, i, j).unwrap_or_else(|| panic!("({pos}, {i}, {j}) fits"))
+    }
+
+    #[test]
+    fn an_entry_that_does_not_fit_is_refused() {
+        assert_eq!(entry(7, 2, 3).pos(), 7);
+        assert_eq!((entry(7, 2, 3).i(), entry(7, 2, 3).j()), (2, 3));
+        assert!(Entry::new(1 << 32, 0, 0).is_none());
+        assert!(Entry::new(0, 1 << 16, 0).is_none());
+        assert!(Entry::new(0, 0, 1 << 16).is_none());
+    }
+
     /// A symmetric positive definite block with a pivot that needs a swap.
     fn sample(k: usize) -> Vec<f64> {
         let mut a = vec![0.0; k * k];
@@ -345,14 +401,14 @@ mod tests {
 
     fn both(k: usize) {
         let a = sample(k);
-        let s: Vec<(usize, usize, usize)> = (0..k * k).map(|p| (p, p / k, p % k)).collect();
+        let s: Vec<Entry> = (0..k * k).map(|p| entry(p, p / k, p % k)).collect();
         // Two rows of B: row 0 all ones, row 1 = 1, 2, 3, …
         let values_b: Vec<f64> = (0..2 * k)
             .map(|q| if q < k { 1.0 } else { (q - k + 1) as f64 })
             .collect();
         let mut values = a.clone();
         values.extend(&values_b);
-        let b: Vec<(usize, usize, usize)> = (0..2 * k).map(|q| (k * k + q, q / k, q % k)).collect();
+        let b: Vec<Entry> = (0..2 * k).map(|q| entry(k * k + q, q / k, q % k)).collect();
         let pairs = [(0u16, 0u16, 0u32), (1, 0, 1), (1, 1, 2)];
         let lists = Lists {
             s_entries: &s,
@@ -405,12 +461,12 @@ mod tests {
         let k = 4;
         let a = sample(k);
         let own = [0.6, -0.8, 0.2, 0.4];
-        let s: Vec<(usize, usize, usize)> = (0..k * k).map(|p| (p, p / k, p % k)).collect();
+        let s: Vec<Entry> = (0..k * k).map(|p| entry(p, p / k, p % k)).collect();
         // Rows 0 and 1 of B go to C, row 2 is the block's own.
         let mut values = a.clone();
         values.extend((0..2 * k).map(|q| 1.0 + q as f64 * 0.25));
         values.extend(own);
-        let b: Vec<(usize, usize, usize)> = (0..3 * k).map(|q| (k * k + q, q / k, q % k)).collect();
+        let b: Vec<Entry> = (0..3 * k).map(|q| entry(k * k + q, q / k, q % k)).collect();
         let pairs = [(0u16, 0u16, 0u32), (1, 0, 1), (0, 1, 2), (1, 1, 3)];
         let lists = Lists {
             s_entries: &s,
@@ -455,7 +511,7 @@ mod tests {
     #[test]
     fn fixed_size_inverse_reports_the_singular_column() {
         let values = [1.0, 2.0, 2.0, 4.0];
-        let s = [(0, 0, 0), (1, 0, 1), (2, 1, 0), (3, 1, 1)];
+        let s = [(0, 0, 0), (1, 0, 1), (2, 1, 0), (3, 1, 1)].map(|(p, i, j)| entry(p, i, j));
         let lists = Lists {
             s_entries: &s,
             b_entries: &[],

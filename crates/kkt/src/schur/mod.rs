@@ -137,13 +137,13 @@ pub(crate) struct Schur {
     /// Unknowns of all blocks, block after block.
     coords: Vec<usize>,
     /// `(KKT value position, local i, local j)` of every block's `S` entries.
-    s_entries: Vec<(usize, usize, usize)>,
+    s_entries: Vec<blocks::Entry>,
     /// The same entries' global `(row, column)` (empty when `diagonal`):
     /// products and norms with `S` read them in one pass, without the
     /// blocks' lists.
     s_global: Vec<(u32, u32)>,
     /// `(KKT value position, local row, local column)` of every block's `B`.
-    b_entries: Vec<(usize, usize, usize)>,
+    b_entries: Vec<blocks::Entry>,
     /// `(local row r, local row s, position of C[r, s] in c.values)` for the
     /// pairs in the triangle the factorization reads (empty when `banded`:
     /// the envelope gives the positions).
@@ -304,8 +304,8 @@ impl Schur {
                 take(v, p);
             }
         } else {
-            for (v, &(p, _, _)) in self.s_values.iter_mut().zip(&self.s_entries) {
-                take(v, p);
+            for (v, e) in self.s_values.iter_mut().zip(&self.s_entries) {
+                take(v, e.pos());
             }
         }
         for (v, &(p, _, _)) in self.d_values.iter_mut().zip(&self.d_all) {

@@ -15,7 +15,7 @@ pub use sensitivity::{DIFFERENCE_STEP, Parameterized, Sensitivities, Variant};
 
 use mstar_kkt::{Backend, KktError, KktSolver};
 use mstar_linearize::{Linearization, max_abs};
-use mstar_model::{Sample, SampleRef, StateRef, System, kinetic_energy};
+use mstar_model::{FlushSubnormals, Sample, SampleRef, StateRef, System, kinetic_energy};
 
 use crate::{
     AlphaParams, Config, IntegrationError, Newton, Observer, Predictor, RunStats, Start, StepMode,
@@ -450,6 +450,9 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     /// [`IntegrationError::Time`] for a `t_end` that is not finite or not
     /// after the current time (within `1e-9 h`, as [`reached`](Self::reached)).
     pub fn step(&mut self, t_end: f64) -> Result<(), IntegrationError> {
+        // Subnormal numbers (a disturbance decayed along a long chain) as
+        // zero while the step computes: mstar_model::subnormal.
+        let _flush = FlushSubnormals::new();
         // A step towards a t_end at or before t would be of size ≤ 0.
         if !t_end.is_finite() || self.reached(t_end) {
             return Err(self.bad_end(t_end, "step needs a finite end time after the current one"));

@@ -28,7 +28,7 @@ use std::collections::HashMap;
 
 use mstar_kkt::{KktOptions, KktSolver, SharedAnalyses};
 use mstar_linearize::{Linearization, MaxAbs, max_abs};
-use mstar_model::{StateRef, System};
+use mstar_model::{FlushSubnormals, StateRef, System};
 
 use super::{Integrator, State};
 use crate::IntegrationError;
@@ -524,6 +524,8 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         t_end: f64,
         sens: &mut Sensitivities,
     ) -> Result<(), IntegrationError> {
+        // As in `step`: subnormal numbers as zero (mstar_model::subnormal).
+        let _flush = FlushSubnormals::new();
         let h_before = self.h_last;
         let factored_before = self.stats.factorizations;
         self.step(t_end)?;
