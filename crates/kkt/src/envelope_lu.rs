@@ -33,8 +33,12 @@ pub(crate) struct EnvelopeLu {
     /// the diagonal, `U`'s diagonal on it, and `U` above.
     values: Vec<f64>,
     lower_len: usize,
-    /// `U`'s diagonal again, contiguous (one read per row in the solve).
-    d: Vec<f64>,
+    /// `1 / u_jj`, contiguous (one read per row in the solve): `L`'s
+    /// entries and the solve's divisions by the pivots are products with
+    /// it, a multiplication's latency instead of a division's on the chain
+    /// from column to column (the values differ from the quotients' by the
+    /// rounding of the reciprocal, an ulp).
+    d_inv: Vec<f64>,
 }
 
 impl EnvelopeLu {
@@ -48,7 +52,7 @@ impl EnvelopeLu {
             row_ptr,
             values: vec![0.0; 2 * len - n],
             lower_len: len,
-            d: vec![0.0; n],
+            d_inv: vec![0.0; n],
         })
     }
 
@@ -61,7 +65,7 @@ impl EnvelopeLu {
 
     /// Position of entry `(r, s)` in the values, `None` outside the envelope.
     pub(crate) fn checked_slot(&self, r: usize, s: usize) -> Option<usize> {
-        let n = self.d.len();
+        let n = self.d_inv.len();
         if r >= n || s >= n {
             return None;
         }
@@ -86,7 +90,7 @@ impl EnvelopeLu {
     /// before it).
     pub(crate) fn factor(&mut self) -> Result<(), usize> {
         let (lower, upper) = self.values.split_at_mut(self.lower_len);
-        for i in 0..self.d.len() {
+        for i in 0..self.d_inv.len() {
             let (range, fi, ui) = row_of(&self.row_ptr, self.lower_len, i);
             let (l_done, l_rest) = lower.split_at_mut(range.start);
             let (u_done, u_rest) = upper.split_at_mut(ui - self.lower_len);
@@ -104,7 +108,7 @@ impl EnvelopeLu {
                     t -= l_row[k - fi] * u_j[k - fj];
                 }
                 u_col[j - fi] = u;
-                l_row[j - fi] = t / self.d[j];
+                l_row[j - fi] = t * self.d_inv[j];
             }
             // u_ii = c_ii − Σ_j l_ij u_ji.
             let (mut d, mut scale) = (c_ii[0], c_ii[0].abs());
@@ -116,14 +120,14 @@ impl EnvelopeLu {
                 return Err(i);
             }
             c_ii[0] = d;
-            self.d[i] = d;
+            self.d_inv[i] = 1.0 / d;
         }
         Ok(())
     }
 
     /// Solves `L U x = b` in place with the last factorization.
     pub(crate) fn solve_in_place(&self, x: &mut [f64]) {
-        let n = self.d.len();
+        let n = self.d_inv.len();
         // L z = b (unit diagonal), by rows.
         for i in 0..n {
             let (range, fi, _) = self.row(i);
@@ -135,7 +139,7 @@ impl EnvelopeLu {
         // after it have been subtracted.
         for i in (0..n).rev() {
             let (_, fi, ui) = self.row(i);
-            let xi = x[i] / self.d[i];
+            let xi = x[i] * self.d_inv[i];
             x[i] = xi;
             let column = &self.values[ui..ui + i - fi];
             for (xk, u) in x[fi..i].iter_mut().zip(column) {
