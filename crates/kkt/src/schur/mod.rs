@@ -271,8 +271,8 @@ impl Schur {
     }
 
     /// Copies `S`, `B` and `D` (all the matrix: its `Bᵀ` mirrors `B`),
-    /// checking that they are finite, and begins the absolute row sums with
-    /// `B` (completed by [`norm_inf`](Self::norm_inf)).
+    /// checking that they are finite, and forms the absolute row sums of the
+    /// whole matrix on the way (their largest is [`norm_inf`](Self::norm_inf)).
     fn gather(&mut self, values: &[f64]) -> Result<(), KktError> {
         let mut finite = Finite::new();
         let n = self.n_primal;
@@ -295,21 +295,25 @@ impl Schur {
             }
             *w = column;
         }
-        let mut take = |v: &mut f64, p: usize| {
+        // S and D copied, and their terms of the row sums added after B's
+        // (the order `norm_inf` added them in).
+        let mut take = |v: &mut f64, p: usize, w: &mut f64| {
             *v = values[p];
             finite.push(*v);
+            *w += v.abs();
         };
         if self.diagonal {
-            for (v, &p) in self.s_values.iter_mut().zip(&self.diag_s) {
-                take(v, p);
+            for ((v, &p), w) in self.s_values.iter_mut().zip(&self.diag_s).zip(wp) {
+                take(v, p, w);
             }
         } else {
-            for (v, e) in self.s_values.iter_mut().zip(&self.s_entries) {
-                take(v, e.pos());
+            let entries = self.s_entries.iter().zip(&self.s_global);
+            for (v, (e, &(i, _))) in self.s_values.iter_mut().zip(entries) {
+                take(v, e.pos(), &mut wp[i as usize]);
             }
         }
-        for (v, &(p, _, _)) in self.d_values.iter_mut().zip(&self.d_all) {
-            take(v, p);
+        for (v, &(p, r, _)) in self.d_values.iter_mut().zip(&self.d_all) {
+            take(v, p, &mut wm[r]);
         }
         if finite.all() {
             Ok(())
@@ -470,26 +474,14 @@ impl Schur {
     }
 
     /// `‖A‖∞`, the largest absolute row sum of the last factored matrix
-    /// (completes the row sums that [`gather`](Self::gather) began with `B`).
+    /// (the row sums of [`gather`](Self::gather)).
     fn norm_inf(&mut self) -> f64 {
         if let Some(norm) = self.norm {
             return norm;
         }
-        let n = self.n_primal;
-        let (wp, wm) = self.row_sums.split_at_mut(n);
-        if self.diagonal {
-            for (w, s) in wp.iter_mut().zip(&self.s_values) {
-                *w += s.abs();
-            }
-        } else {
-            for (&(i, _), &v) in self.s_global.iter().zip(&self.s_values) {
-                wp[i as usize] += v.abs();
-            }
-        }
-        for (&(_, r, _), &v) in self.d_all.iter().zip(&self.d_values) {
-            wm[r] += v.abs();
-        }
-        self.row_sums.iter().fold(0.0, |m: f64, &x| m.max(x))
+        // The row sums are complete after `gather` (finite and ≥ 0: their
+        // largest as `f64::max` folds it, in vectorizable lanes).
+        max_abs(&self.row_sums)
     }
 
     /// Solves in place with the last factorization; returns `‖x‖∞` (as

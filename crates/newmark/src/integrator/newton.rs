@@ -261,13 +261,17 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         let (du, dl) = self.rhs.split_at(n);
         let s = &mut self.trial;
         let (mut step, mut u_max) = (0.0f64, 0.0f64);
+        // Plain comparisons, as `f64::max` with a maximum that is never NaN
+        // (a NaN entry is passed over) but without its NaN rules' blends in
+        // the loop's chain.
+        let bigger = |m: f64, x: f64| if x > m { x } else { m };
         for i in 0..n {
             s.u[i] += du[i];
             s.v[i] += k.gamma_p * du[i];
             s.a[i] += k.beta_p * du[i];
             s.a_alpha[i] += k.a_p * du[i];
-            u_max = u_max.max(s.u[i].abs());
-            step = step.max(du[i].abs());
+            u_max = bigger(u_max, s.u[i].abs());
+            step = bigger(step, du[i].abs());
         }
         let scale = k.coefficients.scale;
         for ((l, &d), &phi) in s.lambda.iter_mut().zip(dl).zip(self.lin.phi()) {
