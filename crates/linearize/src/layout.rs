@@ -136,6 +136,9 @@ pub(crate) struct Layout {
     pub(crate) s_slots: Vec<Slot>,
     /// Whether every slot of the `B` block has exactly one entry of `B`.
     pub(crate) b_slots_unique: bool,
+    /// Whether every slot of `S_T` has exactly one entry of `M` (bodies in
+    /// Euler parameters: the other terms fall on `M`'s blocks).
+    pub(crate) mass_covers_s: bool,
     /// `BᵀB` as pairs of positions in `B`'s values: with the augmented
     /// structure from the start, else empty until [`MStar`] needs them.
     pub(crate) bb_pairs: Vec<(usize, usize)>,
@@ -216,6 +219,7 @@ impl Layout {
             kkt,
             s_slots: slots.s_terms(nnz),
             b_slots_unique: slots.b_unique(nnz),
+            mass_covers_s: slots.mass_covers_s(nnz),
             slots,
             bb_pairs,
             m_star: None,
@@ -269,6 +273,16 @@ impl KktSlots {
         }
         // Slots fit in a `Slot` (checked when the layout was made).
         (0..nnz).filter(|&k| used[k]).map(|k| k as Slot).collect()
+    }
+
+    /// Whether every slot of `S_T`'s terms has exactly one entry of `M`.
+    fn mass_covers_s(&self, nnz: usize) -> bool {
+        let mut used = vec![false; nnz];
+        let unique = self
+            .mass
+            .iter()
+            .all(|&s| !std::mem::replace(&mut used[s as usize], true));
+        unique && self.s_terms(nnz).iter().all(|&s| used[s as usize])
     }
 
     /// Whether every slot of the `B` block has exactly one entry of `B`.

@@ -679,15 +679,23 @@ impl Linearization {
         // adding B (fewer instructions; the same cache lines are written).
         let assign_b =
             !self.structure.transpose && !self.structure.augmented && layout.b_slots_unique;
-        if assign_b {
-            for &k in &layout.s_slots {
-                vals[k as usize] = 0.0;
+        let sl = &layout.slots;
+        if assign_b && layout.mass_covers_s {
+            // Every S slot takes one entry of M first: assigned, not zeroed
+            // and added to (the same values, but for the sign of a zero).
+            for (&k, &m) in sl.mass.iter().zip(&self.mass) {
+                vals[k as usize] = (s * c.c_a) * m;
             }
         } else {
-            vals.fill(0.0);
+            if assign_b {
+                for &k in &layout.s_slots {
+                    vals[k as usize] = 0.0;
+                }
+            } else {
+                vals.fill(0.0);
+            }
+            scatter(vals, &sl.mass, &self.mass, s * c.c_a);
         }
-        let sl = &layout.slots;
-        scatter(vals, &sl.mass, &self.mass, s * c.c_a);
         if c.c_u != 0.0 {
             scatter(vals, &sl.hessian, &self.hessian, s * c.c_u);
             scatter(vals, &sl.g_u, &self.g_u, -s * c.c_u);

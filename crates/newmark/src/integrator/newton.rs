@@ -36,7 +36,8 @@ struct Norms {
     constraint: f64,
     constraint_tol: f64,
     /// The violation whose force `β' M Φ` is within the residual's
-    /// tolerance, or the positions' round-off `ε max(1, ‖u‖∞)`.
+    /// tolerance, or the positions' round-off `ε max(1, ‖u‖∞)`; infinite
+    /// (not read) when the residual is above its tolerance.
     constraint_settled: f64,
 }
 
@@ -225,14 +226,22 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             4.0 * k.coefficients.c_bb * f64::EPSILON * u_max.max(1.0) * max_abs(self.lin.b())
         };
         let residual_tol = (self.config.tol * self.lin.force_scale()).max(floor);
-        let kick = k.coefficients.c_a * max_abs(self.lin.mass());
+        // Both checks that read `constraint_settled` need the residual
+        // within its tolerance first: above it the pass over `M` is skipped
+        // (most predictors' residuals).
+        let constraint_settled = if residual <= residual_tol {
+            let kick = k.coefficients.c_a * max_abs(self.lin.mass());
+            (residual_tol / kick).max(f64::EPSILON * u_max.max(1.0))
+        } else {
+            f64::INFINITY
+        };
         Ok(Norms {
             rhs,
             residual,
             residual_tol,
             constraint,
             constraint_tol: self.config.tol * u_max.max(1.0),
-            constraint_settled: (residual_tol / kick).max(f64::EPSILON * u_max.max(1.0)),
+            constraint_settled,
         })
     }
 
