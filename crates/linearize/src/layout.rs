@@ -139,6 +139,9 @@ pub(crate) struct Layout {
     /// Whether every slot of `S_T` has exactly one entry of `M` (bodies in
     /// Euler parameters: the other terms fall on `M`'s blocks).
     pub(crate) mass_covers_s: bool,
+    /// Whether `∂g/∂u`, `∂(M ü)/∂u` and `∂g/∂u̇` have the same slots, in
+    /// the same order (assembled in one pass).
+    pub(crate) velocity_terms_share_slots: bool,
     /// `BᵀB` as pairs of positions in `B`'s values: with the augmented
     /// structure from the start, else empty until [`MStar`] needs them.
     pub(crate) bb_pairs: Vec<(usize, usize)>,
@@ -220,6 +223,7 @@ impl Layout {
             s_slots: slots.s_terms(nnz),
             b_slots_unique: slots.b_unique(nnz),
             mass_covers_s: slots.mass_covers_s(nnz),
+            velocity_terms_share_slots: slots.velocity_terms_share_slots(nnz),
             slots,
             bb_pairs,
             m_star: None,
@@ -283,6 +287,19 @@ impl KktSlots {
             .iter()
             .all(|&s| !std::mem::replace(&mut used[s as usize], true));
         unique && self.s_terms(nnz).iter().all(|&s| used[s as usize])
+    }
+
+    /// Whether `∂g/∂u`, `∂(M ü)/∂u` and `∂g/∂u̇` have the same slots in the
+    /// same order, each once (so that one pass adds each slot's terms in
+    /// the order of three).
+    fn velocity_terms_share_slots(&self, nnz: usize) -> bool {
+        let mut used = vec![false; nnz];
+        self.g_u == self.mass_du
+            && self.g_u == self.g_v
+            && self
+                .g_u
+                .iter()
+                .all(|&s| !std::mem::replace(&mut used[s as usize], true))
     }
 
     /// Whether every slot of the `B` block has exactly one entry of `B`.

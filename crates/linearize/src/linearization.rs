@@ -698,11 +698,31 @@ impl Linearization {
         }
         if c.c_u != 0.0 {
             scatter(vals, &sl.hessian, &self.hessian, s * c.c_u);
-            scatter(vals, &sl.g_u, &self.g_u, -s * c.c_u);
-            scatter(vals, &sl.mass_du, &self.mass_du, s * c.c_u);
         }
-        if c.c_v != 0.0 {
-            scatter(vals, &sl.g_v, &self.g_v, -s * c.c_v);
+        if c.c_u != 0.0 && c.c_v != 0.0 && layout.velocity_terms_share_slots {
+            // `∂g/∂u`, `∂(M ü)/∂u` and `∂g/∂u̇` on the same slots (bodies in
+            // Euler parameters): one pass, each slot's terms in the order of
+            // the three passes below.
+            let terms = sl
+                .g_u
+                .iter()
+                .zip(&self.g_u)
+                .zip(&self.mass_du)
+                .zip(&self.g_v);
+            for (((&k, &gu), &mdu), &gv) in terms {
+                let v = &mut vals[k as usize];
+                *v += -s * c.c_u * gu;
+                *v += s * c.c_u * mdu;
+                *v += -s * c.c_v * gv;
+            }
+        } else {
+            if c.c_u != 0.0 {
+                scatter(vals, &sl.g_u, &self.g_u, -s * c.c_u);
+                scatter(vals, &sl.mass_du, &self.mass_du, s * c.c_u);
+            }
+            if c.c_v != 0.0 {
+                scatter(vals, &sl.g_v, &self.g_v, -s * c.c_v);
+            }
         }
         if c_bb != 0.0 {
             scatter(vals, &sl.bb, &self.bb_values, s * c_bb);
