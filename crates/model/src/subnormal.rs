@@ -12,7 +12,9 @@
 //! [`FlushSubnormals`] sets the flush-to-zero and denormals-are-zero modes
 //! of the SSE control register (MXCSR) for the current thread and restores
 //! the caller's modes when dropped, so that a program using mstar (Python,
-//! say) keeps IEEE arithmetic outside mstar's calls. A value below
+//! say) keeps IEEE arithmetic outside mstar's calls (a system's own code
+//! called inside them, the closures of a [`crate::FnSystem`], runs under
+//! the same modes). A value below
 //! `f64::MIN_POSITIVE` (2.2e-308) then reads and is written as zero: a
 //! change far below every tolerance and round-off of a multibody
 //! computation. On other targets it does nothing.
