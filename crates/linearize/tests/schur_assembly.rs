@@ -20,6 +20,21 @@ fn the_schur_assembly_equals_the_full_one_outside_the_transpose_block() {
     equal_outside_the_transpose_block(&spatial, &spatial.initial_position());
 }
 
+/// `(u, u̇, ü, λ)` of a bent chain with nonzero multipliers (the Hessian
+/// term of `S`) from the pose `u0`, `m` multipliers; `k` varies it.
+fn bent_state(u0: &[f64], m: usize, k: usize) -> [Vec<f64>; 4] {
+    let n = u0.len();
+    let u = u0
+        .iter()
+        .enumerate()
+        .map(|(i, &x)| x + 0.1 * ((i + k) as f64 * 0.7).sin())
+        .collect();
+    let v = (0..n).map(|i| (i as f64 * 0.3).cos()).collect();
+    let a = (0..n).map(|i| 0.5 + (i as f64 * 1.1).sin()).collect();
+    let lambda = (0..m).map(|i| 3.0 + (i + k) as f64).collect();
+    [u, v, a, lambda]
+}
+
 fn equal_outside_the_transpose_block<S: System>(sys: &S, u0: &[f64]) {
     let (n, m) = (sys.n_coords(), sys.n_constraints());
     let plain = Structure {
@@ -43,15 +58,7 @@ fn equal_outside_the_transpose_block<S: System>(sys: &S, u0: &[f64]) {
     .into_iter()
     .enumerate()
     {
-        // A bent chain with nonzero multipliers (the Hessian term of S).
-        let u: Vec<f64> = u0
-            .iter()
-            .enumerate()
-            .map(|(i, &x)| x + 0.1 * ((i + k) as f64 * 0.7).sin())
-            .collect();
-        let v: Vec<f64> = (0..n).map(|i| (i as f64 * 0.3).cos()).collect();
-        let a = vec![0.5; n];
-        let lambda: Vec<f64> = (0..m).map(|i| 3.0 + (i + k) as f64).collect();
+        let [u, v, a, lambda] = bent_state(u0, m, k);
         for lin in [&mut full, &mut lean] {
             let x = StateRef {
                 t: 0.1,
@@ -100,15 +107,7 @@ fn the_spatial_schur_block_is_its_terms_summed() {
     let sys = spatial_bar_chain(4, RotationalMass::Regularized);
     let (n, m) = (sys.n_coords(), sys.n_constraints());
     let mut lin = Linearization::with_structure(&sys, Structure::PLAIN).expect("structure");
-    let u: Vec<f64> = sys
-        .initial_position()
-        .iter()
-        .enumerate()
-        .map(|(i, &x)| x + 0.1 * (i as f64 * 0.7).sin())
-        .collect();
-    let v: Vec<f64> = (0..n).map(|i| (i as f64 * 0.3).cos()).collect();
-    let a: Vec<f64> = (0..n).map(|i| 0.5 + (i as f64 * 1.1).sin()).collect();
-    let lambda: Vec<f64> = (0..m).map(|i| 3.0 + i as f64).collect();
+    let [u, v, a, lambda] = bent_state(&sys.initial_position(), m, 0);
     let x = StateRef {
         t: 0.1,
         u: &u,
