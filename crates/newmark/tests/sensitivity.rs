@@ -199,7 +199,8 @@ fn mass_sensitivity_scales_the_multipliers() {
 
 /// With a factorization of each step's own iterate (full Newton), one
 /// parameter's solve refines with it instead of factoring at the converged
-/// state; two parameters share a factorization there. Both give the
+/// state, mostly in one pass from the extrapolation of its last two
+/// solutions; two parameters share a factorization there. Both give the
 /// sensitivity that the extrapolated differences check above (the same
 /// to round-off: `[J_c]⁻¹` either way).
 #[test]
@@ -227,9 +228,12 @@ fn one_parameter_refines_with_the_step_s_factorization_and_two_factor() {
     let (factored_one, solves_one, refined) = run(&[&length]);
     let (factored_two, solves_two, factored) = run(&[&length, &mass]);
     assert_eq!(factored_one, 0, "one parameter refines");
+    // One solve a step from the extrapolation of the last two steps'
+    // solutions, two at the steps that measure the contraction (the first
+    // and every 32nd) and where the first pass is not enough.
     assert!(
-        (100..=150).contains(&solves_one),
-        "two or three solves a step: {solves_one}"
+        (50..100).contains(&solves_one),
+        "one solve a step, two at a few: {solves_one}"
     );
     assert_eq!(
         (factored_two, solves_two),

@@ -7,6 +7,7 @@ mod control;
 mod history;
 mod initial;
 mod newton;
+mod refine;
 mod sensitivity;
 mod start;
 
@@ -138,6 +139,9 @@ pub struct Integrator<'s, S: System + ?Sized> {
     rejected_last: bool,
     /// The step size the current factorization was made for.
     factored_h: Option<f64>,
+    /// `Σ ‖Δu‖∞` of the corrections since the last factorization: a bound
+    /// on how far the state moved from the factored iterate (`refine.rs`).
+    drift: f64,
     easy_steps: usize,
     /// Time bookkeeping without drift: `t = t_anchor + steps_at_h · h_anchor`.
     t_anchor: f64,
@@ -267,6 +271,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             error_previous: 1.0,
             rejected_last: false,
             factored_h: None,
+            drift: 0.0,
             easy_steps: 0,
             t_anchor: t0,
             h_anchor: h,

@@ -147,6 +147,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             })?;
             let step;
             (step, u_max) = self.correct(&k);
+            self.drift += step;
             if step > k.max_rate * previous_step {
                 force_refactor = true;
             }
@@ -259,6 +260,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 source,
             })?;
         self.factored_h = Some(h);
+        self.drift = 0.0;
         self.stats.factorizations += 1;
         Ok(())
     }

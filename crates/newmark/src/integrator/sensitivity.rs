@@ -18,8 +18,9 @@
 //! differences between the model at `p ± h_p`.
 //! `J` at the converged state is solved by refinement with the step's own
 //! factorization when there is one (once per step, full Newton: an iterate
-//! of the same step: a pass contracts by about 5e-11 on the N-four-bar; two solves and
-//! a product `J x`), else factored there. The initial sensitivities are
+//! of the same step; mostly one solve and one product `J x` from the
+//! extrapolation of the parameter's last solutions, `refine.rs`), else
+//! factored there. The initial sensitivities are
 //! differentiated through the start's own linear systems (`initial.rs`),
 //! or, for the paper's start and a start without projection, central
 //! differences of the whole start at `p ± h_p`.
@@ -30,6 +31,7 @@ use mstar_kkt::{KktOptions, KktSolver, SharedAnalyses};
 use mstar_linearize::{Linearization, MaxAbs, max_abs};
 use mstar_model::{FlushSubnormals, StateRef, System};
 
+use super::refine::{Contraction, PastSolutions, Scratch};
 use super::{Integrator, State};
 use crate::IntegrationError;
 
@@ -99,6 +101,8 @@ pub(super) struct Parameter {
     pub(super) partials: Partials,
     /// `∂(u, u̇, ü, a, λ)/∂p` of the current state.
     pub(super) s: State,
+    /// The last three steps' solutions `[δΔ; δλ]` (`refine.rs`).
+    past: PastSolutions,
 }
 
 /// What the partials `c = [∂r/∂p; −∂Φ/∂p]` of one parameter are formed
@@ -207,6 +211,8 @@ pub struct Sensitivities {
     solves: usize,
     /// Factorizations at the converged state, one per step.
     factorizations: usize,
+    /// The refinement's contraction per drift (`refine.rs`).
+    contraction: Contraction,
 }
 
 impl std::fmt::Debug for Sensitivities {
@@ -345,6 +351,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             scratch: Scratch::default(),
             solves: 0,
             factorizations: 0,
+            contraction: Contraction::default(),
         })
     }
 
@@ -402,6 +409,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             step,
             partials,
             s,
+            past: PastSolutions::default(),
         };
         Ok((parameter, given))
     }
@@ -539,14 +547,16 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         self.lin.eval_jacobians(self.sys, &s.at(self.t));
         // A factorization of this step's own iterate (once per step, full
         // Newton) is that of a matrix close to the converged one: refined
-        // with it, a parameter costs two solves and a product. Otherwise
+        // with it, a parameter costs a solve and a product (`refine.rs`). Otherwise
         // (an earlier step's Jacobian, modified Newton), or for many
         // parameters, the matrix is factored at the converged state once
         // for all of them.
         let mut refine = self.stats.factorizations > factored_before
             && self.factored_h == Some(h)
             && sens.params.len() <= REFINED_PARAMETERS;
-        if !refine {
+        if refine {
+            sens.contraction.tick();
+        } else {
             self.factor_converged(h)?;
             sens.factorizations += 1;
         }
@@ -573,17 +583,17 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             scratch,
             solves,
             factorizations,
+            contraction,
         } = sens;
         scratch.size(n, m);
         let param = &mut params[k];
         self.predict_sensitivity(&param.s, h, rescale, &mut scratch.predicted);
-        // rhs = [r_p − K_T δu^p − C_T δu̇^p; −Φ_p − B δu^p]
-        self.partials_into(param, &mut scratch.rhs);
-        let pred = &scratch.predicted;
-        let (top, bottom) = scratch.rhs.split_at_mut(n);
-        self.lin.tangent_mul_sub(&pred.u, &pred.v, top);
-        self.lin.b_pattern().mul_sub(self.lin.b(), &pred.u, bottom);
-        self.solve_sensitivity(scratch, (solves, factorizations), h, refine)?;
+        // The system's right-hand side is `[r_p − K_T δu^p − C_T δu̇^p; −Φ_p −
+        // B δu^p]`; the products are formed with those of `J x`
+        // (`Integrator::kkt_residual`).
+        self.partials_into(param, &mut scratch.partials);
+        let refinement = (&param.past, contraction);
+        self.solve_sensitivity(scratch, refinement, (solves, factorizations), h, refine)?;
         let c = self.p.coefficients(h, self.config.scaling);
         let a_p = 1.0 / (self.p.beta * h * h);
         let (x, pred, s) = (&scratch.x, &scratch.predicted, &mut param.s);
@@ -599,6 +609,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             s.a_alpha[i] = pred.a_alpha[i] + a_p * du;
         }
         s.lambda.copy_from_slice(&x[n..]);
+        param.past.push(&mut scratch.x, h);
         let finite = norm.is_finite() && max_abs(&s.lambda).is_finite();
         if let Some(i) = (!finite)
             .then(|| s.u.iter().chain(&s.lambda).position(|x| !x.is_finite()))
@@ -665,80 +676,29 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     /// `J x = rhs` (`scratch`'s) with `J = [S Bᵀ; B 0]`, `S = K_T + γ' C_T +
     /// β' M`, at the converged state, into `scratch.x`. With `refine`, by
     /// refinement with the step's own factorization (of an iterate of this
-    /// step) until the next pass would change `x` by at most [`REFINED`]
-    /// relative (two solves: the matrices differ by about `5e-11` relative
-    /// on the N-four-bar); when that does not converge within
-    /// [`MAX_REFINEMENTS`] passes or stops contracting, the matrix is
+    /// step, `refine.rs`); when that does not converge, the matrix is
     /// factored at the converged state and `refine` cleared (for the step's
     /// other parameters). Without, one solve with the factorization at the
     /// converged state. `counts`: the solves and factorizations made.
     fn solve_sensitivity(
         &mut self,
         scratch: &mut Scratch,
+        refinement: (&PastSolutions, &mut Contraction),
         (solves, factorizations): (&mut usize, &mut usize),
         h: f64,
         refine: &mut bool,
     ) -> Result<(), IntegrationError> {
-        let n = self.sys.n_coords();
         if *refine {
-            // The last pass's change of `x`, relative; after the first pass
-            // (`x` solved from `rhs`) a change of 1.
-            let mut previous = 1.0;
-            for pass in 0..MAX_REFINEMENTS {
-                // Without the backend's own refinement step (`schur-lu`'s,
-                // against the factored matrix): this loop refines against
-                // `J` at the converged state, and corrects that solve's
-                // error as well.
-                *solves += 1;
-                if pass == 0 {
-                    self.solve_scaled(&scratch.rhs, h, &mut scratch.x, true)?;
-                } else {
-                    self.solve_scaled(&scratch.residual, h, &mut scratch.y, true)?;
-                    let change = add_change(&mut scratch.x, &scratch.y, n);
-                    // Contracting by `change / previous` a pass, the next
-                    // pass would change `x` by `change² / previous`.
-                    if change * change <= REFINED * previous || change <= REFINED {
-                        return Ok(());
-                    }
-                    if change > 0.5 * previous {
-                        break;
-                    }
-                    previous = change;
-                }
-                self.kkt_residual(scratch, h);
+            if self.refined(scratch, refinement, h, solves)? {
+                return Ok(());
             }
             self.factor_converged(h)?;
             *factorizations += 1;
             *refine = false;
         }
         *solves += 1;
-        self.solve_scaled(&scratch.rhs, h, &mut scratch.x, false)
-    }
-
-    /// `scratch.residual = rhs − J x` with the Jacobians at the converged
-    /// state (see [`solve_sensitivity`](Self::solve_sensitivity)).
-    fn kkt_residual(&self, scratch: &mut Scratch, h: f64) {
-        let n = self.sys.n_coords();
-        let c = self.p.coefficients(h, self.config.scaling);
-        let Scratch {
-            rhs,
-            x,
-            residual,
-            x_v,
-            x_a,
-            ..
-        } = scratch;
-        let (x_u, x_l) = x.split_at(n);
-        residual.copy_from_slice(rhs);
-        let (top, bottom) = residual.split_at_mut(n);
-        for ((v, a), x) in x_v.iter_mut().zip(x_a.iter_mut()).zip(x_u) {
-            (*v, *a) = (c.c_v * x, c.c_a * x);
-        }
-        self.lin.tangent_mul_sub(x_u, x_v, top);
-        self.lin.mass_pattern().mul_sub(self.lin.mass(), x_a, top);
-        let (b, b_pattern) = (self.lin.b(), self.lin.b_pattern());
-        b_pattern.mul_transpose_sub(b, x_l, top);
-        b_pattern.mul_sub(b, x_u, bottom);
+        self.kkt_residual(scratch, h, true);
+        self.solve_scaled(&scratch.residual, h, &mut scratch.x, false)
     }
 
     /// `y = J⁻¹ f` with the factored (scaled, possibly augmented) KKT
@@ -749,7 +709,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     /// residual check of Newton's factorization, which the refinement's own
     /// residual replaces
     /// ([`mstar_kkt::KktSolver::solve_unverified_correction`]).
-    fn solve_scaled(
+    pub(super) fn solve_scaled(
         &mut self,
         f: &[f64],
         h: f64,
@@ -789,61 +749,10 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             .factor(&self.lin.kkt().values)
             .map_err(|source| self.kkt_error("factoring for a sensitivity", self.t, h, source))?;
         self.factored_h = Some(h);
+        self.drift = 0.0;
         Ok(())
     }
 }
-
-/// The buffers of one step's sensitivity solves (`n + m` values, the
-/// predictor's and the products' `n`), sized at the first step.
-struct Scratch {
-    /// The predictor applied to a parameter's sensitivities (`u`, `v`,
-    /// `a_alpha`).
-    predicted: State,
-    rhs: Vec<f64>,
-    x: Vec<f64>,
-    residual: Vec<f64>,
-    y: Vec<f64>,
-    x_v: Vec<f64>,
-    x_a: Vec<f64>,
-}
-
-impl Default for Scratch {
-    fn default() -> Self {
-        Self {
-            predicted: State::zeros(0, 0),
-            rhs: Vec::new(),
-            x: Vec::new(),
-            residual: Vec::new(),
-            y: Vec::new(),
-            x_v: Vec::new(),
-            x_a: Vec::new(),
-        }
-    }
-}
-
-impl Scratch {
-    /// Sizes the buffers for `n` coordinates and `m` constraints.
-    fn size(&mut self, n: usize, m: usize) {
-        if self.predicted.u.len() != n {
-            self.predicted = State::zeros(n, 0);
-        }
-        for v in [&mut self.rhs, &mut self.x, &mut self.residual, &mut self.y] {
-            v.resize(n + m, 0.0);
-        }
-        self.x_v.resize(n, 0.0);
-        self.x_a.resize(n, 0.0);
-    }
-}
-
-/// A refined sensitivity is accepted when the next pass would change it by
-/// at most this, relative.
-const REFINED: f64 = 1e-12;
-
-/// The most refinement passes of a sensitivity's solve before the matrix is
-/// factored at the converged state (two suffice with a factorization of
-/// the same step: its matrix differs from the converged one by the step's
-/// Newton corrections).
-const MAX_REFINEMENTS: usize = 3;
 
 /// Up to this many parameters refine with the step's factorization; more
 /// share one factorization at the converged state. A refinement costs a
@@ -851,25 +760,6 @@ const MAX_REFINEMENTS: usize = 3;
 /// parameters took 6 314 instructions a body-step refined against 5 998
 /// with the factorization (docs/performance.md, "Forward sensitivities").
 const REFINED_PARAMETERS: usize = 1;
-
-/// `x += y`, and the larger of `‖y_u‖∞ / ‖x_u‖∞` and `‖y_λ‖∞ / ‖x_λ‖∞`
-/// after it (each 0 when `y`'s part is 0): coordinates and multipliers have
-/// units of their own. The norms are taken in the same pass.
-fn add_change(x: &mut [f64], y: &[f64], n: usize) -> f64 {
-    let part = |x: &mut [f64], y: &[f64]| {
-        let (mut dy, mut sx) = (MaxAbs::new(), MaxAbs::new());
-        for (x, &y) in x.iter_mut().zip(y) {
-            *x += y;
-            dy.push(y);
-            sx.push(*x);
-        }
-        let dy = dy.value();
-        if dy == 0.0 { 0.0 } else { dy / sx.value() }
-    };
-    let (x_u, x_l) = x.split_at_mut(n);
-    let (y_u, y_l) = y.split_at(n);
-    part(x_u, y_u).max(part(x_l, y_l))
-}
 
 /// The whole model's coordinates and constraint rows by name.
 pub(super) struct Names {
