@@ -45,6 +45,10 @@ impl DenseLu {
     /// dependent on the previous ones.
     fn factor_dense(&mut self) -> Result<(), KktError> {
         let n = self.n;
+        if n == 0 {
+            // (Rows of no entries cannot be walked as chunks.)
+            return Ok(());
+        }
         let a = &mut self.a;
         a.fill(0.0);
         let m = self.stored.matrix();
@@ -56,8 +60,11 @@ impl DenseLu {
         // Column norms of A: a pivot is judged against its own column, so that a
         // badly scaled but regular KKT matrix (unscaled, small h) is not taken
         // for a singular one.
-        for (j, w) in self.work.iter_mut().enumerate() {
-            *w = (0..n).fold(0.0f64, |m, i| m.max(a[i * n + j].abs()));
+        self.work.fill(0.0);
+        for row in a.chunks_exact(n) {
+            for (w, x) in self.work.iter_mut().zip(row) {
+                *w = w.max(x.abs());
+            }
         }
         let eps = (n as f64) * f64::EPSILON;
         for (k, p) in self.perm.iter_mut().enumerate() {
@@ -75,18 +82,23 @@ impl DenseLu {
                 return Err(KktError::Singular { unknown: Some(k) });
             }
             if p != k {
-                for j in 0..n {
-                    a.swap(k * n + j, p * n + j);
-                }
+                let (upper, lower) = a.split_at_mut(p * n);
+                upper[k * n..(k + 1) * n].swap_with_slice(&mut lower[..n]);
                 self.perm.swap(k, p);
             }
-            let pivot = a[k * n + k];
-            for i in k + 1..n {
-                let l = a[i * n + k] / pivot;
-                a[i * n + k] = l;
+            // The rows below `k` take `l` times row `k` (its part right of
+            // the diagonal), row by row through slices: the same operations
+            // in the same order as by index, without the bounds checks that
+            // kept the inner loop from being vectorized.
+            let (done, below) = a.split_at_mut((k + 1) * n);
+            let pivot_row = &done[k * n + k + 1..(k + 1) * n];
+            let pivot = done[k * n + k];
+            for row in below.chunks_exact_mut(n) {
+                let l = row[k] / pivot;
+                row[k] = l;
                 if l != 0.0 {
-                    for j in k + 1..n {
-                        a[i * n + j] -= l * a[k * n + j];
+                    for (x, &u) in row[k + 1..].iter_mut().zip(pivot_row) {
+                        *x -= l * u;
                     }
                 }
             }
@@ -96,24 +108,28 @@ impl DenseLu {
 
     fn solve_dense(&mut self, rhs: &mut [f64]) {
         let n = self.n;
+        if n == 0 {
+            return;
+        }
         let a = &self.a;
         for (k, &p) in self.perm.iter().enumerate() {
             self.work[k] = rhs[p];
         }
         let x = &mut self.work;
-        for i in 0..n {
-            let mut s = x[i];
-            for j in 0..i {
-                s -= a[i * n + j] * x[j];
-            }
+        // Rows through slices (the same operations in the same order).
+        for (i, row) in a.chunks_exact(n).enumerate() {
+            let s = row[..i]
+                .iter()
+                .zip(&x[..i])
+                .fold(x[i], |s, (l, x)| s - l * x);
             x[i] = s;
         }
-        for i in (0..n).rev() {
-            let mut s = x[i];
-            for j in i + 1..n {
-                s -= a[i * n + j] * x[j];
-            }
-            x[i] = s / a[i * n + i];
+        for (i, row) in a.chunks_exact(n).enumerate().rev() {
+            let s = row[i + 1..]
+                .iter()
+                .zip(&x[i + 1..])
+                .fold(x[i], |s, (u, x)| s - u * x);
+            x[i] = s / row[i];
         }
         rhs.copy_from_slice(x);
     }
