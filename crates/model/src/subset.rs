@@ -123,6 +123,9 @@ impl<S: System + ?Sized> System for RowSubset<'_, S> {
     fn conserves_energy(&self) -> bool {
         self.inner.conserves_energy()
     }
+    fn jacobians_are_costly(&self) -> bool {
+        self.inner.jacobians_are_costly()
+    }
     fn phi_t_into(&self, t: f64, u: &[f64], phi_t: &mut [f64]) {
         self.rows_of(phi_t, |full| self.inner.phi_t_into(t, u, full));
     }

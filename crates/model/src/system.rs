@@ -149,6 +149,17 @@ pub trait System: Send + Sync {
         self.mass_is_constant() && self.forces_are_constant()
     }
 
+    /// Whether evaluating the Jacobians (the constraint Hessian contracted
+    /// with `λ`, the force Jacobians) costs more than a solve and a product
+    /// with the iteration matrix (default: `false`). An integrator carrying
+    /// forward sensitivities evaluates them at every converged state; the
+    /// next step's first factorization then takes those instead of
+    /// evaluating them again at its predictor (`docs/analysis.md`,
+    /// "Parameter sensitivities").
+    fn jacobians_are_costly(&self) -> bool {
+        false
+    }
+
     /// Potential energy of the conservative forces in `g` (default: 0), for the
     /// energy output. Kinetic energy is `½ u̇ᵀ M u̇`.
     fn potential_energy(&self, _t: f64, _u: &[f64]) -> f64 {

@@ -635,6 +635,16 @@ impl System for SpatialSystem {
             && self.joints.iter().all(|j| !j.element.is_driver())
     }
 
+    /// Yes: the joints' Hessians are formed with second-order dual numbers
+    /// (or, for the spherical joint, a kernel of 4 × 4 blocks per body
+    /// pair), and the bodies' gyroscopic blocks come with them; on
+    /// `models/spatial/slider-crank.toml` they are 85 % of a step
+    /// (`docs/performance.md`, "Other models, and the dense LU through row
+    /// slices").
+    fn jacobians_are_costly(&self) -> bool {
+        true
+    }
+
     fn potential_energy(&self, t: f64, u: &[f64]) -> f64 {
         let _ = t;
         let gravity: f64 = self

@@ -617,6 +617,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     /// recomputation, which starts without a factorization, repeats it).
     fn snapshot(&mut self) -> Snapshot {
         self.factored_h = None;
+        self.jacobians_of_state = false;
         Snapshot {
             t: self.t,
             state: self.state.clone(),
@@ -641,6 +642,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     /// Puts the integrator back at `s`, without a factorization.
     fn restore(&mut self, s: &Snapshot) {
         self.factored_h = None;
+        self.jacobians_of_state = false;
         self.t = s.t;
         self.state.clone_from(&s.state);
         self.history.clone_from(&s.history);

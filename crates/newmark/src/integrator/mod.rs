@@ -139,9 +139,16 @@ pub struct Integrator<'s, S: System + ?Sized> {
     rejected_last: bool,
     /// The step size the current factorization was made for.
     factored_h: Option<f64>,
-    /// `Σ ‖Δu‖∞` of the corrections since the last factorization: a bound
-    /// on how far the state moved from the factored iterate (`refine.rs`).
+    /// A bound on how far the state moved from where the factored matrix's
+    /// Jacobians were evaluated (`refine.rs`): `Σ ‖Δu‖∞` of the corrections
+    /// since the factorization, plus, when it took the Jacobians of the
+    /// state before the step (`jacobians_of_state`), `‖u − u_n‖∞` of the
+    /// iterate it was made at.
     drift: f64,
+    /// The linearization holds the Jacobians of the current state (the
+    /// sensitivities evaluated them): the next step's first factorization
+    /// takes them instead of evaluating them at its predictor.
+    jacobians_of_state: bool,
     easy_steps: usize,
     /// Time bookkeeping without drift: `t = t_anchor + steps_at_h · h_anchor`.
     t_anchor: f64,
@@ -272,6 +279,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             rejected_last: false,
             factored_h: None,
             drift: 0.0,
+            jacobians_of_state: false,
             easy_steps: 0,
             t_anchor: t0,
             h_anchor: h,
@@ -497,6 +505,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                     if stale_jacobian && !retried_fresh {
                         // Retry the same step with a Jacobian evaluated here.
                         self.factored_h = None;
+                        self.jacobians_of_state = false;
                         retried_fresh = true;
                         self.stats.rejected += 1;
                         continue;
@@ -506,6 +515,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
                         self.h = h;
                         self.easy_steps = 0;
                         self.factored_h = None;
+                        self.jacobians_of_state = false;
                         retried_fresh = false;
                         self.stats.rejected += 1;
                         continue;
@@ -634,6 +644,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         // fresh one at the next step.
         if iterations > 4 {
             self.factored_h = None;
+            self.jacobians_of_state = false;
         }
         // Regrow h after a run of easy steps. With a fresh Jacobian at every
         // iteration a resolved step takes one correction (two at most); more

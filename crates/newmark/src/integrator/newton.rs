@@ -246,11 +246,16 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         })
     }
 
-    /// Evaluates the Jacobians at the iterate, assembles the iteration
-    /// matrix (16)-(17) and factors it.
+    /// Evaluates the Jacobians at the iterate (or takes those of the state
+    /// before the step that the sensitivities left,
+    /// [`System::jacobians_are_costly`]), assembles the iteration matrix
+    /// (16)-(17) with `M` and `B` of the iterate, and factors it.
     fn refactor(&mut self, k: &Corrector, h: f64) -> Result<(), Failure> {
         let s = &self.trial;
-        self.lin.eval_jacobians(self.sys, &s.at(k.t1));
+        let reused = std::mem::take(&mut self.jacobians_of_state);
+        if !reused {
+            self.lin.eval_jacobians(self.sys, &s.at(k.t1));
+        }
         self.lin.assemble(&k.coefficients);
         self.factored_h = None;
         self.solver
@@ -260,7 +265,11 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 source,
             })?;
         self.factored_h = Some(h);
-        self.drift = 0.0;
+        self.drift = if reused {
+            max_abs_difference(&self.trial.u, &self.state.u)
+        } else {
+            0.0
+        };
         self.stats.factorizations += 1;
         Ok(())
     }
@@ -364,4 +373,9 @@ fn positions_with(
         t.v[i] = s.v[i] + h * ((1.0 - gamma) * a_n + gamma * aa1);
         t.u[i] = s.u[i] + h * s.v[i] + h * h * ((0.5 - beta) * a_n + beta * aa1);
     }
+}
+
+/// `‖a − b‖∞`.
+fn max_abs_difference(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).fold(0.0, |m, (x, y)| m.max((x - y).abs()))
 }

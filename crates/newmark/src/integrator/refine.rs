@@ -4,7 +4,9 @@
 //! The sensitivity system `J x = c` has `J` at the converged state; full
 //! Newton leaves a factorization `J̃` of an iterate of the same step, which
 //! differs from the converged one by the corrections `Δu` made after it (the
-//! "drift"). Refinement `x ← x + J̃⁻¹ (c − J x)` contracts the error by
+//! "drift"; when that factorization took the Jacobians of the state before
+//! the step, `System::jacobians_are_costly`, the predictor's move from that
+//! state as well). Refinement `x ← x + J̃⁻¹ (c − J x)` contracts the error by
 //! `ρ = ‖I − J̃⁻¹ J‖`, which is proportional to the drift (`J` is smooth in
 //! `u`): about `5e-11` on the N-four-bar.
 //!

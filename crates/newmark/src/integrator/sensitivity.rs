@@ -554,6 +554,10 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         let mut refine = self.stats.factorizations > factored_before
             && self.factored_h == Some(h)
             && sens.params.len() <= REFINED_PARAMETERS;
+        // With the step's own factorization (once per step, full Newton)
+        // and Jacobians that cost more than a solve, the next step's first
+        // factorization takes the ones evaluated here.
+        let shares = refine && self.sys.jacobians_are_costly();
         if refine {
             sens.contraction.tick();
         } else {
@@ -563,6 +567,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         for k in 0..sens.params.len() {
             self.advance_sensitivity(sens, k, h, h / h_before, &mut refine)?;
         }
+        self.jacobians_of_state = shares;
         Ok(())
     }
 
