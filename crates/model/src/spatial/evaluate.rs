@@ -118,7 +118,7 @@ pub(crate) fn joint_patterns(
             for a in 0..TIME {
                 grad[r][a] |= o.g[a] != 0.0;
                 for b in 0..TIME {
-                    hess[a][b] |= o.h[a][b] != 0.0 || o.h[b][a] != 0.0;
+                    hess[a][b] |= o.hess(a, b) != 0.0;
                 }
             }
         }

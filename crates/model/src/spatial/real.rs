@@ -172,13 +172,18 @@ impl<const N: usize> Real for Dual<N> {
     }
 }
 
+/// The entries of a symmetric `VARS × VARS` matrix on and above its diagonal.
+const PACKED: usize = VARS * (VARS + 1) / 2;
+
 /// A value with its gradient and (symmetric) Hessian over [`VARS`]
-/// variables.
+/// variables. The Hessian is kept on and above its diagonal, row by row
+/// (`h[k VARS − k (k + 1)/2 + l]` for `k ≤ l`): half the products and half
+/// the bytes that a `Jet` passed by value copies.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Jet {
     pub(crate) v: f64,
     pub(crate) g: [f64; VARS],
-    pub(crate) h: [[f64; VARS]; VARS],
+    h: [f64; PACKED],
 }
 
 impl Jet {
@@ -189,13 +194,19 @@ impl Jet {
         j
     }
 
+    /// `∂²/∂x_a ∂x_b`.
+    pub(crate) fn hess(&self, a: usize, b: usize) -> f64 {
+        let (k, l) = if a <= b { (a, b) } else { (b, a) };
+        self.h[k * VARS - k * (k + 1) / 2 + l]
+    }
+
     fn combine(mut self, o: &Self, f: impl Fn(f64, f64) -> f64) -> Self {
         self.v = f(self.v, o.v);
         for k in 0..VARS {
             self.g[k] = f(self.g[k], o.g[k]);
-            for l in 0..VARS {
-                self.h[k][l] = f(self.h[k][l], o.h[k][l]);
-            }
+        }
+        for (a, &b) in self.h.iter_mut().zip(&o.h) {
+            *a = f(*a, b);
         }
         self
     }
@@ -226,13 +237,13 @@ impl Mul for Jet {
     type Output = Self;
     fn mul(self, o: Self) -> Self {
         let mut out = Self::cst(self.v * o.v);
+        let mut p = 0;
         for k in 0..VARS {
             out.g[k] = self.v * o.g[k] + o.v * self.g[k];
-            for l in 0..VARS {
-                out.h[k][l] = self.v * o.h[k][l]
-                    + o.v * self.h[k][l]
-                    + self.g[k] * o.g[l]
-                    + o.g[k] * self.g[l];
+            for l in k..VARS {
+                out.h[p] =
+                    self.v * o.h[p] + o.v * self.h[p] + self.g[k] * o.g[l] + o.g[k] * self.g[l];
+                p += 1;
             }
         }
         out
@@ -252,7 +263,7 @@ impl Real for Jet {
         Self {
             v: x,
             g: [0.0; VARS],
-            h: [[0.0; VARS]; VARS],
+            h: [0.0; PACKED],
         }
     }
     fn value(&self) -> f64 {
@@ -261,15 +272,17 @@ impl Real for Jet {
     fn scale(mut self, k: f64) -> Self {
         self.v *= k;
         self.g.iter_mut().for_each(|a| *a *= k);
-        self.h.iter_mut().flatten().for_each(|a| *a *= k);
+        self.h.iter_mut().for_each(|a| *a *= k);
         self
     }
     fn chain(self, f: f64, f1: f64, f2: f64) -> Self {
         let mut out = Self::cst(f);
+        let mut p = 0;
         for k in 0..VARS {
             out.g[k] = f1 * self.g[k];
-            for l in 0..VARS {
-                out.h[k][l] = f1 * self.h[k][l] + f2 * self.g[k] * self.g[l];
+            for l in k..VARS {
+                out.h[p] = f1 * self.h[p] + f2 * self.g[k] * self.g[l];
+                p += 1;
             }
         }
         out
@@ -291,12 +304,12 @@ mod tests {
         assert!((j.g[0] - (2.0 * x0 * y0 + c)).abs() < 1e-14);
         let fy = x0 * x0 + x0 * c / y0 - s / (y0 * y0);
         assert!((j.g[1] - fy).abs() < 1e-14);
-        assert!((j.h[0][0] - (2.0 * y0 - y0 * s)).abs() < 1e-14);
+        assert!((j.hess(0, 0) - (2.0 * y0 - y0 * s)).abs() < 1e-14);
         let fxy = 2.0 * x0 - x0 * s;
-        assert!((j.h[0][1] - fxy).abs() < 1e-14 && (j.h[1][0] - fxy).abs() < 1e-14);
+        assert!((j.hess(0, 1) - fxy).abs() < 1e-14 && (j.hess(1, 0) - fxy).abs() < 1e-14);
         let fyy = -x0 * x0 * s / y0 - 2.0 * x0 * c / (y0 * y0) + 2.0 * s / (y0 * y0 * y0);
-        assert!((j.h[1][1] - fyy).abs() < 1e-13);
-        assert!(j.h[2][2] == 0.0 && j.g[3] == 0.0);
+        assert!((j.hess(1, 1) - fyy).abs() < 1e-13);
+        assert!(j.hess(2, 2) == 0.0 && j.g[3] == 0.0);
     }
 
     #[test]

@@ -593,7 +593,9 @@ impl System for SpatialSystem {
             }
             let o = self.joint_jet(j, t, u);
             for (k, &(a, b)) in j.h_local.iter().enumerate() {
-                out[j.h_off + k] = (0..j.rows()).map(|r| mu[j.row0 + r] * o[r].h[a][b]).sum();
+                out[j.h_off + k] = (0..j.rows())
+                    .map(|r| mu[j.row0 + r] * o[r].hess(a, b))
+                    .sum();
             }
         }
         for (k, &(row, _)) in self.norms.iter().enumerate() {
@@ -619,11 +621,11 @@ impl System for SpatialSystem {
             let vl: [f64; TIME] =
                 std::array::from_fn(|a| global(&self.bodies, j.sides, a).map_or(0.0, |i| v[i]));
             for r in 0..j.rows() {
-                let h = &o[r].h;
-                let mut q = h[TIME][TIME];
+                let h = |a: usize, b: usize| o[r].hess(a, b);
+                let mut q = h(TIME, TIME);
                 for a in 0..TIME {
-                    let row: f64 = (0..TIME).map(|b| h[a][b] * vl[b]).sum();
-                    q += vl[a] * (row + 2.0 * h[a][TIME]);
+                    let row: f64 = (0..TIME).map(|b| h(a, b) * vl[b]).sum();
+                    q += vl[a] * (row + 2.0 * h(a, TIME));
                 }
                 c[j.row0 + r] = -q;
             }
