@@ -152,8 +152,10 @@ impl PastSolutions {
 }
 
 impl<S: System + ?Sized> Integrator<'_, S> {
-    /// `J x = c` (`scratch.rhs`) into `scratch.x` by refinement with the
-    /// step's factorization (module documentation), started from `past`
+    /// The sensitivity system `J x = b` (`b` from `scratch.partials` and the
+    /// predicted sensitivities, [`kkt_residual`](Self::kkt_residual)) into
+    /// `scratch.x` by refinement with the step's factorization (module
+    /// documentation), started from `past`
     /// unless the contraction is due to be measured. `Ok(true)` when
     /// accepted; `Ok(false)` when it did not converge within
     /// [`MAX_REFINEMENTS`] passes or stopped contracting (then `J` is to be
@@ -190,13 +192,14 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             self.solve_scaled(&scratch.residual, h, &mut scratch.y, true)?;
             let change = add_change(&mut scratch.x, &scratch.y, n);
             match previous {
-                None if from_past => {
+                // The first pass from the extrapolation (from zero, the
+                // first pass was made above).
+                None => {
                     contraction.first_change = change;
                     if contraction.bound(drift) * change <= REFINED {
                         return Ok(true);
                     }
                 }
-                None => {}
                 Some(previous) => {
                     if measure && pass == 1 && previous > 0.0 {
                         contraction.measured(change / previous, drift);
