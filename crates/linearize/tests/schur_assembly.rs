@@ -22,6 +22,18 @@ fn the_schur_assembly_equals_the_full_one_outside_the_transpose_block() {
 
 /// `(u, u̇, ü, λ)` of a bent chain with nonzero multipliers (the Hessian
 /// term of `S`) from the pose `u0`, `m` multipliers; `k` varies it.
+/// The state `[u, u̇, ü, λ]` of [`bent_state`] at t = 0.1.
+fn at(state: &[Vec<f64>; 4]) -> StateRef<'_> {
+    let [u, v, a, lambda] = state;
+    StateRef {
+        t: 0.1,
+        u,
+        v,
+        a,
+        lambda,
+    }
+}
+
 fn bent_state(u0: &[f64], m: usize, k: usize) -> [Vec<f64>; 4] {
     let n = u0.len();
     let u = u0
@@ -58,15 +70,9 @@ fn equal_outside_the_transpose_block<S: System>(sys: &S, u0: &[f64]) {
     .into_iter()
     .enumerate()
     {
-        let [u, v, a, lambda] = bent_state(u0, m, k);
+        let state = bent_state(u0, m, k);
         for lin in [&mut full, &mut lean] {
-            let x = StateRef {
-                t: 0.1,
-                u: &u,
-                v: &v,
-                a: &a,
-                lambda: &lambda,
-            };
+            let x = at(&state);
             lin.eval_residual(sys, &x);
             lin.eval_jacobians(sys, &x);
             lin.assemble(&c);
@@ -107,14 +113,8 @@ fn the_spatial_schur_block_is_its_terms_summed() {
     let sys = spatial_bar_chain(4, RotationalMass::Regularized);
     let (n, m) = (sys.n_coords(), sys.n_constraints());
     let mut lin = Linearization::with_structure(&sys, Structure::PLAIN).expect("structure");
-    let [u, v, a, lambda] = bent_state(&sys.initial_position(), m, 0);
-    let x = StateRef {
-        t: 0.1,
-        u: &u,
-        v: &v,
-        a: &a,
-        lambda: &lambda,
-    };
+    let state = bent_state(&sys.initial_position(), m, 0);
+    let x = at(&state);
     lin.eval_residual(&sys, &x);
     lin.eval_jacobians(&sys, &x);
     let c = Coefficients {
