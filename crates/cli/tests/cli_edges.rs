@@ -40,7 +40,7 @@ fn longest_number(s: &str) -> usize {
 
 /// A directory with the four-bar model as `fb.toml` and a short run of it
 /// as `fb.csv`.
-fn four_bar(tag: &str) -> std::path::PathBuf {
+fn four_bar(tag: &str) -> common::Scratch {
     let dir = scratch(tag);
     std::fs::copy(model("four-bar.toml"), dir.join("fb.toml")).expect("copied");
     let ok = mstar_in(

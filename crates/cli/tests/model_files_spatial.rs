@@ -11,26 +11,15 @@
 //! row, and runs with minimum-norm multipliers.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
+mod common;
+
+use common::{mstar, scratch};
 use mstar::file::{Format, Mechanism, MechanismFile};
 use mstar::{SampleRef, System};
 
 fn models() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../models/spatial")
-}
-
-fn mstar(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_mstar"))
-        .args(args)
-        .output()
-        .expect("mstar runs")
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mstar-spatial-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("scratch directory");
-    dir
 }
 
 /// The document of the brief and of docs/model-format.md, as written.

@@ -52,7 +52,7 @@ fn equilibrium_and_convert_refuse_outputs_that_name_their_inputs() {
 
 /// A scratch copy of `models/urdf/two-link-arm-start.toml` and the URDF it
 /// reads (`urdf = "two-link-arm.urdf"`), with a short results CSV.
-fn arm_with_urdf(tag: &str) -> std::path::PathBuf {
+fn arm_with_urdf(tag: &str) -> common::Scratch {
     let dir = scratch(tag);
     for name in ["two-link-arm-start.toml", "two-link-arm.urdf"] {
         std::fs::copy(model(&format!("urdf/{name}")), dir.join(name)).expect("copied");

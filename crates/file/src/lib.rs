@@ -561,6 +561,7 @@ mod tests {
         .expect("written");
         assert!(included_files(&planar).is_empty());
         assert!(included_files(&dir.join("missing.toml")).is_empty());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     /// `number_at` reads a key's number as the file (after the overrides)

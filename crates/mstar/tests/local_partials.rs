@@ -152,7 +152,10 @@ impl Parameterized for Whole {
 
 /// The model file `text` written to a scratch file.
 fn scratch(name: &str, text: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("mstar-local-partials-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "mstar-local-partials-{}-{name}",
+        std::process::id()
+    ));
     std::fs::create_dir_all(&dir).expect("a scratch directory");
     let path = dir.join(name);
     std::fs::write(&path, text).expect("the model file written");
@@ -207,7 +210,9 @@ fn local_equals_whole(name: &str, text: &str, keys: &[&str]) {
             );
         }
     }
-    let _ = std::fs::remove_file(&path);
+    if let Some(dir) = path.parent() {
+        let _ = std::fs::remove_dir_all(dir);
+    }
 }
 
 /// `max(‖g‖∞, ‖Bᵀλ‖∞, ‖M ü‖∞, ‖λ‖∞, ‖u‖∞, 1)` at the integrator's state.

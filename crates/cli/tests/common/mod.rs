@@ -26,11 +26,13 @@ pub fn mstar(args: &[&str]) -> Output {
 }
 
 /// Program output as text.
+#[allow(dead_code)] // (not every test reads output as text)
 pub fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
 }
 
 /// The path of a file of `models/`.
+#[allow(dead_code)] // (not every test reads `models/`)
 pub fn model(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../../models")
@@ -39,10 +41,35 @@ pub fn model(name: &str) -> String {
         .to_string()
 }
 
-/// A fresh directory for one test's files (`tag` names the test).
-pub fn scratch(tag: &str) -> PathBuf {
+/// A fresh directory for one test's files (`tag` names the test), removed
+/// when the test passes and kept for a look when it fails.
+pub fn scratch(tag: &str) -> Scratch {
     let dir = std::env::temp_dir().join(format!("mstar-cli-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("a scratch directory");
-    dir
+    Scratch(dir)
+}
+
+/// A scratch directory: a path while the test runs, gone after it passes.
+pub struct Scratch(PathBuf);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for Scratch {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
 }
