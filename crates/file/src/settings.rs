@@ -28,7 +28,9 @@ pub enum NewtonChoice {
     /// `"per-step"`: refactor at each step's first iteration, reuse within
     /// the step while it contracts.
     PerStep,
-    /// `"auto"` (the default): once per step with `schur-lu`, else modified.
+    /// `"auto"` (the default): `mstar_newmark::Newton::Automatic` (once per
+    /// step with the Schur backends on a large model with cheap Jacobians,
+    /// else modified).
     Auto,
 }
 

@@ -70,8 +70,12 @@ fn auto_picks_schur_then_ldlt_when_the_primal_count_is_given() {
     let s = KktSolver::new(&plain, &auto(Some(30))).expect("regular structure");
     assert_eq!(s.backend(), Backend::SCHUR);
     assert_eq!(pick(auto(None)), Backend::SPARSE_LU);
+    // Small: the Schur backends before the dense LU (one body's `S` is one
+    // block), the dense LU without the primal count.
     let small = chain(1, 1, None);
     let s = KktSolver::new(&small, &auto(Some(3))).expect("regular structure");
+    assert_eq!(s.backend(), Backend::SCHUR);
+    let s = KktSolver::new(&small, &auto(None)).expect("regular structure");
     assert_eq!(s.backend(), Backend::DENSE);
 }
 

@@ -49,10 +49,11 @@
 //!   without pivoting on its envelope in the constraints' own order (its
 //!   symmetric part is positive definite when that of `S` is); a wider
 //!   envelope is refused.
-//! - [`Backend::AUTO`] (default): dense up to [`KktOptions::dense_threshold`]
-//!   unknowns; above it, when [`KktOptions::n_primal`] is given, Schur if the
-//!   structure's `S` is block-diagonal with small blocks, else LDLᵀ, else
-//!   sparse LU; sparse LU without `n_primal` ([`KktOptions::candidates`]).
+//! - [`Backend::AUTO`] (default): when [`KktOptions::n_primal`] is given,
+//!   Schur if the structure's `S` is block-diagonal with small blocks, else
+//!   LDLᵀ, else sparse LU; up to [`KktOptions::dense_threshold`] unknowns
+//!   Schur, else dense; sparse LU without `n_primal`, dense when that small
+//!   ([`KktOptions::candidates`]).
 //!   `ldlt` and `schur` need a symmetric matrix
 //!   ([`Registration::symmetric`]); an unsymmetric one skips to `schur-lu`.
 //!
@@ -104,7 +105,8 @@ pub use templates::SharedAnalyses;
 pub struct KktOptions {
     /// Factorization (default: [`Backend::AUTO`]).
     pub backend: Backend,
-    /// Largest dimension that [`Backend::AUTO`] solves densely (default: 24).
+    /// Largest dimension that [`Backend::AUTO`] solves densely when no
+    /// Schur backend takes it ([`candidates`](Self::candidates); default: 24).
     pub dense_threshold: usize,
     /// Largest accepted relative residual `‖A x − b‖∞ / (‖A‖∞ ‖x‖∞ + ‖b‖∞)` of a
     /// solution; above it the matrix is reported as numerically singular
@@ -143,17 +145,23 @@ impl Default for KktOptions {
 
 impl KktOptions {
     /// The backends [`KktSolver::new`] tries, in order, for a matrix of
-    /// dimension `dim`: the chosen one alone, or for [`Backend::AUTO`] dense up
-    /// to [`dense_threshold`](Self::dense_threshold) unknowns, else the
+    /// dimension `dim`: the chosen one alone, or for [`Backend::AUTO`] the
     /// backends whose [`Registration::automatic`] has a rank, in ascending
     /// rank, leaving out those that [`need n_primal`](Registration::needs_n_primal)
-    /// when it is not given. For the built-in backends: with
+    /// when it is not given. Up to [`dense_threshold`](Self::dense_threshold)
+    /// unknowns only those that read `S` without `BᵀB`
+    /// ([`Structure::augmented`] false: they eliminate `S`'s small blocks)
+    /// are tried, then the dense LU: where they take the structure they are
+    /// as fast as the dense LU or faster on the systems of `models/` that
+    /// small (docs/performance.md, "Backends compared"), and a general
+    /// sparse factorization is not. For the built-in backends: with
     /// [`n_primal`](Self::n_primal) Schur, Schur with LU, LDLᵀ, then sparse
     /// LU (both Schur backends refuse a structure whose `S` is not
     /// block-diagonal with small blocks, `schur-lu` also one whose `C` has a
     /// wide envelope, LDLᵀ one that is not symmetric; a caller that knows its
     /// matrix is not symmetric skips `schur` and `ldlt`, and so takes
-    /// `schur-lu` for an unsymmetric block-diagonal `S`), else sparse LU.
+    /// `schur-lu` for an unsymmetric block-diagonal `S`), else sparse LU;
+    /// small, Schur, Schur with LU, then dense.
     ///
     /// ```
     /// use mstar_kkt::{Backend, KktOptions};
@@ -166,6 +174,11 @@ impl KktOptions {
     ///     kkt.candidates(50),
     ///     [Backend::SCHUR, Backend::SCHUR_LU, Backend::SPARSE_LDLT, Backend::SPARSE_LU]
     /// );
+    /// let small = KktOptions { n_primal: Some(12), ..auto };
+    /// assert_eq!(
+    ///     small.candidates(20),
+    ///     [Backend::SCHUR, Backend::SCHUR_LU, Backend::DENSE]
+    /// );
     /// let chosen = KktOptions { backend: Backend::SPARSE_LDLT, ..kkt };
     /// assert_eq!(chosen.candidates(50), [Backend::SPARSE_LDLT]);
     /// ```
@@ -174,17 +187,20 @@ impl KktOptions {
         if self.backend != Backend::AUTO {
             return vec![self.backend];
         }
-        if dim <= self.dense_threshold {
-            return vec![Backend::DENSE];
-        }
+        let small = dim <= self.dense_threshold;
         let mut ranked: Vec<(u16, Backend)> = backends()
             .iter()
             .filter(|r| self.n_primal.is_some() || !r.needs_n_primal)
+            .filter(|r| !small || !r.structure.augmented)
             .filter_map(|r| r.automatic.map(|rank| (rank, r.backend)))
             .collect();
         // Stable: equal ranks keep the registration order.
         ranked.sort_by_key(|&(rank, _)| rank);
-        ranked.into_iter().map(|(_, b)| b).collect()
+        let mut candidates: Vec<Backend> = ranked.into_iter().map(|(_, b)| b).collect();
+        if small {
+            candidates.push(Backend::DENSE);
+        }
+        candidates
     }
 
     /// The number of primal unknowns, required by `backend`.

@@ -245,14 +245,20 @@ pub enum Newton {
         max_rate: f64,
     },
     /// Chosen with the KKT backend when the integrator is made
-    /// ([`Newton::resolve`]): once per step with the Schur backends
-    /// (`schur-lu`: spatial bodies' exact, unsymmetric tangent, one
+    /// ([`Newton::resolve`]): once per step with the Schur backends on a
+    /// system above [`mstar_kkt::KktOptions::dense_threshold`] unknowns whose
+    /// Jacobians cost no more than a solve
+    /// ([`System::jacobians_are_costly`](mstar_model::System::jacobians_are_costly)
+    /// false): `schur-lu`, spatial bodies' exact, unsymmetric tangent, one
     /// iteration a step, 1.5–1.8× faster than modified Newton on the spatial
-    /// chain; `schur`: the N-four-bar from 7 to 10⁵ bodies, 1.04–1.36
+    /// chain; `schur`, the N-four-bar from 7 to 10⁵ bodies, 1.04–1.36
     /// iterations a step against modified Newton's 3.1–3.3, 10–35 % less
-    /// time), modified Newton with the others (a dense or sparse LU's
-    /// factorization costs more than the two iterations it saves;
-    /// docs/performance.md, "Newton variant"). The default.
+    /// time. Modified Newton otherwise: a dense or sparse LU's factorization
+    /// costs more than the two iterations it saves; on a small system, or one
+    /// whose Jacobians are formed with dual numbers (the spatial slider-crank,
+    /// 2× slower once per step), or a linear one (one iteration a step either
+    /// way), a factorization a step buys nothing (docs/performance.md,
+    /// "Newton variant"). The default.
     #[default]
     Automatic,
 }
@@ -265,12 +271,17 @@ impl Newton {
     pub const PER_STEP: Self = Self::PerStep { max_rate: 0.5 };
 
     /// The variant to use with `backend`: [`Automatic`](Self::Automatic)
-    /// resolved, the others as they are.
+    /// resolved (once per step with the Schur backends when
+    /// `once_per_step_pays`: the system is larger than the dense threshold
+    /// and its Jacobians are not costly), the others as they are.
     #[must_use]
-    pub fn resolve(self, backend: mstar_kkt::Backend) -> Self {
+    pub fn resolve(self, backend: mstar_kkt::Backend, once_per_step_pays: bool) -> Self {
         use mstar_kkt::Backend;
         match self {
-            Self::Automatic if backend == Backend::SCHUR_LU || backend == Backend::SCHUR => {
+            Self::Automatic
+                if once_per_step_pays
+                    && (backend == Backend::SCHUR_LU || backend == Backend::SCHUR) =>
+            {
                 Self::PER_STEP
             }
             Self::Automatic => Self::MODIFIED,
@@ -294,7 +305,7 @@ impl std::fmt::Display for Newton {
                 crate::Short(*max_rate)
             ),
             Self::Automatic => {
-                f.write_str("automatic (once per step with schur and schur-lu, else modified)")
+                f.write_str("automatic (once per step with schur and schur-lu on a large model with cheap Jacobians, else modified)")
             }
         }
     }

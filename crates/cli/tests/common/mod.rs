@@ -43,6 +43,7 @@ pub fn model(name: &str) -> String {
 
 /// A fresh directory for one test's files (`tag` names the test), removed
 /// when the test passes and kept for a look when it fails.
+#[allow(dead_code)] // (not every test writes files)
 pub fn scratch(tag: &str) -> Scratch {
     let dir = std::env::temp_dir().join(format!("mstar-cli-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -51,6 +52,7 @@ pub fn scratch(tag: &str) -> Scratch {
 }
 
 /// A scratch directory: a path while the test runs, gone after it passes.
+#[allow(dead_code)] // (not every test writes files)
 pub struct Scratch(PathBuf);
 
 impl std::ops::Deref for Scratch {

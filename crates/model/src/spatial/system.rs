@@ -637,14 +637,14 @@ impl System for SpatialSystem {
             && self.joints.iter().all(|j| !j.element.is_driver())
     }
 
-    /// Yes: the joints' Hessians are formed with second-order dual numbers
-    /// (or, for the spherical joint, a kernel of 4 × 4 blocks per body
-    /// pair), and the bodies' gyroscopic blocks come with them; on
-    /// `models/spatial/slider-crank.toml` they are 85 % of a step
-    /// (`docs/performance.md`, "Other models, and the dense LU through row
-    /// slices").
+    /// When a joint other than a spherical one, or a load, is present: their
+    /// Hessians are formed with second-order dual numbers (on
+    /// `models/spatial/slider-crank.toml` 85 % of a step,
+    /// `docs/performance.md`, "Other models, and the dense LU through row
+    /// slices"). Spherical joints have a kernel of 4 × 4 blocks per body
+    /// pair, and a chain of them steps fastest with a Jacobian a step.
     fn jacobians_are_costly(&self) -> bool {
-        true
+        !self.others.is_empty() || !self.loads.is_empty()
     }
 
     fn potential_energy(&self, t: f64, u: &[f64]) -> f64 {

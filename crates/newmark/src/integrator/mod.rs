@@ -258,7 +258,10 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
     ) -> Result<Self, IntegrationError> {
         let (n, m) = (sys.n_coords(), sys.n_constraints());
         let config = Config {
-            newton: config.newton.resolve(solver.backend()),
+            newton: config.newton.resolve(
+                solver.backend(),
+                n + m > config.kkt.dense_threshold && !sys.jacobians_are_costly(),
+            ),
             ..config
         };
         let h = config.h;

@@ -169,6 +169,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
     ) -> Result<bool, IntegrationError> {
         let n = self.sys.n_coords();
         let drift = self.drift;
+        let scale = self.p.coefficients(h, self.config.scaling).scale;
         let measure = contraction.due();
         let from_past = !measure
             && contraction.expects_one_pass(drift)
@@ -190,7 +191,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             // at the converged state, and corrects that solve's error too.
             *solves += 1;
             self.solve_scaled(&scratch.residual, h, &mut scratch.y, true)?;
-            let change = add_change(&mut scratch.x, &scratch.y, n);
+            let change = add_change(&mut scratch.x, &scratch.y, n, scale);
             match previous {
                 // The first pass from the extrapolation (from zero, the
                 // first pass was made above).
@@ -311,10 +312,22 @@ impl Scratch {
     }
 }
 
+/// Below this fraction of the solver's whole solution `[x_u; scale · x_λ]`,
+/// a part's entries are at the solve's round-off (`ε κ` of the whole, `κ`
+/// the scaled matrix's condition): a part's change is judged against the
+/// part or against this fraction of the whole, whichever is larger. Without
+/// it a part that is zero in exact arithmetic (the coordinates of a
+/// mechanism the drivers fix, whose multipliers alone depend on a mass)
+/// changes by O(1) of itself at every pass and is never accepted.
+const PART_FLOOR: f64 = 1e-4;
+
 /// `x += y`, and the larger of `‖y_u‖∞ / ‖x_u‖∞` and `‖y_λ‖∞ / ‖x_λ‖∞`
 /// after it (each 0 when `y`'s part is 0): coordinates and multipliers have
-/// units of their own. The norms are taken in the same pass.
-fn add_change(x: &mut [f64], y: &[f64], n: usize) -> f64 {
+/// units of their own. Each part's norm is floored at [`PART_FLOOR`] of the
+/// whole in its units, the multipliers entering the solved system as
+/// `scale · λ` ([`solve_scaled`](Integrator::solve_scaled)). The norms are
+/// taken in the same pass.
+fn add_change(x: &mut [f64], y: &[f64], n: usize, scale: f64) -> f64 {
     let part = |x: &mut [f64], y: &[f64]| {
         let (mut dy, mut sx) = (
             mstar_linearize::MaxAbs::new(),
@@ -325,12 +338,16 @@ fn add_change(x: &mut [f64], y: &[f64], n: usize) -> f64 {
             dy.push(y);
             sx.push(*x);
         }
-        let dy = dy.value();
-        if dy == 0.0 { 0.0 } else { dy / sx.value() }
+        (dy.value(), sx.value())
     };
     let (x_u, x_l) = x.split_at_mut(n);
     let (y_u, y_l) = y.split_at(n);
-    part(x_u, y_u).max(part(x_l, y_l))
+    let (dy_u, sx_u) = part(x_u, y_u);
+    let (dy_l, sx_l) = part(x_l, y_l);
+    let whole = sx_u.max(scale * sx_l);
+    let relative = |dy: f64, sx: f64| if dy == 0.0 { 0.0 } else { dy / sx };
+    relative(dy_u, sx_u.max(PART_FLOOR * whole))
+        .max(relative(dy_l, sx_l.max(PART_FLOOR * whole / scale)))
 }
 
 #[cfg(test)]
@@ -354,6 +371,30 @@ mod tests {
         assert!(!past.extrapolate_into(0.05, &mut x));
         past.push(&mut vec![4.0, 0.0], 0.05);
         assert!(!past.extrapolate_into(0.05, &mut x));
+    }
+
+    /// A part at round-off of the whole is judged against the floor; a
+    /// small part above it, against itself.
+    #[test]
+    fn a_part_s_change_is_relative_to_it_or_to_the_floor() {
+        let scale = 1e-6;
+        // Coordinates of 5e-19 against multipliers of 5 (`scale · λ` = 5e-6):
+        // a change of 3e-20 is 6e-3 of them but 6e-11 of the floor 5e-10;
+        // the multipliers change by 2e-12 / 5 = 4e-13.
+        let mut x = vec![5e-19, 5.0];
+        let change = add_change(&mut x, &[3e-20, 2e-12], 1, scale);
+        let expected = 3e-20 / (PART_FLOOR * 5.0 * scale);
+        assert!((change - expected).abs() <= 1e-6 * expected, "{change:e}");
+        // Coordinates of 1e-8, above the floor: relative to themselves.
+        let mut x = vec![1e-8, 5.0];
+        let change = add_change(&mut x, &[1e-15, 0.0], 1, scale);
+        let expected = 1e-15 / (1e-8 + 1e-15);
+        assert!((change - expected).abs() <= 1e-6 * expected, "{change:e}");
+        // Multipliers at round-off of large coordinates: against the floor.
+        let mut x = vec![1.0, 1e-20];
+        let change = add_change(&mut x, &[0.0, 1e-20], 1, scale);
+        let expected = 1e-20 / (PART_FLOOR * 1.0 / scale);
+        assert!((change - expected).abs() <= 1e-6 * expected, "{change:e}");
     }
 
     #[test]
