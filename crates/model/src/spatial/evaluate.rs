@@ -26,24 +26,20 @@ pub(crate) fn frames<T: Real>(
     v: Option<&[f64]>,
     var: impl Fn(f64, usize) -> T,
 ) -> [Frame<T>; 2] {
-    std::array::from_fn(|s| match sides[s] {
+    // Each frame built in place from the numbers (no intermediate arrays of
+    // them: a second-order dual number is 1 KB, and `array::from_fn`'s
+    // copies of them were a third of a spatial slider-crank's step).
+    let side = |s: usize| match sides[s] {
         None => Frame::ground(),
         Some(i) => {
             let (x, count) = (bodies[i].x, bodies[i].count());
-            let q: [T; SIDE] = std::array::from_fn(|k| {
-                if k < count {
-                    var(u[x + k], SIDE * s + k)
-                } else {
-                    T::cst(0.0)
-                }
-            });
-            let qd: [T; SIDE] = std::array::from_fn(|k| match v {
-                Some(v) if k < count => var(v[x + k], 2 * SIDE + SIDE * s + k),
-                _ => T::cst(0.0),
-            });
-            Frame::of(&q[..count], &qd[..count])
+            let q = |k: usize| var(u[x + k], SIDE * s + k);
+            let var = &var;
+            let qd = v.map(|v| move |k: usize| var(v[x + k], 2 * SIDE + SIDE * s + k));
+            Frame::with(count == SIDE, q, qd)
         }
-    })
+    };
+    [side(0), side(1)]
 }
 
 /// The number for constraint variable `k` (no rates: index ≥ 14 is unused

@@ -2,7 +2,9 @@
 //! position, Euler parameters and their rates, or the ground.
 
 use super::real::{Dual, Jet, Real};
-use super::rotation::{V3, add, cst3, omega_global, point_jt, rotate, torque_global};
+use super::rotation::{
+    V3, add, apply, cst3, matrix, omega_global, point_jt, rotate, torque_global,
+};
 use crate::planar::TimeFunction;
 
 /// One side of an element: a body's coordinates (and rates), or the ground
@@ -12,8 +14,13 @@ pub(crate) struct Frame<T> {
     pub(crate) r: V3<T>,
     /// Euler parameters; `None` for the ground and for point masses.
     pub(crate) p: Option<[T; 4]>,
-    pub(crate) rd: V3<T>,
-    pub(crate) pd: Option<[T; 4]>,
+    /// The rates; `None` at rest (the ground, or an element evaluated
+    /// without rates: the joints).
+    rd: Option<V3<T>>,
+    pd: Option<[T; 4]>,
+    /// `A(p)` (`rotation::matrix`), formed once for the frame's points and
+    /// axes; `None` with `p`.
+    a: Option<[[T; 3]; 3]>,
 }
 
 impl<T: Real> Frame<T> {
@@ -23,42 +30,46 @@ impl<T: Real> Frame<T> {
         Self {
             r: z,
             p: None,
-            rd: z,
+            rd: None,
             pd: None,
+            a: None,
         }
     }
 
-    /// A body at the coordinates `q` (3 or 7 numbers) moving at `qd` (empty:
-    /// at rest).
-    pub(crate) fn of(q: &[T], qd: &[T]) -> Self {
-        let four = |x: &[T]| (x.len() == 7).then(|| [x[3], x[4], x[5], x[6]]);
-        let zero = T::cst(0.0);
-        let rd = if qd.len() >= 3 {
-            [qd[0], qd[1], qd[2]]
-        } else {
-            [zero; 3]
-        };
+    /// A body at the coordinates `q(0..3)` (and Euler parameters `q(3..7)`
+    /// when `rigid`) moving at `qd(k)` (`None`: at rest), each number made
+    /// where it is kept.
+    pub(crate) fn with(
+        rigid: bool,
+        q: impl Fn(usize) -> T,
+        qd: Option<impl Fn(usize) -> T>,
+    ) -> Self {
+        let p = rigid.then(|| [q(3), q(4), q(5), q(6)]);
         Self {
-            r: [q[0], q[1], q[2]],
-            p: four(q),
-            rd,
-            pd: four(qd).or_else(|| four(q).map(|_| [zero; 4])),
+            r: [q(0), q(1), q(2)],
+            rd: qd.as_ref().map(|qd| [qd(0), qd(1), qd(2)]),
+            pd: qd
+                .as_ref()
+                .filter(|_| rigid)
+                .map(|qd| [qd(3), qd(4), qd(5), qd(6)]),
+            a: p.as_ref().map(matrix),
+            p,
         }
     }
 
     /// The global position of the body point `s` (body axes, relative to
     /// the centre of mass); for the ground, `s` is a global point.
     pub(crate) fn point(&self, s: [f64; 3]) -> V3<T> {
-        match &self.p {
-            Some(p) => add(self.r, rotate(p, cst3(s))),
+        match &self.a {
+            Some(a) => add(self.r, apply(a, s)),
             None => add(self.r, cst3(s)),
         }
     }
 
     /// The body vector `a` in global axes.
     pub(crate) fn axis(&self, a: [f64; 3]) -> V3<T> {
-        match &self.p {
-            Some(p) => rotate(p, cst3(a)),
+        match &self.a {
+            Some(m) => apply(m, a),
             None => cst3(a),
         }
     }
@@ -72,10 +83,15 @@ impl<T: Real> Frame<T> {
                 let plus = rotate(&std::array::from_fn(mid), cst3(s));
                 let (a, b) = (rotate(p, cst3(s)), rotate(pd, cst3(s)));
                 let rate = |i: usize| plus[i] - a[i] - b[i];
-                add(self.rd, [rate(0), rate(1), rate(2)])
+                add(self.linear_rate(), [rate(0), rate(1), rate(2)])
             }
-            _ => self.rd,
+            _ => self.linear_rate(),
         }
+    }
+
+    /// `ṙ` (zero at rest).
+    fn linear_rate(&self) -> V3<T> {
+        self.rd.unwrap_or_else(|| cst3([0.0; 3]))
     }
 
     /// The angular velocity in global axes (zero without rotation).
