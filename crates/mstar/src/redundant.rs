@@ -227,23 +227,32 @@ impl<'a, S: System + ?Sized> MinimumNorm<'a, S> {
     /// Q₂R₂`, `λ = D z = Q₂ R₂⁻ᵀ Q₁ᵀ f` — as accurate as the SVD of `Bᵀ`
     /// (errors `ε κ(B)`) at a fraction of its cost: `O(m n r)` against a
     /// full SVD (`minimum_norm_multipliers_solve_in_the_range_of_b`).
+    /// Neither `Q` is formed: `Dᵀ` is the first `r` rows of `Q₁ᵀ Bᵀ` (the
+    /// reflections applied to `Bᵀ`), and `λ = Q₂ w = D v` with `R₂ v = w`
+    /// (docs/performance.md, "Other measured costs").
     pub fn lambda(&mut self, t: f64, u: &[f64], lambda_kept: &[f64]) -> &[f64] {
         let b = dense_b(self.sys, t, u);
         let (m, n, r) = (b.len(), self.sys.n_coords(), self.kept.len());
+        if r == 0 {
+            // `f = 0`: the least-norm solution is zero.
+            self.lambda.fill(0.0);
+            return &self.lambda;
+        }
         let bk_t = DMatrix::from_fn(n, r, |i, j| b[self.kept[j]][i]);
-        let f = &bk_t * DVector::from_column_slice(lambda_kept);
-        let q1 = bk_t.qr().q();
-        let d = DMatrix::from_fn(m, r, |i, j| {
-            b[i].iter()
-                .zip(q1.column(j).iter())
-                .map(|(x, y)| x * y)
-                .sum()
-        });
-        let qr = d.qr();
-        let rhs = q1.tr_mul(&f);
-        match qr.r().transpose().solve_lower_triangular(&rhs) {
-            Some(w) if w.iter().all(|x| x.is_finite()) => {
-                self.lambda.copy_from_slice((qr.q() * w).as_slice());
+        let mut f = &bk_t * DVector::from_column_slice(lambda_kept);
+        let qr1 = bk_t.qr();
+        let mut bt = DMatrix::from_fn(n, m, |i, j| b[j][i]);
+        qr1.q_tr_mul(&mut bt);
+        qr1.q_tr_mul(&mut f);
+        let d = bt.rows(0, r).transpose();
+        let r2 = d.clone().qr().r();
+        let v = r2
+            .transpose()
+            .solve_lower_triangular(&f.rows(0, r))
+            .and_then(|w| r2.solve_upper_triangular(&w));
+        match v {
+            Some(v) if v.iter().all(|x| x.is_finite()) => {
+                self.lambda.copy_from_slice((d * v).as_slice());
             }
             _ => self.lambda.fill(f64::NAN),
         }
