@@ -9,8 +9,9 @@ mod common;
 
 use common::{model, mstar, text};
 
-/// The summary's "KKT solver: …; Newton: …" line of a short run of `name`.
-fn choice(name: &str) -> String {
+/// Asserts that a short run of `name` names `expected` ("KKT solver: …;
+/// Newton: …") in its summary.
+fn assert_choice(name: &str, expected: &str) {
     let run = mstar(&[
         "run",
         &model(name),
@@ -21,52 +22,38 @@ fn choice(name: &str) -> String {
     ]);
     assert!(run.status.success(), "{name}: {}", text(&run.stderr));
     let summary = text(&run.stdout);
-    summary
+    let line = summary
         .lines()
         .find(|l| l.starts_with("KKT solver: "))
-        .unwrap_or_else(|| panic!("{name}: no KKT line in {summary}"))
-        .to_string()
+        .unwrap_or_else(|| panic!("{name}: no KKT line in {summary}"));
+    assert!(line.starts_with(expected), "{name}: {line}");
 }
 
 #[test]
 fn small_models_take_schur_with_modified_newton() {
     // 9 coordinates and 9 constraint rows; a diagonal mass block per bar.
-    let four_bar = choice("four-bar.toml");
-    assert!(
-        four_bar.starts_with("KKT solver: schur; Newton: modified"),
-        "{four_bar}"
-    );
+    assert_choice("four-bar.toml", "KKT solver: schur; Newton: modified");
     // Spatial bodies' unsymmetric tangent: schur-lu.
-    let top = choice("spatial/top.toml");
-    assert!(
-        top.starts_with("KKT solver: schur-lu; Newton: modified"),
-        "{top}"
-    );
+    assert_choice("spatial/top.toml", "KKT solver: schur-lu; Newton: modified");
 }
 
 #[test]
 fn a_massless_coordinate_keeps_the_dense_lu() {
     // The paper's pendulum: the angle of a point mass has no inertia, which
     // the Schur backends (M without BᵀB) cannot factor.
-    let pendulum = choice("pendulum.toml");
-    assert!(
-        pendulum.starts_with("KKT solver: dense; Newton: modified"),
-        "{pendulum}"
-    );
+    assert_choice("pendulum.toml", "KKT solver: dense; Newton: modified");
 }
 
 #[test]
 fn once_per_step_on_large_models_with_cheap_jacobians_only() {
-    let chain = choice("n-four-bar.toml");
-    assert!(
-        chain.starts_with("KKT solver: schur; Newton: once per step"),
-        "{chain}"
+    assert_choice(
+        "n-four-bar.toml",
+        "KKT solver: schur; Newton: once per step",
     );
     // Revolute, universal, prismatic and cylindrical joints: Hessians by
     // dual numbers, a fresh Jacobian a step costs twice the run.
-    let crank = choice("spatial/slider-crank.toml");
-    assert!(
-        crank.starts_with("KKT solver: schur-lu; Newton: modified"),
-        "{crank}"
+    assert_choice(
+        "spatial/slider-crank.toml",
+        "KKT solver: schur-lu; Newton: modified",
     );
 }
