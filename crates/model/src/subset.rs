@@ -126,6 +126,9 @@ impl<S: System + ?Sized> System for RowSubset<'_, S> {
     fn jacobians_are_costly(&self) -> bool {
         self.inner.jacobians_are_costly()
     }
+    fn fresh_jacobians_pay(&self) -> bool {
+        self.inner.fresh_jacobians_pay()
+    }
     fn phi_t_into(&self, t: f64, u: &[f64], phi_t: &mut [f64]) {
         self.rows_of(phi_t, |full| self.inner.phi_t_into(t, u, full));
     }

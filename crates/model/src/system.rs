@@ -160,6 +160,15 @@ pub trait System: Send + Sync {
         false
     }
 
+    /// Whether a fresh Jacobian at every step pays for itself in Newton
+    /// iterations saved (default: `true`): `false` when evaluating the
+    /// Jacobians costs several residuals, as second-order dual numbers do.
+    /// The automatic Newton variant then keeps a factorization across
+    /// steps (`Newton::resolve`; docs/performance.md, "Newton variant").
+    fn fresh_jacobians_pay(&self) -> bool {
+        true
+    }
+
     /// Potential energy of the conservative forces in `g` (default: 0), for the
     /// energy output. Kinetic energy is `½ u̇ᵀ M u̇`.
     fn potential_energy(&self, _t: f64, _u: &[f64]) -> f64 {

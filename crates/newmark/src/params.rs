@@ -247,9 +247,8 @@ pub enum Newton {
     /// Chosen with the KKT backend when the integrator is made
     /// ([`Newton::resolve`]): once per step with the Schur backends on a
     /// system above [`mstar_kkt::KktOptions::dense_threshold`] unknowns whose
-    /// Jacobians cost no more than a solve
-    /// ([`System::jacobians_are_costly`](mstar_model::System::jacobians_are_costly)
-    /// false): `schur-lu`, spatial bodies' exact, unsymmetric tangent, one
+    /// Jacobians are cheap
+    /// ([`System::fresh_jacobians_pay`](mstar_model::System::fresh_jacobians_pay)): `schur-lu`, spatial bodies' exact, unsymmetric tangent, one
     /// iteration a step, 1.5–1.8× faster than modified Newton on the spatial
     /// chain; `schur`, the N-four-bar from 7 to 10⁵ bodies, 1.04–1.36
     /// iterations a step against modified Newton's 3.1–3.3, 10–35 % less

@@ -637,14 +637,23 @@ impl System for SpatialSystem {
             && self.joints.iter().all(|j| !j.element.is_driver())
     }
 
-    /// When a joint other than a spherical one, or a load, is present: their
-    /// Hessians are formed with second-order dual numbers (on
-    /// `models/spatial/slider-crank.toml` 85 % of a step,
-    /// `docs/performance.md`, "Other models, and the dense LU through row
-    /// slices"). Spherical joints have a kernel of 4 × 4 blocks per body
-    /// pair, and a chain of them steps fastest with a Jacobian a step.
+    /// Yes: the joints' Hessians are formed with second-order dual numbers
+    /// (or, for the spherical joint, a kernel of 4 × 4 blocks per body
+    /// pair), and the bodies' gyroscopic blocks come with them; sharing them
+    /// with Newton saves 5 % of the 100-bar spatial chain's step with a
+    /// sensitivity (`docs/performance.md`, "Newton's next factorization
+    /// from the sensitivity's Jacobians").
     fn jacobians_are_costly(&self) -> bool {
-        !self.others.is_empty() || !self.loads.is_empty()
+        true
+    }
+
+    /// Only when every joint is spherical (its kernel) and there is no load:
+    /// the other joints' and the loads' Hessians are formed with
+    /// second-order dual numbers, and a fresh Jacobian a step costs
+    /// `models/spatial/slider-crank.toml` twice its run with modified Newton
+    /// (`docs/performance.md`, "Newton variant").
+    fn fresh_jacobians_pay(&self) -> bool {
+        self.others.is_empty() && self.loads.is_empty()
     }
 
     fn potential_energy(&self, t: f64, u: &[f64]) -> f64 {

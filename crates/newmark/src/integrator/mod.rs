@@ -260,7 +260,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         let config = Config {
             newton: config.newton.resolve(
                 solver.backend(),
-                n + m > config.kkt.dense_threshold && !sys.jacobians_are_costly(),
+                n + m > config.kkt.dense_threshold && sys.fresh_jacobians_pay(),
             ),
             ..config
         };
