@@ -14,8 +14,7 @@ use super::real::{Dual, Jet, Real, TIME, VARS};
 /// Structural entries as pairs of local indices.
 pub(crate) type Entries = Vec<(usize, usize)>;
 
-/// The local variables of one side: coordinate `k` of side `s` is `7 s + k`.
-pub(crate) const SIDE: usize = 7;
+pub(crate) use super::frame::SIDE;
 
 /// The frames of `sides` at `u` (and rates `v` when `rates` is given), the
 /// numbers made by `var(value, local index)`.

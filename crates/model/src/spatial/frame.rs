@@ -7,6 +7,9 @@ use super::rotation::{
 };
 use crate::planar::TimeFunction;
 
+/// The local variables of one side: coordinate `k` of side `s` is `7 s + k`.
+pub(crate) const SIDE: usize = 7;
+
 /// One side of an element: a body's coordinates (and rates), or the ground
 /// (`r = 0`, no rotation, no motion).
 #[derive(Clone, Copy, Debug)]

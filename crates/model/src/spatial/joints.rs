@@ -2,7 +2,10 @@
 //! numbers that carry their derivatives ([`Real`]): `B`, `Φ_t`, the
 //! constraint Hessian and the acceleration right-hand side are exact
 //! (`docs/theory.md`, "Spatial joints"; the primitive constraints are Haug's,
-//! 1989, §9.2-9.4).
+//! 1989, §9.2-9.4). Each also tells its rows as sums and dot products of
+//! tracked vectors ([`SpatialJoint::tracked_rows`], `hessian.rs`): the same
+//! `Φ`, `B` and contracted Hessian without dual numbers, which Newton's
+//! iterations use.
 //!
 //! Body A's axes are `(f_A, g_A, h_A)` (orthonormal, `h_A` the joint axis),
 //! body B's likewise; `x_A`, `x_B` the joint points, `d = x_B − x_A`.
@@ -10,6 +13,7 @@
 use std::fmt::Debug;
 
 use super::frame::{D15, Frame, J15, of_time};
+use super::hessian::{Rows, Tracked};
 use super::real::Real;
 use super::rotation::{V3, dot, sub};
 use crate::planar::TimeFunction;
@@ -27,6 +31,19 @@ pub(crate) trait SpatialJoint: Send + Sync + Debug {
     fn eval_jet(&self, t: J15, a: &Frame<J15>, b: &Frame<J15>, out: &mut [J15]);
     /// `Φ` in plain numbers.
     fn eval_f64(&self, t: f64, a: &Frame<f64>, b: &Frame<f64>, out: &mut [f64]);
+    /// Its rows as sums of tracked vectors and their dot products
+    /// (`hessian.rs`), at time `t` and the frames' state, told to `rows`;
+    /// `false` when the element has no such form (then dual numbers and
+    /// jets give its gradient and Hessian).
+    fn tracked_rows(
+        &self,
+        _t: f64,
+        _a: &Frame<f64>,
+        _b: &Frame<f64>,
+        _rows: &mut dyn Rows,
+    ) -> bool {
+        false
+    }
     /// Whether it prescribes a motion (its effort is `−λ`).
     fn is_driver(&self) -> bool {
         false
@@ -94,6 +111,35 @@ impl Geometry {
         fr.axis(self.axes[side][k])
     }
 
+    /// `d` as a tracked vector.
+    fn tracked_d(&self, a: &Frame<f64>, b: &Frame<f64>) -> Tracked {
+        Tracked::point(b, 1, self.points[1]).minus(&Tracked::point(a, 0, self.points[0]))
+    }
+
+    /// Axis `k` of side `side` as a tracked vector.
+    fn tracked_ax(&self, fr: &Frame<f64>, side: usize, k: usize) -> Tracked {
+        Tracked::axis(fr, side, self.axes[side][k])
+    }
+
+    /// [`coincide`](Self::coincide) from row `row`.
+    fn tracked_coincide(&self, a: &Frame<f64>, b: &Frame<f64>, row: usize, rows: &mut dyn Rows) {
+        rows.vector(row, -1.0, &self.tracked_d(a, b));
+    }
+
+    /// [`parallel`](Self::parallel) from row `row`.
+    fn tracked_parallel(&self, a: &Frame<f64>, b: &Frame<f64>, row: usize, rows: &mut dyn Rows) {
+        let axis = self.tracked_ax(a, 0, 2);
+        rows.dot(row, 1.0, &axis, &self.tracked_ax(b, 1, 0));
+        rows.dot(row + 1, 1.0, &axis, &self.tracked_ax(b, 1, 1));
+    }
+
+    /// [`on_line`](Self::on_line) from row `row`.
+    fn tracked_on_line(&self, a: &Frame<f64>, b: &Frame<f64>, row: usize, rows: &mut dyn Rows) {
+        let d = self.tracked_d(a, b);
+        rows.dot(row, 1.0, &self.tracked_ax(a, 0, 0), &d);
+        rows.dot(row + 1, 1.0, &self.tracked_ax(a, 0, 1), &d);
+    }
+
     /// `x_A − x_B` (3 rows).
     fn coincide<T: Real>(&self, a: &Frame<T>, b: &Frame<T>, out: &mut [T]) {
         let d = self.d(a, b);
@@ -140,6 +186,10 @@ impl SpatialJoint for Spherical {
     fn row_names(&self) -> &'static [&'static str] {
         &[".x", ".y", ".z"]
     }
+    fn tracked_rows(&self, _: f64, a: &Frame<f64>, b: &Frame<f64>, rows: &mut dyn Rows) -> bool {
+        self.0.tracked_coincide(a, b, 0, rows);
+        true
+    }
     joint_evals!();
 }
 
@@ -163,6 +213,11 @@ impl SpatialJoint for Revolute {
     }
     fn row_names(&self) -> &'static [&'static str] {
         &[".x", ".y", ".z", ".axis_f", ".axis_g"]
+    }
+    fn tracked_rows(&self, _: f64, a: &Frame<f64>, b: &Frame<f64>, rows: &mut dyn Rows) -> bool {
+        self.0.tracked_coincide(a, b, 0, rows);
+        self.0.tracked_parallel(a, b, 3, rows);
+        true
     }
     joint_evals!();
 }
@@ -188,6 +243,11 @@ impl SpatialJoint for Cylindrical {
     }
     fn row_names(&self) -> &'static [&'static str] {
         &[".axis_f", ".axis_g", ".line_f", ".line_g"]
+    }
+    fn tracked_rows(&self, _: f64, a: &Frame<f64>, b: &Frame<f64>, rows: &mut dyn Rows) -> bool {
+        self.0.tracked_parallel(a, b, 0, rows);
+        self.0.tracked_on_line(a, b, 2, rows);
+        true
     }
     joint_evals!();
 }
@@ -219,6 +279,18 @@ impl SpatialJoint for Prismatic {
     fn row_names(&self) -> &'static [&'static str] {
         &[".axis_f", ".axis_g", ".line_f", ".line_g", ".twist"]
     }
+    fn tracked_rows(&self, _: f64, a: &Frame<f64>, b: &Frame<f64>, rows: &mut dyn Rows) -> bool {
+        let g = &self.geometry;
+        g.tracked_parallel(a, b, 0, rows);
+        g.tracked_on_line(a, b, 2, rows);
+        rows.dot(
+            4,
+            1.0,
+            &g.tracked_ax(a, 0, 0),
+            &Tracked::axis(b, 1, self.g_b0),
+        );
+        true
+    }
     joint_evals!();
 }
 
@@ -243,6 +315,16 @@ impl SpatialJoint for Universal {
     }
     fn row_names(&self) -> &'static [&'static str] {
         &[".x", ".y", ".z", ".cross"]
+    }
+    fn tracked_rows(&self, _: f64, a: &Frame<f64>, b: &Frame<f64>, rows: &mut dyn Rows) -> bool {
+        self.0.tracked_coincide(a, b, 0, rows);
+        rows.dot(
+            3,
+            1.0,
+            &self.0.tracked_ax(a, 0, 2),
+            &self.0.tracked_ax(b, 1, 2),
+        );
+        true
     }
     joint_evals!();
 }
@@ -281,6 +363,16 @@ impl SpatialJoint for Weld {
     fn row_names(&self) -> &'static [&'static str] {
         &[".x", ".y", ".z", ".rx", ".ry", ".rz"]
     }
+    fn tracked_rows(&self, _: f64, a: &Frame<f64>, b: &Frame<f64>, rows: &mut dyn Rows) -> bool {
+        self.geometry.tracked_coincide(a, b, 0, rows);
+        for k in 0..3 {
+            let mut e = [0.0; 3];
+            e[k] = 1.0;
+            let other = Tracked::axis(b, 1, self.a_in_b[(k + 1) % 3]);
+            rows.dot(3 + k, 1.0, &Tracked::axis(a, 0, e), &other);
+        }
+        true
+    }
     joint_evals!();
 }
 
@@ -307,6 +399,12 @@ impl SpatialJoint for Distance {
     }
     fn row_names(&self) -> &'static [&'static str] {
         &[""]
+    }
+    fn tracked_rows(&self, _: f64, a: &Frame<f64>, b: &Frame<f64>, rows: &mut dyn Rows) -> bool {
+        let d = self.geometry.tracked_d(a, b);
+        rows.dot(0, 0.5, &d, &d);
+        rows.constant(0, -0.5 * self.length * self.length);
+        true
     }
     joint_evals!();
 }
@@ -351,6 +449,15 @@ impl SpatialJoint for AngleDriver {
     fn is_driver(&self) -> bool {
         true
     }
+    fn tracked_rows(&self, t: f64, a: &Frame<f64>, b: &Frame<f64>, rows: &mut dyn Rows) -> bool {
+        // Φ = s cos f − c sin f with c = f_A · f_B⁰, s = g_A · f_B⁰.
+        let (sin, cos) = of_time(&self.f, t).sin_cos();
+        let fb = Tracked::axis(b, 1, self.f_b0);
+        let g = &self.geometry;
+        rows.dot(0, cos, &g.tracked_ax(a, 0, 1), &fb);
+        rows.dot(0, -sin, &g.tracked_ax(a, 0, 0), &fb);
+        true
+    }
     joint_evals!();
 }
 
@@ -379,6 +486,12 @@ impl SpatialJoint for SlideDriver {
         &[""]
     }
     fn is_driver(&self) -> bool {
+        true
+    }
+    fn tracked_rows(&self, t: f64, a: &Frame<f64>, b: &Frame<f64>, rows: &mut dyn Rows) -> bool {
+        let g = &self.geometry;
+        rows.dot(0, 1.0, &g.tracked_ax(a, 0, 2), &g.tracked_d(a, b));
+        rows.constant(0, -of_time(&self.f, t));
         true
     }
     joint_evals!();

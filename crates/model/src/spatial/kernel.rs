@@ -13,6 +13,7 @@
 //! (algorithm.md, the acceleration-level constraint `B ü = c`).
 
 use super::evaluate::SIDE;
+use super::hessian::contracted_rotation;
 use super::rotation::{point_jacobian, rotate};
 
 /// One side of a spherical joint in the kernel.
@@ -206,7 +207,7 @@ impl SphericalKernel {
             if ks.h_count == 0 {
                 continue;
             }
-            let h = h_block(ks.s, m, sign);
+            let h = contracted_rotation(m, ks.s, sign);
             let h = h.as_flattened();
             let order = &ks.h_order[..usize::from(ks.h_count)];
             for (out, &bit) in out[o..o + order.len()].iter_mut().zip(order) {
@@ -232,29 +233,6 @@ impl SphericalKernel {
             }
         }
     }
-}
-
-/// `sign · H(μ, s)`, `H = 2 [μ·s, (s × μ)ᵀ; s × μ, μ sᵀ + s μᵀ − (μ·s) I]`,
-/// with the operations of `spherical::hessian`.
-#[inline]
-fn h_block(s: [f64; 3], mu: [f64; 3], sign: f64) -> [[f64; 4]; 4] {
-    let ms = mu[0] * s[0] + mu[1] * s[1] + mu[2] * s[2];
-    let sxm = [
-        s[1] * mu[2] - s[2] * mu[1],
-        s[2] * mu[0] - s[0] * mu[2],
-        s[0] * mu[1] - s[1] * mu[0],
-    ];
-    let mut h = [[0.0; 4]; 4];
-    h[0][0] = 2.0 * sign * ms;
-    for i in 0..3 {
-        h[0][1 + i] = 2.0 * sign * sxm[i];
-        h[1 + i][0] = 2.0 * sign * sxm[i];
-        for j in 0..3 {
-            let d = if i == j { ms } else { 0.0 };
-            h[1 + i][1 + j] = 2.0 * sign * (mu[i] * s[j] + s[i] * mu[j] - d);
-        }
-    }
-    h
 }
 
 /// Whether a side's `B` entries are the usual ones: none for the ground;

@@ -13,8 +13,9 @@
 //!
 //! Joints and loads are written once over numbers that carry their
 //! derivatives (module `real`), so their Jacobians and Hessians are exact; the
-//! bodies' inertia terms (module `body`) and the spherical joints of chains are
-//! written out by hand for speed.
+//! bodies' inertia terms (module `body`), the spherical joints of chains
+//! (module `kernel`) and the joints' rows at each iteration (module
+//! `hessian`) are written out by hand for speed.
 
 mod body;
 mod builder;
@@ -23,6 +24,7 @@ mod data;
 mod evaluate;
 mod examples;
 mod frame;
+mod hessian;
 mod joints;
 mod kernel;
 mod loads;

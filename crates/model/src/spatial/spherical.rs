@@ -9,6 +9,7 @@
 //! values; `tests` compares them.
 
 use super::evaluate::SIDE;
+use super::hessian::contracted_rotation;
 use super::rotation::{point_jt, rotate};
 
 /// Side `s`'s coordinates in `u`, or `None` for the ground.
@@ -68,22 +69,10 @@ pub(crate) fn hessian(
         if !rigid[side] {
             continue;
         }
-        let s = points[side];
-        let ms = mu[0] * s[0] + mu[1] * s[1] + mu[2] * s[2];
-        let sxm = [
-            s[1] * mu[2] - s[2] * mu[1],
-            s[2] * mu[0] - s[0] * mu[2],
-            s[0] * mu[1] - s[1] * mu[0],
-        ];
+        let block = contracted_rotation(mu, points[side], sign);
         let o = SIDE * side + 3;
-        h[o][o] = 2.0 * sign * ms;
-        for i in 0..3 {
-            h[o][o + 1 + i] = 2.0 * sign * sxm[i];
-            h[o + 1 + i][o] = 2.0 * sign * sxm[i];
-            for j in 0..3 {
-                let d = if i == j { ms } else { 0.0 };
-                h[o + 1 + i][o + 1 + j] = 2.0 * sign * (mu[i] * s[j] + s[i] * mu[j] - d);
-            }
+        for (i, row) in block.iter().enumerate() {
+            h[o + i][o..o + 4].copy_from_slice(row);
         }
     }
 }

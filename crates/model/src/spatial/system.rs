@@ -5,6 +5,7 @@ use super::evaluate::{
     SIDE, all_joint_patterns, d15, d28, frames, global, jet, load_patterns, probe_states,
 };
 use super::frame::D28;
+use super::hessian::{Contracted, Gradient, LocalHessian};
 use super::kernel::{JointLayout, SphericalKernel};
 use super::real::{Jet, Real, TIME};
 use super::spherical;
@@ -591,12 +592,7 @@ impl System for SpatialSystem {
                 }
                 continue;
             }
-            let o = self.joint_jet(j, t, u);
-            for (k, &(a, b)) in j.h_local.iter().enumerate() {
-                out[j.h_off + k] = (0..j.rows())
-                    .map(|r| mu[j.row0 + r] * o[r].hess(a, b))
-                    .sum();
-            }
+            self.joint_hessian(j, t, u, &mu[j.row0..j.row0 + j.rows()], out);
         }
         for (k, &(row, _)) in self.norms.iter().enumerate() {
             out[self.norm_h_off + 4 * k..self.norm_h_off + 4 * k + 4].fill(2.0 * mu[row]);
@@ -637,9 +633,9 @@ impl System for SpatialSystem {
             && self.joints.iter().all(|j| !j.element.is_driver())
     }
 
-    /// Yes: the joints' Hessians are formed with second-order dual numbers
-    /// (or, for the spherical joint, a kernel of 4 × 4 blocks per body
-    /// pair), and the bodies' gyroscopic blocks come with them; sharing them
+    /// Yes: the joints' Hessians (their written-out rows, `hessian.rs`, or
+    /// for the spherical joint a kernel of 4 × 4 blocks per body pair), the
+    /// loads' (dual numbers) and the bodies' gyroscopic blocks; sharing them
     /// with Newton saves 5 % of the 100-bar spatial chain's step with a
     /// sensitivity (`docs/performance.md`, "Newton's next factorization
     /// from the sensitivity's Jacobians").
@@ -648,10 +644,12 @@ impl System for SpatialSystem {
     }
 
     /// Only when every joint is spherical (its kernel) and there is no load:
-    /// the other joints' and the loads' Hessians are formed with
-    /// second-order dual numbers, and a fresh Jacobian a step costs
-    /// `models/spatial/slider-crank.toml` twice its run with modified Newton
-    /// (`docs/performance.md`, "Newton variant").
+    /// a fresh Jacobian and factorization a step cost
+    /// `models/spatial/slider-crank.toml` 22 % more than modified Newton's
+    /// extra iterations (its blocks with the rows of ground joints take the
+    /// general factorization path), and the loads' Jacobians are formed
+    /// with dual numbers (`docs/performance.md`, "Newton variant", "Joints'
+    /// rows written out").
     fn fresh_jacobians_pay(&self) -> bool {
         self.others.is_empty() && self.loads.is_empty()
     }
@@ -696,17 +694,7 @@ impl SpatialSystem {
                 }
                 continue;
             }
-            let f = frames(&self.bodies, j.sides, u, None, d15);
-            let mut out = [d15(0.0, TIME); 6];
-            let rows = j.rows();
-            j.element
-                .eval_dual(d15(t, TIME), &f[0], &f[1], &mut out[..rows]);
-            for r in 0..rows {
-                phi[j.row0 + r] = out[r].v;
-            }
-            for (k, &(r, a)) in j.b_local.iter().enumerate() {
-                b[j.b_off + k] = out[r].g[a];
-            }
+            self.joint_phi_b(j, t, u, phi, b);
         }
     }
 
@@ -718,6 +706,54 @@ impl SpatialSystem {
                 &x[b.x..b.x + b.count()]
             })
         })
+    }
+
+    /// A joint's contracted Hessian into its values in `out`: written out
+    /// (`hessian.rs`), or from its jets when it has no such form.
+    fn joint_hessian(&self, j: &JointData, t: f64, u: &[f64], mu: &[f64], out: &mut [f64]) {
+        let f = frames(&self.bodies, j.sides, u, None, |x, _| x);
+        let mut sum = Contracted {
+            mu,
+            h: LocalHessian::default(),
+        };
+        let out = &mut out[j.h_off..j.h_off + j.h_local.len()];
+        if j.element.tracked_rows(t, &f[0], &f[1], &mut sum) {
+            for (o, &(a, b)) in out.iter_mut().zip(&j.h_local) {
+                *o = sum.h.get(a, b);
+            }
+            return;
+        }
+        let jets = self.joint_jet(j, t, u);
+        for (o, &(a, b)) in out.iter_mut().zip(&j.h_local) {
+            *o = mu.iter().zip(&jets).map(|(m, r)| m * r.hess(a, b)).sum();
+        }
+    }
+
+    /// A joint's `Φ` and `B` values: written out (`hessian.rs`), or from
+    /// dual numbers when it has no such form.
+    fn joint_phi_b(&self, j: &JointData, t: f64, u: &[f64], phi: &mut [f64], b: &mut [f64]) {
+        let rows = j.rows();
+        let f = frames(&self.bodies, j.sides, u, None, |x, _| x);
+        let mut sum = Gradient::default();
+        if j.element.tracked_rows(t, &f[0], &f[1], &mut sum) {
+            for r in 0..rows {
+                phi[j.row0 + r] = sum.phi(r);
+            }
+            for (k, &(r, a)) in j.b_local.iter().enumerate() {
+                b[j.b_off + k] = sum.grad(r, a);
+            }
+            return;
+        }
+        let f = frames(&self.bodies, j.sides, u, None, d15);
+        let mut out = [d15(0.0, TIME); 6];
+        j.element
+            .eval_dual(d15(t, TIME), &f[0], &f[1], &mut out[..rows]);
+        for r in 0..rows {
+            phi[j.row0 + r] = out[r].v;
+        }
+        for (k, &(r, a)) in j.b_local.iter().enumerate() {
+            b[j.b_off + k] = out[r].g[a];
+        }
     }
 
     fn joint_jet(&self, j: &JointData, t: f64, u: &[f64]) -> Vec<Jet> {
@@ -764,11 +800,14 @@ impl SpatialSystem {
 
 #[cfg(test)]
 mod tests {
+    use super::super::data::JointData;
     use super::super::evaluate::{joint_patterns, probe_states};
     use super::super::{
         Attach, JointSpec, JointType, RotationalMass, SpatialBody, SpatialBuilder, SpatialInertia,
-        SpatialPointMass, SpatialSystem, spatial_bar_chain,
+        SpatialPointMass, SpatialSystem, element_examples, spatial_bar_chain,
     };
+    use super::{Contracted, Gradient, LocalHessian};
+    use crate::spatial::evaluate::frames;
 
     /// Every joint's entries are those its own probe finds.
     fn each_own(sys: &SpatialSystem) {
@@ -827,5 +866,86 @@ mod tests {
         b.joint("j1p", spherical([a1, ap], [[0.0; 3], [0.0; 3]]));
         let sys = b.build().expect("a valid model");
         each_own(&sys);
+    }
+
+    /// `Φ`, `B` and the contracted Hessian written out (`hessian.rs`) equal
+    /// those of the dual numbers and jets for every joint and driver, on
+    /// every pair of sides, at states off the constraints (Euler parameters
+    /// not unit) and with multipliers of both signs: the same functions, so
+    /// agreement to round-off.
+    #[test]
+    fn written_out_rows_are_the_jets() {
+        let mut checked = 0;
+        for seed in 0..4 {
+            let params: Vec<f64> = (0..24)
+                .map(|k| ((k * 7 + seed * 13) % 17) as f64 / 8.5 - 1.0)
+                .collect();
+            for (name, sys) in element_examples(&params) {
+                for (u, _, t) in probe_states(sys.n) {
+                    for j in &sys.joints {
+                        checked += usize::from(agrees_with_jets(&sys, j, &u, t, &name));
+                    }
+                }
+            }
+        }
+        // Every joint kind (with its drivers) on three pairs of sides, both
+        // rotational masses, four geometries, three states.
+        assert!(checked > 300, "only {checked} joints checked");
+    }
+
+    /// Whether joint `j` has written-out rows (asserting that they agree).
+    fn agrees_with_jets(sys: &SpatialSystem, j: &JointData, u: &[f64], t: f64, name: &str) -> bool {
+        let mu: Vec<f64> = (0..j.rows()).map(|r| 1.5 - r as f64 * 0.7).collect();
+        let f = frames(&sys.bodies, j.sides, u, None, |x, _| x);
+        let mut sum = Contracted {
+            mu: &mu,
+            h: LocalHessian::default(),
+        };
+        let mut grad = Gradient::default();
+        if !j.element.tracked_rows(t, &f[0], &f[1], &mut sum) {
+            return false;
+        }
+        assert!(j.element.tracked_rows(t, &f[0], &f[1], &mut grad));
+        let jets = sys.joint_jet(j, t, u);
+        let close = |got: f64, want: f64, scale: f64, what: String| {
+            assert!(
+                (got - want).abs() <= 1e-13 * scale.max(1.0),
+                "{name}, {}: {what} {got} against the jets' {want}",
+                j.name
+            );
+        };
+        let want = |a: usize, b: usize| -> f64 {
+            mu.iter().zip(&jets).map(|(m, r)| m * r.hess(a, b)).sum()
+        };
+        let scale = j
+            .h_local
+            .iter()
+            .map(|&(a, b)| want(a, b).abs())
+            .fold(0.0, f64::max);
+        for &(a, b) in &j.h_local {
+            close(
+                sum.h.get(a, b),
+                want(a, b),
+                scale,
+                format!("Hessian ({a}, {b})"),
+            );
+        }
+        for (r, jet) in jets.iter().enumerate() {
+            close(grad.phi(r), jet.v, jet.v.abs(), format!("Φ row {r}"));
+        }
+        let scale = j
+            .b_local
+            .iter()
+            .map(|&(r, a)| jets[r].g[a].abs())
+            .fold(0.0, f64::max);
+        for &(r, a) in &j.b_local {
+            close(
+                grad.grad(r, a),
+                jets[r].g[a],
+                scale,
+                format!("B ({r}, {a})"),
+            );
+        }
+        true
     }
 }
