@@ -238,14 +238,19 @@ fn factor_dynamic(
     }
     invert(blk, inverse, size)?;
     let w = &mut scratch.w[..nr * k];
-    for r in 0..nr {
-        for l in 0..k {
-            w[r * k + l] = (0..k).map(|j| bk[r * k + j] * inverse[j * size + l]).sum();
+    // The fixed path's sums (each from −0.0, `j` ascending), row by row of
+    // the inverse: contiguous slices, no index checks inside.
+    for (w_row, b_row) in w.chunks_exact_mut(k).zip(bk.chunks_exact(k)) {
+        w_row.fill(-0.0);
+        for (b, inv_row) in b_row.iter().zip(inverse.chunks_exact(size)) {
+            for (x, p) in w_row.iter_mut().zip(&inv_row[..k]) {
+                *x += b * p;
+            }
         }
     }
     for &(r, s, slot) in lists.pairs {
-        let (r, s) = (usize::from(r), usize::from(s));
-        let v: f64 = (0..k).map(|l| w[r * k + l] * bk[s * k + l]).sum();
+        let (r, s) = (usize::from(r) * k, usize::from(s) * k);
+        let v: f64 = w[r..r + k].iter().zip(&bk[s..s + k]).map(|(x, y)| x * y).sum();
         c_values[slot as usize] += v;
     }
     Ok(())
@@ -351,23 +356,41 @@ pub(super) fn invert(a: &mut [f64], inv: &mut [f64], k: usize) -> Result<(), usi
             }
         }
         let d = 1.0 / a[col * k + col];
-        for j in 0..k {
-            a[col * k + j] *= d;
-            inv[col * k + j] *= d;
+        // Columns up to `col` of `a` are not read again (only later
+        // columns pick pivots and multipliers): they are left as they are.
+        for x in &mut a[col * k + col + 1..(col + 1) * k] {
+            *x *= d;
         }
-        for i in 0..k {
-            if i != col {
-                let f = a[i * k + col];
-                if f != 0.0 {
-                    for j in 0..k {
-                        a[i * k + j] -= f * a[col * k + j];
-                        inv[i * k + j] -= f * inv[col * k + j];
-                    }
-                }
+        for x in &mut inv[col * k..(col + 1) * k] {
+            *x *= d;
+        }
+        eliminate(a, inv, k, col);
+    }
+    Ok(())
+}
+
+/// Subtracts multiples of pivot row `col` (of `a`, right of column `col`,
+/// and of `inv`) from the other rows, in row order: [`invert`]'s
+/// elimination, on slices split around the pivot row (no index checks in
+/// the loops).
+fn eliminate(a: &mut [f64], inv: &mut [f64], k: usize, col: usize) {
+    let (a_above, a_rest) = a[..k * k].split_at_mut(col * k);
+    let (a_pivot, a_below) = a_rest.split_at_mut(k);
+    let (i_above, i_rest) = inv[..k * k].split_at_mut(col * k);
+    let (i_pivot, i_below) = i_rest.split_at_mut(k);
+    let rows = a_above.chunks_exact_mut(k).chain(a_below.chunks_exact_mut(k));
+    let inv_rows = i_above.chunks_exact_mut(k).chain(i_below.chunks_exact_mut(k));
+    for (row, inv_row) in rows.zip(inv_rows) {
+        let f = row[col];
+        if f != 0.0 {
+            for (x, p) in row[col + 1..].iter_mut().zip(&a_pivot[col + 1..]) {
+                *x -= f * p;
+            }
+            for (x, p) in inv_row.iter_mut().zip(i_pivot.iter()) {
+                *x -= f * p;
             }
         }
     }
-    Ok(())
 }
 
 #[cfg(test)]
