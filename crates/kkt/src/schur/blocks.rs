@@ -236,7 +236,12 @@ fn factor_dynamic(
             blk[j * size + l] += v;
         }
     }
-    invert(blk, inverse, size)?;
+    match size {
+        0..=8 => invert_padded::<8>(blk, size, inverse)?,
+        9..=12 => invert_padded::<12>(blk, size, inverse)?,
+        13..=16 => invert_padded::<16>(blk, size, inverse)?,
+        _ => invert(blk, inverse, size)?,
+    }
     let w = &mut scratch.w[..nr * k];
     // The fixed path's sums (each from −0.0, `j` ascending), row by row of
     // the inverse: contiguous slices, no index checks inside.
@@ -250,7 +255,11 @@ fn factor_dynamic(
     }
     for &(r, s, slot) in lists.pairs {
         let (r, s) = (usize::from(r) * k, usize::from(s) * k);
-        let v: f64 = w[r..r + k].iter().zip(&bk[s..s + k]).map(|(x, y)| x * y).sum();
+        let v: f64 = w[r..r + k]
+            .iter()
+            .zip(&bk[s..s + k])
+            .map(|(x, y)| x * y)
+            .sum();
         c_values[slot as usize] += v;
     }
     Ok(())
@@ -284,16 +293,52 @@ fn apply_fixed<const K: usize>(coords: &[usize], inverse: &[f64], f: &[f64], x: 
     }
 }
 
+/// [`invert`] of the row-major `size × size` block `blk` into `inverse`, on
+/// the stack, padded to `CAP × CAP` with the identity ([`invert_leading`]):
+/// loops of a constant length, the same values to the bit.
+fn invert_padded<const CAP: usize>(
+    blk: &[f64],
+    size: usize,
+    inverse: &mut [f64],
+) -> Result<(), usize> {
+    let mut a = [[0.0; CAP]; CAP];
+    for (row, src) in a.iter_mut().zip(blk.chunks_exact(size)) {
+        row[..size].copy_from_slice(src);
+    }
+    for (i, row) in a.iter_mut().enumerate().skip(size) {
+        row[i] = 1.0;
+    }
+    let mut inv = [[0.0; CAP]; CAP];
+    invert_leading(&mut a, &mut inv, size)?;
+    for (out, row) in inverse[..size * size].chunks_exact_mut(size).zip(&inv) {
+        out.copy_from_slice(&row[..size]);
+    }
+    Ok(())
+}
+
 /// [`invert`] for a block whose size is a constant: the same operations.
 fn invert_fixed<const K: usize>(
     a: &mut [[f64; K]; K],
     inv: &mut [[f64; K]; K],
 ) -> Result<(), usize> {
+    invert_leading(a, inv, K)
+}
+
+/// [`invert`] of the leading `n × n` block of `a`, whose rows and columns
+/// beyond `n` are those of the identity (a block padded to a constant
+/// size): the same values to the bit. A padding row is zero in the leading
+/// columns, so it is never a pivot and is never changed; a padding column is
+/// zero in the leading rows, so it stays so.
+fn invert_leading<const K: usize>(
+    a: &mut [[f64; K]; K],
+    inv: &mut [[f64; K]; K],
+    n: usize,
+) -> Result<(), usize> {
     for (i, row) in inv.iter_mut().enumerate() {
         row[i] = 1.0;
     }
-    let eps = (K as f64) * f64::EPSILON;
-    for col in 0..K {
+    let eps = (n as f64) * f64::EPSILON;
+    for col in 0..n {
         let scale = (0..K).fold(0.0f64, |s, i| s.max(a[i][col].abs()));
         let (mut p, mut best) = (col, a[col][col].abs());
         for (i, row) in a.iter().enumerate().skip(col + 1) {
@@ -378,8 +423,12 @@ fn eliminate(a: &mut [f64], inv: &mut [f64], k: usize, col: usize) {
     let (a_pivot, a_below) = a_rest.split_at_mut(k);
     let (i_above, i_rest) = inv[..k * k].split_at_mut(col * k);
     let (i_pivot, i_below) = i_rest.split_at_mut(k);
-    let rows = a_above.chunks_exact_mut(k).chain(a_below.chunks_exact_mut(k));
-    let inv_rows = i_above.chunks_exact_mut(k).chain(i_below.chunks_exact_mut(k));
+    let rows = a_above
+        .chunks_exact_mut(k)
+        .chain(a_below.chunks_exact_mut(k));
+    let inv_rows = i_above
+        .chunks_exact_mut(k)
+        .chain(i_below.chunks_exact_mut(k));
     for (row, inv_row) in rows.zip(inv_rows) {
         let f = row[col];
         if f != 0.0 {
@@ -473,6 +522,38 @@ mod tests {
     fn fixed_size_blocks_equal_the_generic_path_to_the_bit() {
         for k in 1..=MAX_FIXED {
             both(k);
+        }
+    }
+
+    /// Blocks padded to 8, 12 and 16 with the identity give the values of
+    /// the generic inverse, and report the same singular column.
+    #[test]
+    fn padded_inverses_equal_the_generic_path() {
+        for n in 1..=16 {
+            let a = sample(n);
+            let generic = |a: &[f64]| {
+                let (mut a, mut inv) = (a.to_vec(), vec![0.0; n * n]);
+                invert(&mut a, &mut inv, n).map(|()| inv)
+            };
+            let padded = |a: &[f64]| {
+                let mut inv = vec![0.0; n * n];
+                match n {
+                    0..=8 => invert_padded::<8>(a, n, &mut inv),
+                    9..=12 => invert_padded::<12>(a, n, &mut inv),
+                    _ => invert_padded::<16>(a, n, &mut inv),
+                }
+                .map(|()| inv)
+            };
+            let want = generic(&a);
+            assert!(want.is_ok(), "n = {n}");
+            assert_eq!(padded(&a), want, "n = {n}");
+            // Row 0 repeated in the last row: singular, the same column.
+            let mut singular = a.clone();
+            let first: Vec<f64> = singular[..n].to_vec();
+            singular[(n - 1) * n..].copy_from_slice(&first);
+            let want = generic(&singular);
+            assert_eq!(padded(&singular), want, "n = {n}, singular");
+            assert!(n == 1 || want.is_err(), "n = {n}: {want:?}");
         }
     }
 
