@@ -3,7 +3,8 @@
 //! compared" and "Newton variant"), as the run's summary names them: the
 //! Schur backends wherever they apply, the dense LU on a small model they
 //! do not take; once per step only on a model of more than 24 unknowns
-//! whose Jacobians are cheap.
+//! whose Jacobians are cheap, or when a run's sensitivities find modified
+//! Newton slow from their factorizations.
 
 mod common;
 
@@ -50,10 +51,52 @@ fn once_per_step_on_large_models_with_cheap_jacobians_only() {
         "n-four-bar.toml",
         "KKT solver: schur; Newton: once per step",
     );
-    // Revolute, universal, prismatic and cylindrical joints: Hessians by
-    // dual numbers, a fresh Jacobian a step costs twice the run.
+    // Revolute, universal, prismatic and cylindrical joints: a fresh
+    // factorization a step (blocks with the ground joints' rows) costs more
+    // than modified Newton's extra iterations.
     assert_choice(
         "spatial/slider-crank.toml",
         "KKT solver: schur-lu; Newton: modified",
     );
+}
+
+/// The summary of a short run of `name` with `--sensitivity key`.
+fn summary_with_sensitivity(name: &str, key: &str, t_end: &str) -> String {
+    let run = mstar(&[
+        "run",
+        &model(name),
+        "--t-end",
+        t_end,
+        "--out",
+        "/dev/null",
+        "--sensitivity",
+        key,
+    ]);
+    assert!(run.status.success(), "{name}: {}", text(&run.stderr));
+    text(&run.stdout)
+}
+
+/// With sensitivities, modified Newton (the automatic choice) starts each
+/// step from their factorization at the converged state. On the spinning
+/// top that takes four iterations a step (the Jacobian one step old, the
+/// top turning 0.03 rad a step), so the run turns to once per step after
+/// its first 16 such steps and says so; the four-bar converges in one and
+/// keeps modified Newton.
+#[test]
+fn sensitivities_turn_modified_newton_into_once_per_step_where_it_is_slow() {
+    let top = summary_with_sensitivity("spatial/top.toml", "body.top.mass", "0.05");
+    let line = top
+        .lines()
+        .find(|l| l.starts_with("Newton: once per step from t = "))
+        .unwrap_or_else(|| panic!("no switch in {top}"));
+    assert!(
+        line.contains("(modified Newton took 4.00 iterations a step"),
+        "{line}"
+    );
+    let four_bar = summary_with_sensitivity("four-bar.toml", "body.coupler.mass", "0.05");
+    assert!(
+        four_bar.contains("KKT solver: schur; Newton: modified"),
+        "{four_bar}"
+    );
+    assert!(!four_bar.contains("once per step"), "{four_bar}");
 }

@@ -155,18 +155,34 @@ fn slider_crank_motor_torque_with_respect_to_the_coupler_mass() {
 /// The spinning top of `models/spatial/top.toml` with once-per-step Newton:
 /// each step's first factorization takes the Jacobians that the
 /// sensitivity evaluated at the previous converged state
-/// (`System::jacobians_are_costly`, spatial models), so the nominal run
-/// converges within its tolerance from there rather than from its own
-/// predictor. Its seven coordinates at t = 0.2 s with respect to its mass
-/// (gravity's torque about the tip; the inertia is given apart) against
-/// extrapolated differences of runs without the sensitivity.
+/// (`System::jacobians_are_costly`, spatial models) over the first 16 such
+/// steps, after which the run stops taking them (two iterations a step
+/// from them, against one). Its coordinates against extrapolated
+/// differences of runs without the sensitivity ([`top_against_differences`]).
 #[test]
 fn spatial_top_coordinates_with_respect_to_its_mass_from_shared_jacobians() {
-    let dir = scratch("sens-top");
+    top_against_differences("sens-top", &["--set", "simulation.newton=\"per-step\""]);
+}
+
+/// The same with the automatic Newton variant: modified Newton from the
+/// sensitivities' factorizations, turned into once per step after 16 steps
+/// (the sensitivities refined with Newton's factorization from then on).
+#[test]
+fn spatial_top_coordinates_with_respect_to_its_mass_after_the_switch() {
+    top_against_differences("sens-top-auto", &[]);
+}
+
+/// The top's seven coordinates at t = 0.2 s with respect to its mass
+/// (gravity's torque about the tip; the inertia is given apart), run with
+/// `extra`, against extrapolated differences of runs without the
+/// sensitivity.
+fn top_against_differences(tag: &str, extra: &[&str]) {
+    let dir = scratch(tag);
     let m = model("spatial/top.toml");
     let (key, p, delta) = ("body.top.mass", 2.0, 1e-3);
-    let common = ["--t-end", "0.2", "--set", "simulation.newton=\"per-step\""];
-    let mut args = common.to_vec();
+    let mut common = vec!["--t-end", "0.2"];
+    common.extend_from_slice(extra);
+    let mut args = common.clone();
     args.extend_from_slice(&["--sensitivity", key]);
     let nominal = run(&dir, &m, "nominal", &args);
     let rows = perturbed(&dir, &m, key, p, delta, &common);

@@ -34,8 +34,8 @@ mod resample;
 
 pub use error::{IntegrationError, Short};
 pub use integrator::{
-    Column, DIFFERENCE_STEP, Gradient, Integrator, Memory, Objective, Parameterized, Sensitivities,
-    StartReport, Variant,
+    Column, DIFFERENCE_STEP, Gradient, Integrator, Memory, NewtonSwitch, Objective, Parameterized,
+    Sensitivities, StartReport, Variant,
 };
 pub use output::{EnergyReport, ErrorReport, Observer, RunStats, Trajectory};
 pub use params::{AlphaParams, Config, ErrorControl, Newton, Predictor, Scheme, Start, StepMode};

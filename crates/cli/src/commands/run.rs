@@ -521,6 +521,14 @@ fn integrate<S: System + ?Sized>(
             sens.solves(),
             sens.factorizations()
         );
+        if let Some(switch) = sens.switched_newton() {
+            say!(
+                "Newton: once per step from t = {} s (modified Newton took {:.2} iterations a \
+                 step from the sensitivities' factorizations)",
+                Short(switch.t),
+                switch.iterations
+            );
+        }
     }
     Ok((integ.stats(), integ.time(), wall, result))
 }

@@ -12,7 +12,7 @@ mod sensitivity;
 mod start;
 
 pub use adjoint::{Column, Gradient, Memory, Objective};
-pub use sensitivity::{DIFFERENCE_STEP, Parameterized, Sensitivities, Variant};
+pub use sensitivity::{DIFFERENCE_STEP, NewtonSwitch, Parameterized, Sensitivities, Variant};
 
 use mstar_kkt::{Backend, KktError, KktSolver};
 use mstar_linearize::{Linearization, max_abs};
@@ -149,6 +149,9 @@ pub struct Integrator<'s, S: System + ?Sized> {
     /// sensitivities evaluated them): the next step's first factorization
     /// takes them instead of evaluating them at its predictor.
     jacobians_of_state: bool,
+    /// Modified Newton is the automatic choice (which sensitivities may
+    /// turn into once per step, `sensitivity.rs`).
+    modified_by_choice: bool,
     easy_steps: usize,
     /// Time bookkeeping without drift: `t = t_anchor + steps_at_h · h_anchor`.
     t_anchor: f64,
@@ -257,6 +260,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
         solver: KktSolver,
     ) -> Result<Self, IntegrationError> {
         let (n, m) = (sys.n_coords(), sys.n_constraints());
+        let automatic = config.newton == Newton::Automatic;
         let config = Config {
             newton: config.newton.resolve(
                 solver.backend(),
@@ -283,6 +287,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             factored_h: None,
             drift: 0.0,
             jacobians_of_state: false,
+            modified_by_choice: automatic && matches!(config.newton, Newton::Modified { .. }),
             easy_steps: 0,
             t_anchor: t0,
             h_anchor: h,

@@ -33,7 +33,7 @@ use mstar_model::{FlushSubnormals, StateRef, System};
 
 use super::refine::{Contraction, PastSolutions, Scratch};
 use super::{Integrator, State};
-use crate::IntegrationError;
+use crate::{IntegrationError, Newton};
 
 /// A model at one value of a parameter: its system and its initial state
 /// (as given, before the start projects it).
@@ -213,6 +213,58 @@ pub struct Sensitivities {
     factorizations: usize,
     /// The refinement's contraction per drift (`refine.rs`).
     contraction: Contraction,
+    /// Newton's iterations on the first steps that start from the
+    /// sensitivities' factorization at the converged state (modified
+    /// Newton by the automatic choice), and on those that start from their
+    /// Jacobians (`Integrator::jacobians_of_state`).
+    probes: [Probe; 2],
+    /// Whether the next step's first factorization may take the
+    /// sensitivities' Jacobians.
+    sharing: bool,
+    switched: Option<NewtonSwitch>,
+}
+
+/// Steps a [`Probe`] averages over.
+const PROBE_STEPS: usize = 16;
+
+/// The Newton iterations a step from which a probed choice is undone:
+/// modified Newton from the sensitivities' factorization then costs at
+/// least an iteration a step more than once per step's one, which the
+/// sensitivities refine with (a solve and a product); a step from their
+/// Jacobians likewise costs more than the evaluation it saves
+/// (docs/performance.md, "Sensitivities choose once per step").
+const PROBE_MEAN: f64 = 1.5;
+
+/// Newton's iterations a step over a run's first [`PROBE_STEPS`] steps of
+/// one kind.
+#[derive(Clone, Copy, Debug, Default)]
+struct Probe {
+    steps: usize,
+    iterations: usize,
+}
+
+impl Probe {
+    /// Adds a step of `iterations`; the mean once the last step is in (and
+    /// only then).
+    fn record(&mut self, iterations: usize) -> Option<f64> {
+        if self.steps >= PROBE_STEPS {
+            return None;
+        }
+        self.steps += 1;
+        self.iterations += iterations;
+        (self.steps == PROBE_STEPS).then(|| self.iterations as f64 / PROBE_STEPS as f64)
+    }
+}
+
+/// Modified Newton (the automatic choice) turned into once per step by a
+/// run's sensitivities ([`Sensitivities::switched_newton`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NewtonSwitch {
+    /// The time of the switch, s.
+    pub t: f64,
+    /// Modified Newton's iterations a step from the sensitivities'
+    /// factorization, over the steps before the switch.
+    pub iterations: f64,
 }
 
 impl std::fmt::Debug for Sensitivities {
@@ -226,6 +278,15 @@ impl std::fmt::Debug for Sensitivities {
 }
 
 impl Sensitivities {
+    /// When the run's modified Newton (the automatic choice) turned into
+    /// once per step: its steps from the sensitivities' factorization at
+    /// the converged state took 1.5 iterations or more on average over the
+    /// first 16 (`None`: it did not).
+    #[must_use]
+    pub fn switched_newton(&self) -> Option<NewtonSwitch> {
+        self.switched
+    }
+
     /// How many parameters.
     #[must_use]
     pub fn len(&self) -> usize {
@@ -352,6 +413,9 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             solves: 0,
             factorizations: 0,
             contraction: Contraction::default(),
+            probes: [Probe::default(); 2],
+            sharing: true,
+            switched: None,
         })
     }
 
@@ -536,10 +600,12 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         let _flush = FlushSubnormals::new();
         let h_before = self.h_last;
         let factored_before = self.stats.factorizations;
+        let (iterations_before, from_shared) = (self.stats.iterations, self.jacobians_of_state);
         self.step(t_end)?;
         if sens.params.is_empty() {
             return Ok(());
         }
+        self.probe(sens, self.stats.iterations - iterations_before, from_shared);
         let h = self.h_last;
         // `M`, `B`, `g`, `Φ` are those of Newton's last residual, at the
         // converged state; the Jacobians are evaluated there too.
@@ -557,7 +623,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         // With the step's own factorization (once per step, full Newton)
         // and Jacobians that cost more than a solve, the next step's first
         // factorization takes the ones evaluated here.
-        let shares = refine && self.sys.jacobians_are_costly();
+        let shares = refine && self.sys.jacobians_are_costly() && sens.sharing;
         if refine {
             sens.contraction.tick();
         } else {
@@ -569,6 +635,33 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         }
         self.jacobians_of_state = shares;
         Ok(())
+    }
+
+    /// Records a step of `iterations` and undoes a choice its probe finds
+    /// costly: modified Newton by the automatic choice, whose steps start
+    /// from the sensitivities' factorization at the converged state
+    /// (`factor_converged`), turns into once per step; the next step's
+    /// Jacobians stop coming from the sensitivities (`from_shared`: this
+    /// step's did).
+    fn probe(&mut self, sens: &mut Sensitivities, iterations: usize, from_shared: bool) {
+        let modified = matches!(self.config.newton, Newton::Modified { .. });
+        if self.modified_by_choice && modified && sens.factorizations > 0 {
+            let mean = sens.probes[0].record(iterations);
+            if let Some(mean) = mean.filter(|&m| m >= PROBE_MEAN) {
+                self.config.newton = Newton::PER_STEP;
+                sens.switched = Some(NewtonSwitch {
+                    t: self.t,
+                    iterations: mean,
+                });
+            }
+        }
+        if from_shared
+            && sens.probes[1]
+                .record(iterations)
+                .is_some_and(|m| m >= PROBE_MEAN)
+        {
+            sens.sharing = false;
+        }
     }
 
     /// Parameter `k`'s sensitivities from the previous state to the new one
@@ -589,6 +682,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             solves,
             factorizations,
             contraction,
+            ..
         } = sens;
         scratch.size(n, m);
         let param = &mut params[k];
