@@ -456,7 +456,7 @@ fn bodies_that_start_turned_run_under_the_defaults_on_every_backend() {
     assert!(report.contains("degrees of freedom: 3"), "{report}");
     let reference = final_coordinates(&model, &[], &dir).unwrap_or_else(|e| panic!("{e}"));
     // The defaults: schur-lu, with modified Newton (the automatic variant on
-    // a small model whose joints' Jacobians are formed with dual numbers).
+    // a small model, and on one with joints other than spherical ones).
     let run = mstar(&["run", model.to_str().expect("UTF-8"), "--t-end", "0.01"]);
     let summary = String::from_utf8_lossy(&run.stdout);
     assert!(

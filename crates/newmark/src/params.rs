@@ -253,11 +253,15 @@ pub enum Newton {
     /// chain; `schur`, the N-four-bar from 7 to 10⁵ bodies, 1.04–1.36
     /// iterations a step against modified Newton's 3.1–3.3, 10–35 % less
     /// time. Modified Newton otherwise: a dense or sparse LU's factorization
-    /// costs more than the two iterations it saves; on a small system, or one
-    /// whose Jacobians are formed with dual numbers (the spatial slider-crank,
-    /// 2× slower once per step), or a linear one (one iteration a step either
-    /// way), a factorization a step buys nothing (docs/performance.md,
-    /// "Newton variant"). The default.
+    /// costs more than the two iterations it saves; on a small system, or a
+    /// spatial one with other joints or loads (the spatial slider-crank, 22 %
+    /// more instructions once per step), or a linear one (one iteration a
+    /// step either way), a factorization a step buys nothing
+    /// (docs/performance.md, "Newton variant"). With one forward
+    /// sensitivity, modified Newton by this choice turns into once per step
+    /// when its first 16 steps from the sensitivities' factorizations take
+    /// 1.5 iterations a step or more ([`crate::Sensitivities::switched_newton`]).
+    /// The default.
     #[default]
     Automatic,
 }

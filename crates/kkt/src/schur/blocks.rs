@@ -237,7 +237,7 @@ fn factor_dynamic(
         }
     }
     match size {
-        0..=8 => invert_padded::<8>(blk, size, inverse)?,
+        1..=8 => invert_padded::<8>(blk, size, inverse)?,
         9..=12 => invert_padded::<12>(blk, size, inverse)?,
         13..=16 => invert_padded::<16>(blk, size, inverse)?,
         _ => invert(blk, inverse, size)?,
@@ -538,7 +538,7 @@ mod tests {
             let padded = |a: &[f64]| {
                 let mut inv = vec![0.0; n * n];
                 match n {
-                    0..=8 => invert_padded::<8>(a, n, &mut inv),
+                    1..=8 => invert_padded::<8>(a, n, &mut inv),
                     9..=12 => invert_padded::<12>(a, n, &mut inv),
                     _ => invert_padded::<16>(a, n, &mut inv),
                 }

@@ -149,6 +149,9 @@ pub struct Integrator<'s, S: System + ?Sized> {
     /// sensitivities evaluated them): the next step's first factorization
     /// takes them instead of evaluating them at its predictor.
     jacobians_of_state: bool,
+    /// The factorization in hand is the sensitivities' at the last
+    /// converged state (`sensitivity.rs`, `factor_converged`), not Newton's.
+    factored_at_converged: bool,
     /// Modified Newton is the automatic choice (which sensitivities may
     /// turn into once per step, `sensitivity.rs`).
     modified_by_choice: bool,
@@ -287,6 +290,7 @@ impl<'s, S: System + ?Sized> Integrator<'s, S> {
             factored_h: None,
             drift: 0.0,
             jacobians_of_state: false,
+            factored_at_converged: false,
             modified_by_choice: automatic && matches!(config.newton, Newton::Modified { .. }),
             easy_steps: 0,
             t_anchor: t0,

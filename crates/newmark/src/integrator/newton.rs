@@ -265,6 +265,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 source,
             })?;
         self.factored_h = Some(h);
+        self.factored_at_converged = false;
         self.drift = if reused {
             max_abs_difference(&self.trial.u, &self.state.u)
         } else {

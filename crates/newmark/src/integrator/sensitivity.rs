@@ -256,6 +256,18 @@ impl Probe {
     }
 }
 
+/// The run at the start of a step, for [`Integrator::probe`].
+struct Start {
+    iterations: usize,
+    rejected: usize,
+    /// Newton's factorization in hand was the sensitivities' at the last
+    /// converged state.
+    from_converged: bool,
+    /// The step's first factorization was to take the sensitivities'
+    /// Jacobians.
+    from_shared: bool,
+}
+
 /// Modified Newton (the automatic choice) turned into once per step by a
 /// run's sensitivities ([`Sensitivities::switched_newton`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -600,12 +612,17 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         let _flush = FlushSubnormals::new();
         let h_before = self.h_last;
         let factored_before = self.stats.factorizations;
-        let (iterations_before, from_shared) = (self.stats.iterations, self.jacobians_of_state);
+        let before = Start {
+            iterations: self.stats.iterations,
+            rejected: self.stats.rejected,
+            from_converged: self.factored_at_converged,
+            from_shared: self.jacobians_of_state,
+        };
         self.step(t_end)?;
         if sens.params.is_empty() {
             return Ok(());
         }
-        self.probe(sens, self.stats.iterations - iterations_before, from_shared);
+        self.probe(sens, &before);
         let h = self.h_last;
         // `M`, `B`, `g`, `Φ` are those of Newton's last residual, at the
         // converged state; the Jacobians are evaluated there too.
@@ -637,15 +654,27 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         Ok(())
     }
 
-    /// Records a step of `iterations` and undoes a choice its probe finds
-    /// costly: modified Newton by the automatic choice, whose steps start
-    /// from the sensitivities' factorization at the converged state
-    /// (`factor_converged`), turns into once per step; the next step's
-    /// Jacobians stop coming from the sensitivities (`from_shared`: this
-    /// step's did).
-    fn probe(&mut self, sens: &mut Sensitivities, iterations: usize, from_shared: bool) {
+    /// Records the step just made (`before`: the run at its start) and
+    /// undoes a choice its probe finds costly: modified Newton by the
+    /// automatic choice, the step started from the sensitivities'
+    /// factorization at the converged state (`factor_converged`), turns into
+    /// once per step (with one parameter, which then refines with Newton's
+    /// factorization; more share a factorization at the converged state
+    /// either way); the next step's Jacobians stop coming from the
+    /// sensitivities (the step's first factorization took them). A step
+    /// with a rejected attempt is not recorded: its failed iterations say
+    /// nothing of the converged ones.
+    fn probe(&mut self, sens: &mut Sensitivities, before: &Start) {
+        if self.stats.rejected != before.rejected {
+            return;
+        }
+        let iterations = self.stats.iterations - before.iterations;
         let modified = matches!(self.config.newton, Newton::Modified { .. });
-        if self.modified_by_choice && modified && sens.factorizations > 0 {
+        if self.modified_by_choice
+            && modified
+            && before.from_converged
+            && sens.params.len() <= REFINED_PARAMETERS
+        {
             let mean = sens.probes[0].record(iterations);
             if let Some(mean) = mean.filter(|&m| m >= PROBE_MEAN) {
                 self.config.newton = Newton::PER_STEP;
@@ -655,7 +684,8 @@ impl<S: System + ?Sized> Integrator<'_, S> {
                 });
             }
         }
-        if from_shared
+        let took_shared = before.from_shared && !self.jacobians_of_state;
+        if took_shared
             && sens.probes[1]
                 .record(iterations)
                 .is_some_and(|m| m >= PROBE_MEAN)
@@ -848,6 +878,7 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             .factor(&self.lin.kkt().values)
             .map_err(|source| self.kkt_error("factoring for a sensitivity", self.t, h, source))?;
         self.factored_h = Some(h);
+        self.factored_at_converged = true;
         self.drift = 0.0;
         Ok(())
     }
