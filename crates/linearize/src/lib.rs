@@ -34,6 +34,7 @@
 
 mod check;
 mod csc;
+mod fours;
 mod layout;
 mod linearization;
 

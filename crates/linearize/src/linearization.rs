@@ -6,10 +6,8 @@ use mstar_model::{Pattern, StateRef, System};
 use mstar_kkt::{Csc, MaxAbs, Structure, max_abs};
 
 use crate::csc::scatter;
+use crate::fours::Fours;
 use crate::layout::{Layout, MStar, Patterns, bb_pairs};
-
-/// One of [`Pattern`]'s products `y ± A x` (`mul_add`, `mul_sub`).
-type MulFn = fn(&Pattern, &[f64], &[f64], &mut [f64]);
 
 /// Errors in a system's declared structure.
 #[derive(Debug, thiserror::Error)]
@@ -149,6 +147,49 @@ impl BtGather {
     }
 }
 
+/// The patterns of `M`, `B` and the tangent's four terms as [`Fours`]
+/// (`None` where few entries come in fours: the pattern's own product).
+#[derive(Clone, Debug)]
+struct PatternFours {
+    mass: Option<Fours>,
+    b: Option<Fours>,
+    tangent: [Option<Fours>; 4],
+    /// Whether `∂g/∂u`, `∂g/∂u̇` and `∂(M ü)/∂u` have one pattern (bodies
+    /// in Euler parameters): their products are made in one pass.
+    velocity_terms_fused: bool,
+}
+
+impl PatternFours {
+    fn new(mass: &Pattern, b: &Pattern, tangent: [&Pattern; 4]) -> Self {
+        Self {
+            mass: Fours::new(mass),
+            b: Fours::new(b),
+            tangent: tangent.map(Fours::new),
+            velocity_terms_fused: !tangent[1].is_empty()
+                && tangent[1] == tangent[2]
+                && tangent[1] == tangent[3],
+        }
+    }
+}
+
+/// `y ± A x` (`Aᵀ` with `TRANSPOSE`, subtracting with `SUB`) for the
+/// matrix of `pattern` with `values`: by its `fours` when there are.
+fn product<const TRANSPOSE: bool, const SUB: bool>(
+    fours: Option<&Fours>,
+    pattern: &Pattern,
+    values: &[f64],
+    x: &[f64],
+    y: &mut [f64],
+) {
+    match (fours, TRANSPOSE, SUB) {
+        (Some(fours), ..) => fours.product::<TRANSPOSE, SUB>(values, x, y),
+        (None, false, false) => pattern.mul_add(values, x, y),
+        (None, false, true) => pattern.mul_sub(values, x, y),
+        (None, true, false) => pattern.mul_transpose_add(values, x, y),
+        (None, true, true) => pattern.mul_transpose_sub(values, x, y),
+    }
+}
+
 /// Residual, constraints, Jacobians and the KKT matrix of one [`System`], with
 /// every buffer allocated once in [`Linearization::new`].
 ///
@@ -178,6 +219,9 @@ pub struct Linearization {
     /// The patterns of `Σ λᵢ ∂²Φᵢ/∂u²`, `∂g/∂u`, `∂g/∂u̇`, `∂(M ü)/∂u`, for
     /// [`tangent_mul_add`](Self::tangent_mul_add).
     tangent_patterns: [Pattern; 4],
+    /// `M`'s, `B`'s and the tangent's patterns (in `tangent_patterns`'
+    /// order) in fours, for their products.
+    fours: PatternFours,
     /// Values of `M`, `B`, `Σ λᵢ ∂²Φᵢ/∂u²`, `∂g/∂u`, `∂g/∂u̇`, `∂(M ü)/∂u` on
     /// the system's patterns.
     mass: Vec<f64>,
@@ -287,6 +331,7 @@ impl Linearization {
             r_max: 0.0,
             phi_max: 0.0,
             bb_values: vec![0.0; layout.bb_pairs.len()],
+            fours: PatternFours::new(&p.mass, &p.b, [&p.hessian, &p.g_u, &p.g_v, &p.mass_du]),
             mass_pattern: p.mass,
             b_pattern: p.b,
             tangent_patterns: [p.hessian, p.g_u, p.g_v, p.mass_du],
@@ -483,12 +528,13 @@ impl Linearization {
         }
         if self.bt_gather.is_none() {
             self.bt_lambda.fill(0.0);
-            self.b_pattern
-                .mul_transpose_add(&self.b, lambda, &mut self.bt_lambda);
+            let b = self.fours.b.as_ref();
+            product::<true, false>(b, &self.b_pattern, &self.b, lambda, &mut self.bt_lambda);
         }
         if !self.mass_diagonal {
             self.m_a.fill(0.0);
-            self.mass_pattern.mul_add(&self.mass, a, &mut self.m_a);
+            let mass = self.fours.mass.as_ref();
+            product::<false, false>(mass, &self.mass_pattern, &self.mass, a, &mut self.m_a);
         }
     }
 
@@ -606,23 +652,79 @@ impl Linearization {
     /// place (`K_T`'s `−∂g/∂u` and `C_T`'s `−∂g/∂u̇` with the other sign).
     fn tangent_product<const SUB: bool>(&self, x: &[f64], w: &[f64], y: &mut [f64]) {
         let [hessian, g_u, g_v, mass_du] = &self.tangent_patterns;
-        let (plus, minus): (MulFn, MulFn) = if SUB {
-            (Pattern::mul_sub, Pattern::mul_add)
-        } else {
-            (Pattern::mul_add, Pattern::mul_sub)
-        };
+        let [f_hessian, f_g_u, f_g_v, f_mass_du] =
+            self.fours.tangent.each_ref().map(Option::as_ref);
         if !self.hessian.is_empty() {
-            plus(hessian, &self.hessian, x, y);
+            product::<false, SUB>(f_hessian, hessian, &self.hessian, x, y);
+        }
+        if self.fours.velocity_terms_fused {
+            self.velocity_product::<SUB>(x, w, y);
+            return;
         }
         if !self.mass_du.is_empty() {
-            plus(mass_du, &self.mass_du, x, y);
+            product::<false, SUB>(f_mass_du, mass_du, &self.mass_du, x, y);
         }
-        if !self.g_u.is_empty() {
-            minus(g_u, &self.g_u, x, y);
+        // `−∂g/∂u` and `−∂g/∂u̇`: the other sign.
+        if SUB {
+            if !self.g_u.is_empty() {
+                product::<false, false>(f_g_u, g_u, &self.g_u, x, y);
+            }
+            if !self.g_v.is_empty() {
+                product::<false, false>(f_g_v, g_v, &self.g_v, w, y);
+            }
+        } else {
+            if !self.g_u.is_empty() {
+                product::<false, true>(f_g_u, g_u, &self.g_u, x, y);
+            }
+            if !self.g_v.is_empty() {
+                product::<false, true>(f_g_v, g_v, &self.g_v, w, y);
+            }
         }
-        if !self.g_v.is_empty() {
-            minus(g_v, &self.g_v, w, y);
+    }
+
+    /// `y ± ((∂(M ü)/∂u − ∂g/∂u) x − ∂g/∂u̇ w)` in one pass, the three on
+    /// one pattern (`PatternFours::velocity_terms_fused`).
+    fn velocity_product<const SUB: bool>(&self, x: &[f64], w: &[f64], y: &mut [f64]) {
+        let values = [&self.mass_du[..], &self.g_u, &self.g_v];
+        if let Some(fours) = &self.fours.tangent[1] {
+            fours.velocity_product::<SUB>(values, x, w, y);
+            return;
         }
+        let sign = if SUB { -1.0 } else { 1.0 };
+        let terms = self.tangent_patterns[1].entries.iter().zip(&self.mass_du);
+        for ((&(i, j), m_du), (g_u, g_v)) in terms.zip(self.g_u.iter().zip(&self.g_v)) {
+            y[i] += sign * ((m_du - g_u) * x[j] - g_v * w[j]);
+        }
+    }
+
+    /// `y −= B x` with the last evaluated `B`.
+    ///
+    /// # Panics
+    /// If `x` is not of length `n` or `y` of length `m`.
+    pub fn b_mul_sub(&self, x: &[f64], y: &mut [f64]) {
+        product::<false, true>(self.fours.b.as_ref(), &self.b_pattern, &self.b, x, y);
+    }
+
+    /// `y −= Bᵀ x` with the last evaluated `B`.
+    ///
+    /// # Panics
+    /// If `x` is not of length `m` or `y` of length `n`.
+    pub fn b_mul_transpose_sub(&self, x: &[f64], y: &mut [f64]) {
+        product::<true, true>(self.fours.b.as_ref(), &self.b_pattern, &self.b, x, y);
+    }
+
+    /// `y −= M x` with the last evaluated `M`.
+    ///
+    /// # Panics
+    /// If `x` or `y` is not of length `n`.
+    pub fn mass_mul_sub(&self, x: &[f64], y: &mut [f64]) {
+        product::<false, true>(
+            self.fours.mass.as_ref(),
+            &self.mass_pattern,
+            &self.mass,
+            x,
+            y,
+        );
     }
 
     /// `y += K_Tᵀ x` and `z += C_Tᵀ x` (the transposes of

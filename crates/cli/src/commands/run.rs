@@ -916,6 +916,8 @@ struct RunOutput<'a> {
     t_end: f64,
     progress: ProgressBar,
     shown: bool,
+    /// The bar's last position, in thousandths of `t_end`.
+    position: Option<u64>,
     start: Instant,
 }
 
@@ -937,6 +939,7 @@ impl<'a> RunOutput<'a> {
             t_end,
             progress,
             shown: false,
+            position: None,
             start: Instant::now(),
         }
     }
@@ -954,9 +957,12 @@ impl Observer for RunOutput<'_> {
             self.progress.set_draw_target(ProgressDrawTarget::stderr());
             self.shown = true;
         }
-        if self.shown {
-            self.progress
-                .set_position((1000.0 * s.t / self.t_end) as u64);
+        // Redrawn when the position moves (a thousandth of the run), not at
+        // every step: the message is a formatted number.
+        let position = (1000.0 * s.t / self.t_end) as u64;
+        if self.shown && self.position != Some(position) {
+            self.position = Some(position);
+            self.progress.set_position(position);
             self.progress.set_message(format!("{:.4}", s.t));
         }
     }

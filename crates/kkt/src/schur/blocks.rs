@@ -100,6 +100,11 @@ pub(super) fn factor_block(
         (2, 2) => factor_fixed::<2, 2>(lists, values, inverse, scratch, c_values),
         (3, 3) => factor_fixed::<3, 3>(lists, values, inverse, scratch, c_values),
         (4, 4) => factor_fixed::<4, 4>(lists, values, inverse, scratch, c_values),
+        // A planar body with one, two or three rows of a joint to the
+        // ground folded in (a prismatic, revolute or weld joint).
+        (3, 4) => factor_fixed::<3, 4>(lists, values, inverse, scratch, c_values),
+        (3, 5) => factor_fixed::<3, 5>(lists, values, inverse, scratch, c_values),
+        (3, 6) => factor_fixed::<3, 6>(lists, values, inverse, scratch, c_values),
         // A body in Euler parameters with its normalization row.
         (4, 5) => factor_fixed::<4, 5>(lists, values, inverse, scratch, c_values),
         (k, size) => factor_dynamic((k, size), lists, values, inverse, scratch, c_values),
@@ -273,6 +278,7 @@ pub(super) fn apply_block(coords: &[usize], inverse: &[f64], f: &[f64], x: &mut 
         1 => apply_fixed::<1>(coords, inverse, f, x),
         4 => apply_fixed::<4>(coords, inverse, f, x),
         5 => apply_fixed::<5>(coords, inverse, f, x),
+        6 => apply_fixed::<6>(coords, inverse, f, x),
         k => {
             for (i, &ci) in coords.iter().enumerate() {
                 let row = &inverse[i * k..(i + 1) * k];
@@ -557,20 +563,23 @@ mod tests {
         }
     }
 
-    /// A body's block with its own row (the normalization's `2pᵀ`): the
-    /// fixed path of 4 unknowns and 1 local row gives the generic path's
-    /// values to the bit, and the inverse is that of the saddle point.
-    #[test]
-    fn a_block_with_its_own_row_equals_the_generic_path_to_the_bit() {
-        let k = 4;
+    /// A block with rows of its own (`local` of them: a body's normalization
+    /// `2pᵀ`, a planar joint to the ground folded in): the fixed path gives
+    /// the generic path's values to the bit, and the inverse is that of the
+    /// saddle point.
+    fn with_own_rows(k: usize, local: usize) {
+        let size = k + local;
         let a = sample(k);
-        let own = [0.6, -0.8, 0.2, 0.4];
+        let own = |l: usize, j: usize| f64::from(u8::from(j == l)) + 0.1 * (l + 2 * j + 1) as f64;
         let s: Vec<Entry> = (0..k * k).map(|p| entry(p, p / k, p % k)).collect();
-        // Rows 0 and 1 of B go to C, row 2 is the block's own.
+        // Rows 0 and 1 of B go to C, rows 2.. are the block's own.
         let mut values = a.clone();
         values.extend((0..2 * k).map(|q| 1.0 + q as f64 * 0.25));
-        values.extend(own);
-        let b: Vec<Entry> = (0..3 * k).map(|q| entry(k * k + q, q / k, q % k)).collect();
+        values.extend((0..local * k).map(|q| own(q / k, q % k)));
+        let rows = 2 + local;
+        let b: Vec<Entry> = (0..rows * k)
+            .map(|q| entry(k * k + q, q / k, q % k))
+            .collect();
         let pairs = [(0u16, 0u16, 0u32), (1, 0, 1), (0, 1, 2), (1, 1, 3)];
         let lists = Lists {
             s_entries: &s,
@@ -579,36 +588,51 @@ mod tests {
             n_rows: 2,
         };
         let run = |fixed: bool| {
-            let (mut block, mut bk, mut w) = (vec![0.0; 25], vec![0.0; 2 * k], vec![0.0; 2 * k]);
+            let mut block = vec![0.0; size * size];
+            let (mut bk, mut w) = (vec![0.0; 2 * k], vec![0.0; 2 * k]);
             let mut scratch = Scratch {
                 block: &mut block,
                 bk: &mut bk,
                 w: &mut w,
             };
-            let (mut inv, mut c) = (vec![0.0; 25], vec![0.0; 4]);
+            let (mut inv, mut c) = (vec![0.0; size * size], vec![0.0; 4]);
             let r = if fixed {
-                factor_block((k, k + 1), &lists, &values, &mut inv, &mut scratch, &mut c)
+                factor_block((k, size), &lists, &values, &mut inv, &mut scratch, &mut c)
             } else {
-                factor_dynamic((k, k + 1), &lists, &values, &mut inv, &mut scratch, &mut c)
+                factor_dynamic((k, size), &lists, &values, &mut inv, &mut scratch, &mut c)
             };
-            assert_eq!(r, Ok(()));
+            assert_eq!(r, Ok(()), "({k}, {size})");
             (inv, c)
         };
         let (inv_f, c_f) = run(true);
-        assert_eq!((&inv_f, &c_f), (&run(false).0, &run(false).1));
-        // [[S, rᵀ], [r, 0]] times the inverse is I, independently of either path.
+        assert_eq!(
+            (&inv_f, &c_f),
+            (&run(false).0, &run(false).1),
+            "({k}, {size})"
+        );
+        // [[S, Rᵀ], [R, 0]] times the inverse is I, independently of either path.
         let saddle = |i: usize, j: usize| match (i < k, j < k) {
             (true, true) => a[i * k + j],
-            (true, false) => own[i],
-            (false, true) => own[j],
+            (true, false) => own(j - k, i),
+            (false, true) => own(i - k, j),
             (false, false) => 0.0,
         };
-        for i in 0..=k {
-            for j in 0..=k {
-                let p: f64 = (0..=k).map(|l| saddle(i, l) * inv_f[l * 5 + j]).sum();
+        for i in 0..size {
+            for j in 0..size {
+                let p: f64 = (0..size).map(|l| saddle(i, l) * inv_f[l * size + j]).sum();
                 let want = if i == j { 1.0 } else { 0.0 };
-                assert!((p - want).abs() < 1e-10, "({i}, {j}) = {p}");
+                assert!((p - want).abs() < 1e-10, "({k}, {size}): ({i}, {j}) = {p}");
             }
+        }
+    }
+
+    /// The fixed sizes with rows of their own: a body in Euler parameters
+    /// with its normalization row, a planar body with one to three rows of
+    /// a joint to the ground.
+    #[test]
+    fn blocks_with_their_own_rows_equal_the_generic_path_to_the_bit() {
+        for (k, local) in [(4, 1), (3, 1), (3, 2), (3, 3)] {
+            with_own_rows(k, local);
         }
     }
 

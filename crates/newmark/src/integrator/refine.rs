@@ -241,10 +241,9 @@ impl<S: System + ?Sized> Integrator<'_, S> {
         } = scratch;
         residual.copy_from_slice(partials);
         let (top, bottom) = residual.split_at_mut(n);
-        let (b, b_pattern) = (self.lin.b(), self.lin.b_pattern());
         if zero {
             self.lin.tangent_mul_sub(&predicted.u, &predicted.v, top);
-            b_pattern.mul_sub(b, &predicted.u, bottom);
+            self.lin.b_mul_sub(&predicted.u, bottom);
             return;
         }
         let (x_u, x_l) = x.split_at(n);
@@ -254,9 +253,9 @@ impl<S: System + ?Sized> Integrator<'_, S> {
             x_a[i] = c.c_a * x_u[i];
         }
         self.lin.tangent_mul_sub(w_u, w_v, top);
-        self.lin.mass_pattern().mul_sub(self.lin.mass(), x_a, top);
-        b_pattern.mul_transpose_sub(b, x_l, top);
-        b_pattern.mul_sub(b, w_u, bottom);
+        self.lin.mass_mul_sub(x_a, top);
+        self.lin.b_mul_transpose_sub(x_l, top);
+        self.lin.b_mul_sub(w_u, bottom);
     }
 }
 
