@@ -738,17 +738,19 @@ impl Linearization {
     /// If `x`, `y` or `z` is not of length `n`.
     pub fn tangent_mul_transpose_add(&self, x: &[f64], y: &mut [f64], z: &mut [f64]) {
         let [hessian, g_u, g_v, mass_du] = &self.tangent_patterns;
+        let [f_hessian, f_g_u, f_g_v, f_mass_du] =
+            self.fours.tangent.each_ref().map(Option::as_ref);
         if !self.hessian.is_empty() {
-            hessian.mul_transpose_add(&self.hessian, x, y);
+            product::<true, false>(f_hessian, hessian, &self.hessian, x, y);
         }
         if !self.mass_du.is_empty() {
-            mass_du.mul_transpose_add(&self.mass_du, x, y);
+            product::<true, false>(f_mass_du, mass_du, &self.mass_du, x, y);
         }
         if !self.g_u.is_empty() {
-            g_u.mul_transpose_sub(&self.g_u, x, y);
+            product::<true, true>(f_g_u, g_u, &self.g_u, x, y);
         }
         if !self.g_v.is_empty() {
-            g_v.mul_transpose_sub(&self.g_v, x, z);
+            product::<true, true>(f_g_v, g_v, &self.g_v, x, z);
         }
     }
 
