@@ -6,8 +6,8 @@
 //! 4 × 4 block of `M` or `∂(M ü)/∂u`, the Euler-parameter part of a joint's
 //! row of `B`). Such a four is one `(row, col)`, four contiguous values and
 //! four contiguous entries of `x`: its product reads one pair of indices
-//! and checks bounds once, where entry by entry it reads four pairs and
-//! checks eight bounds. The other entries stay entry by entry.
+//! and makes three bounds checks, where entry by entry it reads four pairs
+//! and makes eight. The other entries stay entry by entry.
 
 use mstar_model::Pattern;
 

@@ -528,8 +528,8 @@ impl Linearization {
         }
         if self.bt_gather.is_none() {
             self.bt_lambda.fill(0.0);
-            let b = self.fours.b.as_ref();
-            product::<true, false>(b, &self.b_pattern, &self.b, lambda, &mut self.bt_lambda);
+            self.b_pattern
+                .mul_transpose_add(&self.b, lambda, &mut self.bt_lambda);
         }
         if !self.mass_diagonal {
             self.m_a.fill(0.0);
@@ -690,6 +690,7 @@ impl Linearization {
             fours.velocity_product::<SUB>(values, x, w, y);
             return;
         }
+        assert_eq!((x.len(), w.len(), y.len()), (self.n, self.n, self.n));
         let sign = if SUB { -1.0 } else { 1.0 };
         let terms = self.tangent_patterns[1].entries.iter().zip(&self.mass_du);
         for ((&(i, j), m_du), (g_u, g_v)) in terms.zip(self.g_u.iter().zip(&self.g_v)) {

@@ -101,7 +101,7 @@ pub(super) fn factor_block(
         (3, 3) => factor_fixed::<3, 3>(lists, values, inverse, scratch, c_values),
         (4, 4) => factor_fixed::<4, 4>(lists, values, inverse, scratch, c_values),
         // A planar body with one, two or three rows of a joint to the
-        // ground folded in (a prismatic, revolute or weld joint).
+        // ground folded in (a distance; a revolute or prismatic; a weld).
         (3, 4) => factor_fixed::<3, 4>(lists, values, inverse, scratch, c_values),
         (3, 5) => factor_fixed::<3, 5>(lists, values, inverse, scratch, c_values),
         (3, 6) => factor_fixed::<3, 6>(lists, values, inverse, scratch, c_values),
