@@ -41,6 +41,50 @@ pub(crate) struct EnvelopeLdlt {
     values: Vec<f64>,
     /// `D` again, contiguous (one read per row in the solve, not a cache line).
     d: Vec<f64>,
+    /// The factorization's updates `t_ij −= Σ_k t_ik l_jk` with at least
+    /// one term, row by row (`update_ptr`): see [`Update`].
+    updates: Vec<Update>,
+    /// Start of each row's updates in `updates` (`n + 1` entries).
+    update_ptr: Vec<u32>,
+}
+
+/// One entry `(i, j)` of the factor whose sum has terms: its position in
+/// row `i` (`j − first[i]`), the end of row `j`'s terms in the values (the
+/// position of `l_jj`'s left neighbour plus one) and their number `m =
+/// min(j − first[i], j − first[j])`. Computed once from the envelope: an
+/// entry without terms (a row's first, or a column whose row starts at its
+/// diagonal) costs the factorization nothing, and the others no index
+/// arithmetic (the factorization of a small closed loop's `C` spent more
+/// on that than on its terms, docs/performance.md).
+#[derive(Clone, Copy, Debug)]
+struct Update {
+    at: u32,
+    end: u32,
+    m: u32,
+}
+
+/// [`Update`]s of the envelope with row pointers `row_ptr`, and where each
+/// row's start; `None` beyond 32-bit counts.
+fn updates_of(row_ptr: &[u32]) -> Option<(Vec<Update>, Vec<u32>)> {
+    let n = row_ptr.len() - 1;
+    let (mut updates, mut update_ptr) = (Vec::new(), Vec::with_capacity(n + 1));
+    update_ptr.push(0);
+    for i in 0..n {
+        let (_, fi) = row_of(row_ptr, i);
+        for j in fi..i {
+            let (rj, fj) = row_of(row_ptr, j);
+            let m = j - fi.max(fj);
+            if m > 0 {
+                updates.push(Update {
+                    at: u32::try_from(j - fi).ok()?,
+                    end: u32::try_from(rj.end - 1).ok()?,
+                    m: u32::try_from(m).ok()?,
+                });
+            }
+        }
+        update_ptr.push(u32::try_from(updates.len()).ok()?);
+    }
+    Some((updates, update_ptr))
 }
 
 impl EnvelopeLdlt {
@@ -48,10 +92,13 @@ impl EnvelopeLdlt {
     /// (`first[i] ≤ i`); `None` if it has more than `u32::MAX` values.
     pub(crate) fn new(first: &[usize]) -> Option<Self> {
         let (row_ptr, len) = row_pointers(first)?;
+        let (updates, update_ptr) = updates_of(&row_ptr)?;
         Some(Self {
             row_ptr,
             values: vec![0.0; len],
             d: vec![0.0; first.len()],
+            updates,
+            update_ptr,
         })
     }
 
@@ -99,31 +146,25 @@ impl EnvelopeLdlt {
             let (range, fi) = self.row(i);
             let (done, rest) = self.values.split_at_mut(range.start);
             let row = &mut rest[..range.len()];
-            // t_ij = c_ij − Σ_{k<j} t_ik l_jk  (t_ik = l_ik d_k), for j < i.
-            for j in fi..i {
-                let (rj, fj) = row_of(&self.row_ptr, j);
-                let lj = &done[rj];
-                let k0 = fi.max(fj);
-                let mut t = row[j - fi];
-                for k in k0..j {
-                    t -= row[k - fi] * lj[k - fj];
-                }
-                row[j - fi] = t;
-            }
+            let updates =
+                &self.updates[self.update_ptr[i] as usize..self.update_ptr[i + 1] as usize];
+            eliminate_row(done, row, updates);
             // l_ij = t_ij / d_j; d_i = c_ii − Σ_j t_ij l_ij.
-            let c_ii = row[i - fi];
+            let (below, diagonal) = row.split_at_mut(i - fi);
+            let c_ii = diagonal[0];
             let (mut d, mut scale) = (c_ii, c_ii.abs());
-            for j in fi..i {
-                let t = row[j - fi];
-                let l = t / self.d[j];
-                row[j - fi] = l;
+            let d_before = &self.d[fi..i];
+            for k in 0..below.len() {
+                let t = below[k];
+                let l = t / d_before[k];
+                below[k] = l;
                 d -= t * l;
                 scale += (t * l).abs();
             }
             if d.is_nan() || d.abs() <= PIVOT_TOLERANCE * scale {
                 return Err(i);
             }
-            row[i - fi] = d;
+            diagonal[0] = d;
             self.d[i] = d;
         }
         Ok(())
@@ -225,6 +266,23 @@ impl EnvelopeLdlt {
     }
 }
 
+/// `t_ij = c_ij − Σ_{k<j} t_ik l_jk` (`t_ik = l_ik d_k`) for the columns
+/// `j` of one row below its diagonal that have terms (`updates`), in
+/// place: `done` holds the rows before it, factored. Row `j`'s entries
+/// that meet the row's own are its last `m` before its diagonal.
+#[inline]
+fn eliminate_row(done: &[f64], row: &mut [f64], updates: &[Update]) {
+    for u in updates {
+        let (at, end, m) = (u.at as usize, u.end as usize, u.m as usize);
+        let (lj, (ti, t)) = (&done[end - m..end], row[at - m..].split_at_mut(m));
+        let mut sum = t[0];
+        for k in 0..m {
+            sum -= ti[k] * lj[k];
+        }
+        t[0] = sum;
+    }
+}
+
 /// Row `i`'s positions in the values and its first stored column.
 #[inline]
 fn row_of(row_ptr: &[u32], i: usize) -> (std::ops::Range<usize>, usize) {
@@ -251,11 +309,11 @@ mod tests {
         (first, a)
     }
 
-    #[test]
-    fn solves_a_band_system() {
-        let n = 40;
-        let (first, a) = example(n);
-        let mut env = EnvelopeLdlt::new(&first).expect("small");
+    /// Fills an envelope with `a` (its entries within the envelope), factors
+    /// it and checks a solve against a known solution.
+    fn check_solve(first: &[usize], a: &[Vec<f64>]) {
+        let n = first.len();
+        let mut env = EnvelopeLdlt::new(first).expect("small");
         for i in 0..n {
             for j in first[i]..=i {
                 let k = env.slot(i, j);
@@ -271,6 +329,32 @@ mod tests {
         for (xi, ti) in x.iter().zip(&x_true) {
             assert!((xi - ti).abs() < 1e-13, "{xi} vs {ti}");
         }
+    }
+
+    #[test]
+    fn solves_a_system_whose_rows_start_anywhere() {
+        // The envelope of a closed loop's `C` (Andrews' squeezer, 18
+        // rows): rows that start at their diagonal, rows that start after
+        // the rows before them, and entries without terms.
+        let first = [0, 0, 0, 0, 2, 2, 2, 2, 2, 2, 10, 10, 6, 6, 14, 14, 8, 8];
+        let n = first.len();
+        let mut a = vec![vec![0.0; n]; n];
+        for i in 0..n {
+            for j in first[i]..i {
+                let v = ((i * 5 + j * 11) % 7) as f64 * 0.05 - 0.15;
+                a[i][j] = v;
+                a[j][i] = v;
+            }
+            a[i][i] = 3.0 + (i % 3) as f64;
+        }
+        check_solve(&first, &a);
+    }
+
+    #[test]
+    fn solves_a_band_system() {
+        let n = 40;
+        let (first, a) = example(n);
+        check_solve(&first, &a);
     }
 
     #[test]

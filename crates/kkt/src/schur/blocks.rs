@@ -87,6 +87,7 @@ pub(super) struct Scratch<'a> {
 ///
 /// # Errors
 /// The local column without a pivot when the block is singular.
+#[inline(always)]
 pub(super) fn factor_block(
     sizes: (usize, usize),
     lists: &Lists<'_>,
@@ -114,7 +115,10 @@ pub(super) fn factor_block(
 /// [`factor_block`] for one unknown (a body's `x`, `y` or `z`): `1 / s` and
 /// `C += b_r (1 / s) b_s`, the arithmetic of [`factor_fixed`] for `K = 1`
 /// (whose sums from `−0.0` add one term: the same values to the bit) without
-/// its buffers.
+/// its buffers. Inlined into the loop over the blocks with the dispatch
+/// (a closed loop of planar bodies is mostly such blocks, and a call a
+/// block cost about as much as its pairs, docs/performance.md).
+#[inline(always)]
 fn factor_scalar(
     lists: &Lists<'_>,
     values: &[f64],
@@ -151,6 +155,7 @@ fn factor_scalar(
 }
 
 /// [`factor_block`] for `K` primal unknowns and `A − K` local rows.
+#[inline(never)]
 fn factor_fixed<const K: usize, const A: usize>(
     lists: &Lists<'_>,
     values: &[f64],
@@ -215,6 +220,7 @@ fn factor_fixed<const K: usize, const A: usize>(
     Ok(())
 }
 
+#[inline(never)]
 fn factor_dynamic(
     (k, size): (usize, usize),
     lists: &Lists<'_>,

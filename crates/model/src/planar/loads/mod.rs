@@ -58,6 +58,13 @@ pub(crate) trait LoadElement: Send + Sync + std::fmt::Debug {
     fn symmetric(&self) -> bool {
         true
     }
+
+    /// Whether its forces depend on the velocities (default: yes); when
+    /// not, `∂g/∂q̇` is zero and is not evaluated (an undamped spring: its
+    /// geometry is most of a Jacobian's cost).
+    fn velocity_dependent(&self) -> bool {
+        true
+    }
 }
 
 /// A registered kind of load, with an example for the derivative tests.
@@ -152,6 +159,12 @@ impl Force {
     /// Values of `∂g/∂q` (`wrt_v = false`) or `∂g/∂q̇` (`true`) in pattern order.
     pub(crate) fn jacobian(&self, t: f64, u: &[f64], v: &[f64], wrt_v: bool, out: &mut [f64]) {
         let pattern = if wrt_v { &self.g_v } else { &self.g_u };
+        // Nothing to evaluate: no entries (a torque), or `∂g/∂q̇` of a load
+        // that does not depend on the velocities.
+        if pattern.is_empty() || (wrt_v && !self.element.velocity_dependent()) {
+            out.fill(0.0);
+            return;
+        }
         self.element
             .jacobian(&self.place(t, u, v), wrt_v, pattern, out);
     }
@@ -164,5 +177,94 @@ impl Force {
     /// Potential energy of a conservative load.
     pub(crate) fn potential(&self, u: &[f64]) -> f64 {
         self.element.potential(&self.place(0.0, u, &[]))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::System;
+    use crate::planar::{
+        At, PlanarBuilder, PlanarSystem, RigidBody, RotationalSpringDamper, SpringDamper,
+    };
+
+    /// Two bodies joined by a spring-damper and a rotational one, both of
+    /// damping `c`, and a state with velocities.
+    fn two_bodies(c: f64) -> (PlanarSystem, Vec<f64>, Vec<f64>) {
+        let mut b = PlanarBuilder::new();
+        let body = |pose| RigidBody {
+            mass: 1.5,
+            inertia: 0.2,
+            pose,
+            velocity: [0.0; 3],
+        };
+        let p = b.rigid_body("p", body([0.0, 0.0, 0.1]));
+        let q = b.rigid_body("q", body([1.2, 0.3, -0.4]));
+        let spring = SpringDamper {
+            stiffness: 40.0,
+            damping: c,
+            rest_length: 0.9,
+        };
+        b.spring(
+            "s",
+            At::Body(p, [0.1, 0.2]),
+            At::Body(q, [-0.3, 0.1]),
+            spring,
+        );
+        let rotational = RotationalSpringDamper {
+            stiffness: 7.0,
+            damping: c,
+        };
+        b.rotational_spring("r", Some(p), q, rotational);
+        let sys = b.build().expect("a valid model");
+        let u = vec![0.0, 0.0, 0.1, 1.2, 0.3, -0.4];
+        let v = vec![0.3, -0.7, 1.1, -0.2, 0.5, 0.9];
+        (sys, u, v)
+    }
+
+    /// `∂g/∂q̇` by central differences of the forces (the reference: the
+    /// forces alone, not the Jacobian code).
+    fn dg_dv_by_differences(sys: &dyn System, u: &[f64], v: &[f64], i: usize, j: usize) -> f64 {
+        let n = sys.n_coords();
+        let (mut plus, mut minus) = (vec![0.0; n], vec![0.0; n]);
+        let (mut vp, mut vm) = (v.to_vec(), v.to_vec());
+        let dv = 1e-6;
+        vp[j] += dv;
+        vm[j] -= dv;
+        sys.forces_into(0.0, u, &vp, &mut plus);
+        sys.forces_into(0.0, u, &vm, &mut minus);
+        (plus[i] - minus[i]) / (2.0 * dv)
+    }
+
+    #[test]
+    fn undamped_springs_have_a_zero_velocity_jacobian_and_damped_ones_theirs() {
+        for c in [0.0, 2.5] {
+            let (sys, u, v) = two_bodies(c);
+            let pattern = sys.forces_dv_pattern();
+            assert!(!pattern.is_empty(), "the springs keep their pattern");
+            // NaN where nothing is written: a skipped evaluation must still
+            // leave its zeros.
+            let mut g_v = vec![f64::NAN; pattern.len()];
+            sys.forces_dv_into(0.0, &u, &v, &mut g_v);
+            let dense = pattern.to_dense(&g_v);
+            let mut largest = 0.0f64;
+            for (i, row) in dense.iter().enumerate() {
+                for (j, &value) in row.iter().enumerate() {
+                    let reference = dg_dv_by_differences(&sys, &u, &v, i, j);
+                    // The forces are linear in q̇: the differences are
+                    // exact but for the rounding of forces of order 10 N
+                    // over 2e-6.
+                    assert!(
+                        (value - reference).abs() <= 1e-7,
+                        "c = {c}: ∂g_{i}/∂q̇_{j} = {value}, differences {reference}"
+                    );
+                    largest = largest.max(value.abs());
+                }
+            }
+            if c == 0.0 {
+                assert_eq!(largest, 0.0);
+            } else {
+                assert!(largest > 1.0, "a damper's Jacobian is not zero: {largest}");
+            }
+        }
     }
 }

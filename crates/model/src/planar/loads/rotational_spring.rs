@@ -40,6 +40,10 @@ impl LoadElement for RotationalSpring {
         false
     }
 
+    fn velocity_dependent(&self) -> bool {
+        self.c != 0.0
+    }
+
     fn problem(&self, anchors: &[Anchor; 2]) -> Option<String> {
         let angle = |a: &Anchor| matches!(a, Anchor::Rigid { .. } | Anchor::Ground(_));
         if !(angle(&anchors[0]) && matches!(anchors[1], Anchor::Rigid { .. })) {

@@ -133,6 +133,10 @@ impl LoadElement for Spring {
         self.c == 0.0
     }
 
+    fn velocity_dependent(&self) -> bool {
+        self.c != 0.0
+    }
+
     /// A damper's `∂g/∂q` holds `c ∂ℓ̇/∂q ∂ℓ/∂qᵀ`, not symmetric.
     fn symmetric(&self) -> bool {
         self.c == 0.0
