@@ -58,13 +58,6 @@ pub(crate) trait LoadElement: Send + Sync + std::fmt::Debug {
     fn symmetric(&self) -> bool {
         true
     }
-
-    /// Whether its forces depend on the velocities (default: yes); when
-    /// not, `∂g/∂q̇` is zero and is not evaluated (an undamped spring: its
-    /// geometry is most of a Jacobian's cost).
-    fn velocity_dependent(&self) -> bool {
-        true
-    }
 }
 
 /// A registered kind of load, with an example for the derivative tests.
@@ -159,10 +152,9 @@ impl Force {
     /// Values of `∂g/∂q` (`wrt_v = false`) or `∂g/∂q̇` (`true`) in pattern order.
     pub(crate) fn jacobian(&self, t: f64, u: &[f64], v: &[f64], wrt_v: bool, out: &mut [f64]) {
         let pattern = if wrt_v { &self.g_v } else { &self.g_u };
-        // Nothing to evaluate: no entries (a torque), or `∂g/∂q̇` of a load
-        // that does not depend on the velocities.
-        if pattern.is_empty() || (wrt_v && !self.element.velocity_dependent()) {
-            out.fill(0.0);
+        // Nothing to evaluate (a torque's; `∂g/∂q̇` of an undamped spring):
+        // its place is not computed either.
+        if pattern.is_empty() {
             return;
         }
         self.element
@@ -236,11 +228,12 @@ mod tests {
     }
 
     #[test]
-    fn undamped_springs_have_a_zero_velocity_jacobian_and_damped_ones_theirs() {
+    fn undamped_springs_have_no_velocity_jacobian_and_damped_ones_theirs() {
         for c in [0.0, 2.5] {
             let (sys, u, v) = two_bodies(c);
             let pattern = sys.forces_dv_pattern();
-            assert!(!pattern.is_empty(), "the springs keep their pattern");
+            // Without damping, no entries: nothing evaluated or multiplied.
+            assert_eq!(pattern.is_empty(), c == 0.0, "c = {c}");
             // NaN where nothing is written: a skipped evaluation must still
             // leave its zeros.
             let mut g_v = vec![f64::NAN; pattern.len()];
@@ -260,9 +253,7 @@ mod tests {
                     largest = largest.max(value.abs());
                 }
             }
-            if c == 0.0 {
-                assert_eq!(largest, 0.0);
-            } else {
+            if c != 0.0 {
                 assert!(largest > 1.0, "a damper's Jacobian is not zero: {largest}");
             }
         }

@@ -40,10 +40,6 @@ impl LoadElement for RotationalSpring {
         false
     }
 
-    fn velocity_dependent(&self) -> bool {
-        self.c != 0.0
-    }
-
     fn problem(&self, anchors: &[Anchor; 2]) -> Option<String> {
         let angle = |a: &Anchor| matches!(a, Anchor::Rigid { .. } | Anchor::Ground(_));
         if !(angle(&anchors[0]) && matches!(anchors[1], Anchor::Rigid { .. })) {
@@ -62,7 +58,13 @@ impl LoadElement for RotationalSpring {
             .iter()
             .flat_map(|&a| thetas.iter().map(move |&b| (a, b)))
             .collect();
-        (pairs.clone(), pairs)
+        // `∂g/∂q̇` without damping has no entries (it is zero).
+        let velocity = if self.c == 0.0 {
+            Vec::new()
+        } else {
+            pairs.clone()
+        };
+        (pairs, velocity)
     }
 
     fn add_forces(&self, x: &LoadPlace<'_>, g: &mut [f64]) {

@@ -74,11 +74,17 @@ impl LoadElement for Spring {
         })
     }
 
-    /// Dense over its slots.
+    /// Dense over its slots; `∂g/∂q̇` without damping has no entries (it is
+    /// zero: nothing to evaluate, store or multiply).
     fn patterns(&self, slots: &Slots) -> JacobianPatterns {
         let n = slots.len();
         let all: Vec<(usize, usize)> = (0..n).flat_map(|a| (0..n).map(move |b| (a, b))).collect();
-        (all.clone(), all)
+        let velocity = if self.c == 0.0 {
+            Vec::new()
+        } else {
+            all.clone()
+        };
+        (all, velocity)
     }
 
     fn add_forces(&self, x: &LoadPlace<'_>, g: &mut [f64]) {
@@ -131,10 +137,6 @@ impl LoadElement for Spring {
     /// Without damping its force is the gradient of its potential.
     fn conservative(&self) -> bool {
         self.c == 0.0
-    }
-
-    fn velocity_dependent(&self) -> bool {
-        self.c != 0.0
     }
 
     /// A damper's `∂g/∂q` holds `c ∂ℓ̇/∂q ∂ℓ/∂qᵀ`, not symmetric.
