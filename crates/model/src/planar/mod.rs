@@ -326,6 +326,12 @@ impl System for PlanarSystem {
     }
 
     fn phi_b_into(&self, t: f64, u: &[f64], phi: &mut [f64], b: &mut [f64], work: &mut [f64]) {
+        // Without constraints nothing to write (a body alone, the small
+        // model of a sensitivity to its mass): not even the table, which
+        // only the constraints' Hessian reads.
+        if self.constraints.is_empty() {
+            return;
+        }
         // The workspace holds each body's (sin θ, cos θ), computed once, not
         // once per joint it takes part in, in a table of the angles alone (no
         // gaps: on a long chain it is written and read through memory).
