@@ -294,18 +294,33 @@ fn row_of(row_ptr: &[u32], i: usize) -> (std::ops::Range<usize>, usize) {
 mod tests {
     use super::*;
 
-    /// A symmetric positive definite band matrix with a varying envelope.
-    fn example(n: usize) -> (Vec<usize>, Vec<Vec<f64>>) {
-        let first: Vec<usize> = (0..n).map(|i| i.saturating_sub(1 + i % 3)).collect();
+    /// The symmetric matrix of the envelope `first` with entries `off(i, j)`
+    /// below the diagonal (mirrored above) and `diagonal(i)` on it.
+    fn symmetric(
+        first: &[usize],
+        off: impl Fn(usize, usize) -> f64,
+        diagonal: impl Fn(usize) -> f64,
+    ) -> Vec<Vec<f64>> {
+        let n = first.len();
         let mut a = vec![vec![0.0; n]; n];
         for i in 0..n {
             for j in first[i]..i {
-                let v = ((i * 7 + j * 3) % 5) as f64 * 0.1 - 0.2;
-                a[i][j] = v;
-                a[j][i] = v;
+                a[i][j] = off(i, j);
+                a[j][i] = a[i][j];
             }
-            a[i][i] = 2.0 + (i % 4) as f64;
+            a[i][i] = diagonal(i);
         }
+        a
+    }
+
+    /// A symmetric positive definite band matrix with a varying envelope.
+    fn example(n: usize) -> (Vec<usize>, Vec<Vec<f64>>) {
+        let first: Vec<usize> = (0..n).map(|i| i.saturating_sub(1 + i % 3)).collect();
+        let a = symmetric(
+            &first,
+            |i, j| ((i * 7 + j * 3) % 5) as f64 * 0.1 - 0.2,
+            |i| 2.0 + (i % 4) as f64,
+        );
         (first, a)
     }
 
@@ -337,16 +352,12 @@ mod tests {
         // rows): rows that start at their diagonal, rows that start after
         // the rows before them, and entries without terms.
         let first = [0, 0, 0, 0, 2, 2, 2, 2, 2, 2, 10, 10, 6, 6, 14, 14, 8, 8];
-        let n = first.len();
-        let mut a = vec![vec![0.0; n]; n];
-        for i in 0..n {
-            for j in first[i]..i {
-                let v = ((i * 5 + j * 11) % 7) as f64 * 0.05 - 0.15;
-                a[i][j] = v;
-                a[j][i] = v;
-            }
-            a[i][i] = 3.0 + (i % 3) as f64;
-        }
+        // Diagonally dominant (at most 17 entries of at most 0.15 a row).
+        let a = symmetric(
+            &first,
+            |i, j| ((i * 5 + j * 11) % 7) as f64 * 0.05 - 0.15,
+            |i| 3.0 + (i % 3) as f64,
+        );
         check_solve(&first, &a);
     }
 
