@@ -50,7 +50,8 @@ pub(crate) struct EnvelopeLdlt {
 
 /// One entry `(i, j)` of the factor whose sum has terms: its position in
 /// row `i` (`j − first[i]`), the end of row `j`'s terms in the values (the
-/// position of `l_jj`'s left neighbour plus one) and their number `m =
+/// position of its diagonal: the terms are its last `m` entries before it)
+/// and their number `m =
 /// min(j − first[i], j − first[j])`. Computed once from the envelope: an
 /// entry without terms (a row's first, or a column whose row starts at its
 /// diagonal) costs the factorization nothing, and the others no index
