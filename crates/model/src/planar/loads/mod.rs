@@ -234,8 +234,7 @@ mod tests {
             let pattern = sys.forces_dv_pattern();
             // Without damping, no entries: nothing evaluated or multiplied.
             assert_eq!(pattern.is_empty(), c == 0.0, "c = {c}");
-            // NaN where nothing is written: a skipped evaluation must still
-            // leave its zeros.
+            // NaN in every entry beforehand: each must be written.
             let mut g_v = vec![f64::NAN; pattern.len()];
             sys.forces_dv_into(0.0, &u, &v, &mut g_v);
             let dense = pattern.to_dense(&g_v);
