@@ -18,6 +18,8 @@
 //! - `cargo xtask setup`: the time from the command line to the first step
 //!   on the N-four-bar at 10³, 10⁴, 10⁵ bodies; `cargo xtask n-four-bar-file`
 //!   writes one such file ([`setup`]).
+//! - `cargo xtask chain-scaling`: `mstar chain` at 10⁵ bodies against 10⁴
+//!   per body, in interleaved cycles ([`chain_scaling`]).
 //! - `cargo xtask hanging-chain-file`: a planar bar chain hanging at its
 //!   equilibrium as a model file, for `mstar modes` ([`setup`]).
 //! - `cargo xtask animate-check`: `mstar animate`'s page in headless Chromium,
@@ -26,6 +28,7 @@
 mod animate_check;
 mod bench;
 mod bench_files;
+mod chain_scaling;
 mod common;
 mod convergence;
 mod energy;
@@ -85,6 +88,24 @@ enum Command {
         /// Exudyn beside them): target/studies/bench/files.csv.
         #[arg(long, conflicts_with = "report_only")]
         files_only: bool,
+    },
+    /// `mstar chain` at 10⁵ links against 10⁴, per body per step, as a user
+    /// runs it (the command's defaults, rayon's pool as the environment sets
+    /// it): cycles of three runs at 10⁴ and one at 10⁵, a cycle's ratio
+    /// being its 10⁵ run over the median of its 10⁴ runs; writes
+    /// target/studies/chain-scaling/cycles.csv.
+    ChainScaling {
+        /// Number of cycles.
+        #[arg(long, default_value_t = 5)]
+        cycles: usize,
+        /// The chain's kind (`mstar chain --kind`; the command's default
+        /// when not given).
+        #[arg(long)]
+        kind: Option<String>,
+        /// End time of every run (the command's default, 1 s, when not
+        /// given).
+        #[arg(long)]
+        t_end: Option<f64>,
     },
     /// `mstar animate` in a real browser: the four-bar's HTML page in
     /// headless Chromium (`apt-get install -y chromium`), a screenshot to
@@ -160,6 +181,15 @@ fn main() -> Result<()> {
             report_only,
             files_only,
         } => bench::run(max_n, report_only, files_only),
+        Command::ChainScaling {
+            cycles,
+            kind,
+            t_end,
+        } => chain_scaling::run(&chain_scaling::Options {
+            cycles,
+            kind,
+            t_end,
+        }),
         Command::AnimateCheck => animate_check::run(),
         Command::WorkPrecision => work_precision::run(),
         Command::Setup { max_bodies } => setup::run(max_bodies),
