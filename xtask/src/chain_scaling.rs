@@ -197,6 +197,20 @@ mod tests {
     }
 
     #[test]
+    fn no_cycles_is_refused_before_anything_is_built_or_run() {
+        let options = Options {
+            cycles: 0,
+            kind: None,
+            t_end: None,
+        };
+        let err = run(&options).expect_err("zero cycles measure nothing");
+        assert!(
+            err.to_string().contains("--cycles must be at least 1"),
+            "{err}"
+        );
+    }
+
+    #[test]
     fn medians_of_odd_and_even_counts() {
         assert_eq!(median(&[0.3, 0.1, 0.2]), 0.2);
         assert_eq!(median(&[0.4, 0.1, 0.2, 0.3]), 0.25);
